@@ -1,0 +1,18 @@
+// Subcommands of the `infinisplat` tool; each lives in its own cli/cmd_*.cpp.
+#pragma once
+#include <functional>
+#include <map>
+#include <string>
+
+namespace isplat::cli {
+
+struct Command {
+  std::string summary;
+  std::function<int(int argc, char** argv)> run;  // argv[1] is the command name
+};
+
+std::map<std::string, Command> all_commands();
+
+int run_version(int argc, char** argv);
+
+}  // namespace isplat::cli

@@ -1,0 +1,31 @@
+// Shared start-up for executables: parse the common options, load and validate the config, apply the
+// runtime (threads, seed, logging), and answer --print-config / --help-config.
+#pragma once
+#include <iostream>
+
+#include "core/args.h"
+#include "core/config.h"
+#include "core/runtime.h"
+
+namespace isplat {
+
+// `Options` is a root config struct with a `RuntimeOptions runtime` member.
+// Returns false when the program should exit 0 (help or config printed).
+template <class Options>
+bool start_app(ArgParser& parser, CommonArgs& common, Options& options, int argc, char** argv, int first = 1) {
+  if (!parser.parse(argc, argv, first)) return false;
+  if (common.help_config) {
+    std::cout << config_reference(options);
+    return false;
+  }
+  options = load_config<Options>(common.config, common.sets);
+  if (common.threads >= 0) options.runtime.threads = common.threads;
+  if (common.print_config) {
+    std::cout << config_to_json(options).dump(2) << "\n";
+    return false;
+  }
+  apply_runtime(options.runtime);
+  return true;
+}
+
+}  // namespace isplat

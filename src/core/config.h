@@ -1,0 +1,117 @@
+// Typed JSON configuration: option structs describe their keys once; the same description reads,
+// validates, writes and documents them.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace isplat {
+
+// Closed/open numeric bounds for a config value.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false;
+  bool hi_open = false;
+
+  static Range at_least(double v) { return {v, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range above(double v) { return {v, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range between(double a, double b) { return {a, b, false, false}; }
+  static Range unit() { return between(0.0, 1.0); }
+  bool contains(double v) const;
+  bool bounded() const;
+  std::string describe() const;  // e.g. "in [0, 1]" or ">= 1"
+};
+
+// Visitor over an option struct. Each struct has `void visit(ConfigVisitor&)` that lists its fields
+// with a default (the member's initial value), a one-line doc and its validation.
+class ConfigVisitor {
+ public:
+  virtual ~ConfigVisitor() = default;
+  virtual void field(const char* key, bool& value, const char* doc) = 0;
+  virtual void field(const char* key, int64_t& value, const char* doc, Range range = {}) = 0;
+  virtual void field(const char* key, double& value, const char* doc, Range range = {}) = 0;
+  virtual void field(const char* key, std::string& value, const char* doc,
+                     std::vector<std::string> choices = {}) = 0;
+  virtual void field(const char* key, std::vector<int64_t>& value, const char* doc, Range range = {}) = 0;
+  virtual void field(const char* key, std::vector<double>& value, const char* doc, Range range = {}) = 0;
+  virtual void field(const char* key, std::vector<std::string>& value, const char* doc) = 0;
+
+  // Narrower numeric types, stored through the 64-bit forms above.
+  void field(const char* key, int& value, const char* doc, Range range = {});
+  void field(const char* key, float& value, const char* doc, Range range = {});
+
+  template <class T>
+  void section(const char* key, const char* doc, T& options) {
+    enter(key, doc);
+    options.visit(*this);
+    leave();
+  }
+
+ protected:
+  virtual void enter(const char* key, const char* doc) = 0;
+  virtual void leave() = 0;
+};
+
+// A merged JSON document (base files, the config file, then --set overrides) and where each key came from.
+struct ConfigDocument {
+  nlohmann::json json = nlohmann::json::object();
+  std::map<std::string, std::string> origin;  // dotted key -> file path or "--set k=v"
+  std::string source_of(const std::string& key) const;
+};
+
+// Reads `path` (empty = defaults only), following "base": "other.json" chains, then applies
+// overrides of the form "a.b=value" (value parsed as JSON, else taken as a string).
+ConfigDocument merge_config(const std::string& path, const std::vector<std::string>& overrides);
+nlohmann::json read_json_file(const std::string& path);
+
+// Visitor plumbing; use the templates below.
+void read_options(const ConfigDocument& doc, const std::function<void(ConfigVisitor&)>& visit);
+nlohmann::ordered_json write_options(const std::function<void(ConfigVisitor&)>& visit);
+std::string document_options(const std::function<void(ConfigVisitor&)>& visit);
+
+// Fill `options` from a document; unknown keys, wrong types and out-of-range values throw Error
+// naming the file, the key and the expected form.
+template <class T>
+void apply_config(const ConfigDocument& doc, T& options) {
+  read_options(doc, [&](ConfigVisitor& v) { options.visit(v); });
+}
+
+template <class T>
+T load_config(const std::string& path, const std::vector<std::string>& overrides = {}) {
+  T options;
+  apply_config(merge_config(path, overrides), options);
+  return options;
+}
+
+// The full merged configuration, every key with its value (for --print-config and checkpoints).
+template <class T>
+nlohmann::ordered_json config_to_json(const T& options) {
+  T copy = options;
+  return write_options([&](ConfigVisitor& v) { copy.visit(v); });
+}
+
+// One line per key: name, type, bounds, default and doc (for --help-config).
+template <class T>
+std::string config_reference(const T& options) {
+  T copy = options;
+  return document_options([&](ConfigVisitor& v) { copy.visit(v); });
+}
+
+// Rebuild options from a JSON written by config_to_json (e.g. stored in a checkpoint).
+template <class T>
+T config_from_json(const nlohmann::json& json, const std::string& source) {
+  ConfigDocument doc;
+  doc.json = json;
+  doc.origin[""] = source;
+  T options;
+  apply_config(doc, options);
+  return options;
+}
+
+}  // namespace isplat

@@ -1,0 +1,101 @@
+// Atomic writes (temp + fsync + rename) and whole-file reads with clear errors.
+#include "io/atomic_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace isplat {
+namespace fs = std::filesystem;
+
+static std::string temp_name_for(const std::string& path) {
+  static std::atomic<uint64_t> counter{0};
+  fs::path p(path);
+  const std::string stem = p.stem().string(), ext = p.extension().string();
+  return (p.parent_path() / cat(".", stem, ".tmp", getpid(), "_", counter++, ext)).string();
+}
+
+static void ensure_parent(const std::string& path) {
+  fs::path parent = fs::path(path).parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) fail(path, ": cannot create folder ", parent.string(), ": ", ec.message());
+}
+
+static void fsync_path(const std::string& path) {
+  int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+static void rename_into_place(const std::string& temp, const std::string& path) {
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(temp.c_str());
+    fail(path, ": cannot rename temporary file into place: ", why);
+  }
+}
+
+void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& fill) {
+  ensure_parent(path);
+  const std::string temp = temp_name_for(path);
+  try {
+    {
+      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+      if (!out) fail(path, ": cannot open for writing: ", std::strerror(errno));
+      fill(out);
+      out.flush();
+      if (!out) fail(path, ": write failed (disk full?)");
+    }
+    fsync_path(temp);
+  } catch (...) {
+    std::remove(temp.c_str());
+    throw;
+  }
+  rename_into_place(temp, path);
+}
+
+void write_file_atomic(const std::string& path, const std::string& bytes) {
+  write_file_atomic(path, [&](std::ostream& os) { os.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
+}
+
+AtomicPath::AtomicPath(std::string path) : path_(std::move(path)) {
+  ensure_parent(path_);
+  temp_ = temp_name_for(path_);
+}
+
+AtomicPath::~AtomicPath() {
+  if (!committed_) std::remove(temp_.c_str());
+}
+
+void AtomicPath::commit() {
+  if (!fs::exists(temp_)) fail(path_, ": writer produced no file");
+  fsync_path(temp_);
+  rename_into_place(temp_, path_);
+  committed_ = true;
+}
+
+std::string read_file_bytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, ": no such file");
+  if (fs::is_directory(path, ec)) fail(path, ": is a folder, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) fail(path, ": read error");
+  return ss.str();
+}
+
+}  // namespace isplat

@@ -1,0 +1,43 @@
+// Shared test helpers.
+#include "support/test_util.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace isplat::test {
+namespace fs = std::filesystem;
+
+std::string temp_dir(const std::string& tag) {
+  static std::atomic<int> counter{0};
+  const char* root = std::getenv("ISPLAT_TEST_TMP");
+  fs::path base = root ? fs::path(root) : fs::temp_directory_path() / "isplat_tests";
+  fs::path dir = base / (tag + "_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+std::string shared_weights_dir() {
+  const char* env = std::getenv("ISPLAT_WEIGHTS_DIR");
+  fs::path dir = env ? fs::path(env) : fs::path(ISPLAT_SOURCE_DIR) / ".." / "shared" / "weights";
+  return fs::exists(dir) ? fs::weakly_canonical(dir).string() : std::string();
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace isplat::test

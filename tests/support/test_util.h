@@ -1,0 +1,15 @@
+// Shared test helpers: a fresh temporary folder per test and the shared-weights location.
+#pragma once
+#include <string>
+
+namespace isplat::test {
+
+// A new empty folder under $ISPLAT_TEST_TMP (or /tmp), unique per call.
+std::string temp_dir(const std::string& tag);
+// ../shared/weights relative to the source tree, or "" when absent.
+std::string shared_weights_dir();
+// Writes raw bytes to a file (for crafting corrupt inputs).
+void write_bytes(const std::string& path, const std::string& bytes);
+std::string read_bytes(const std::string& path);
+
+}  // namespace isplat::test

@@ -1,0 +1,68 @@
+// Core utilities: argument parsing, progress formatting, thread configuration and the runtime report.
+#include <catch2/catch.hpp>
+
+#include <ATen/Parallel.h>
+
+#include "core/args.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "core/runtime.h"
+
+using namespace isplat;
+
+TEST_CASE("args: options, flags, repeated values and errors", "[core]") {
+  std::string config;
+  int64_t n = 3;
+  double x = 0;
+  bool verbose = false;
+  std::vector<std::string> sets;
+  std::string input;
+  ArgParser p("prog", "test program");
+  p.option("--config", config, "config");
+  p.option("--n", n, "count");
+  p.option("--x", x, "value");
+  p.flag("--verbose", verbose, "talk");
+  p.repeated("--set", sets, "override");
+  p.positional("input", input, "input file");
+  const char* argv[] = {"prog", "in.png", "--config", "a.json", "--n=7", "--set", "a=1", "--set", "b=2", "--verbose", "--x", "0.5"};
+  REQUIRE(p.parse(12, const_cast<char**>(argv)));
+  CHECK(input == "in.png");
+  CHECK(config == "a.json");
+  CHECK(n == 7);
+  CHECK(x == 0.5);
+  CHECK(verbose);
+  CHECK(sets == std::vector<std::string>{"a=1", "b=2"});
+  const char* bad[] = {"prog", "in", "--nope"};
+  CHECK_THROWS_WITH(p.parse(3, const_cast<char**>(bad)), Catch::Contains("unknown option '--nope'"));
+  const char* badnum[] = {"prog", "in", "--n", "seven"};
+  CHECK_THROWS_WITH(p.parse(4, const_cast<char**>(badnum)), Catch::Contains("expected an integer, got 'seven'"));
+  const char* missing[] = {"prog"};
+  CHECK_THROWS_WITH(p.parse(1, const_cast<char**>(missing)), Catch::Contains("missing argument <input>"));
+  CHECK_THAT(p.help(), Catch::Contains("--set KEY=VALUE") || Catch::Contains("--set VALUE"));
+}
+
+TEST_CASE("progress: durations and status line", "[core]") {
+  CHECK(ProgressBar::format_duration(4.2) == "0:04");
+  CHECK(ProgressBar::format_duration(187) == "3:07");
+  CHECK(ProgressBar::format_duration(3909) == "1:05:09");
+  ProgressBar bar("train", 100, "step");
+  bar.set(25);
+  bar.postfix("loss 0.5");
+  const auto line = bar.status_line();
+  CHECK_THAT(line, Catch::Contains("25/100 25%"));
+  CHECK_THAT(line, Catch::Contains("ETA"));
+  CHECK_THAT(line, Catch::Contains("| loss 0.5"));
+  bar.finish();
+}
+
+TEST_CASE("runtime: threads default to all cores, report names LibTorch and BLAS", "[core]") {
+  const int all = configure_threads(0);
+  CHECK(all == static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  CHECK(configure_threads(1) == 1);
+  CHECK(at::get_num_threads() == 1);
+  configure_threads(0);
+  const auto report = runtime_report(false);
+  CHECK_THAT(report, Catch::Contains("LibTorch        1.13"));
+  CHECK_THAT(report, Catch::Contains("OpenMP          yes"));
+  CHECK_THAT(loaded_blas(), Catch::Contains("blas"));
+}
