@@ -6,6 +6,7 @@ namespace isplat::cli {
 std::map<std::string, Command> all_commands() {
   return {
       {"version", {"print versions, threads, BLAS and a matmul speed check", run_version}},
+      {"generate", {"render the synthetic datasets (Hypersim layout + COLMAP/nerfstudio eval sets)", run_generate}},
   };
 }
 

@@ -14,5 +14,6 @@ struct Command {
 std::map<std::string, Command> all_commands();
 
 int run_version(int argc, char** argv);
+int run_generate(int argc, char** argv);
 
 }  // namespace isplat::cli

@@ -1,6 +1,8 @@
 // Progress bar: ~10 redraws/s on a TTY; on pipes and CI logs, a line at each 10% or every 30 s.
 #include "core/progress.h"
 
+#include "core/log.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -65,7 +67,7 @@ std::string ProgressBar::status_line() const {
 }
 
 void ProgressBar::maybe_draw(bool force) {
-  if (finished_) return;
+  if (finished_ || log_level() > LogLevel::Info) return;  // quiet runs (and tests) get no bar
   if (force && done_ == last_drawn_done_) return;  // the final state is already on screen
   const auto now = std::chrono::steady_clock::now();
   const double since = std::chrono::duration<double>(now - last_draw_).count();

@@ -1,0 +1,402 @@
+// Scene layouts and trajectories for the synthetic datasets.
+#include "data/synth/builder.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+namespace isplat::synth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Rng {
+  std::mt19937_64 gen;
+  explicit Rng(uint64_t seed) : gen(seed) {}
+  double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(gen); }
+  int integer(int a, int b) { return std::uniform_int_distribution<int>(a, b)(gen); }
+  bool chance(double p) { return uniform(0, 1) < p; }
+  Vec3 color(double lo, double hi) { return Vec3(uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)); }
+  template <class T>
+  const T& pick(const std::vector<T>& v) { return v[static_cast<size_t>(integer(0, static_cast<int>(v.size()) - 1))]; }
+};
+
+Mat3 yaw(double a) { return Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix(); }
+
+Primitive quad(const Vec3& p0, const Vec3& e1, const Vec3& e2, int mat) {
+  Primitive p;
+  p.shape = Shape::Quad;
+  p.p0 = p0;
+  p.e1 = e1;
+  p.e2 = e2;
+  p.material = mat;
+  return p;
+}
+
+Primitive box(const Vec3& center, const Vec3& half, double yaw_angle, int mat) {
+  Primitive p;
+  p.shape = Shape::Box;
+  p.p0 = center;
+  p.half = half;
+  p.R = yaw(yaw_angle);
+  p.material = mat;
+  return p;
+}
+
+Primitive sphere(const Vec3& c, double r, int mat) {
+  Primitive p;
+  p.shape = Shape::Sphere;
+  p.p0 = c;
+  p.radius = r;
+  p.material = mat;
+  return p;
+}
+
+// Cylinder from `base` along `axis` (unit) with the given radius and height.
+Primitive cylinder(const Vec3& base, const Vec3& axis, double r, double h, int mat) {
+  Primitive p;
+  p.shape = Shape::Cylinder;
+  p.p0 = base;
+  const Vec3 z = axis.normalized();
+  const Vec3 x = (std::fabs(z.z()) < 0.9 ? Vec3::UnitZ() : Vec3::UnitX()).cross(z).normalized();
+  p.R.col(0) = x;
+  p.R.col(1) = z.cross(x);
+  p.R.col(2) = z;
+  p.radius = r;
+  p.height = h;
+  p.material = mat;
+  return p;
+}
+
+Material mat(Rng& rng, Pattern pattern, double scale, double lo, double hi, double spec = 0.0) {
+  Material m;
+  m.pattern = pattern;
+  m.scale = scale;
+  m.a = rng.color(lo, hi);
+  m.b = (m.a * rng.uniform(0.25, 0.6)).eval();
+  m.specular = spec;
+  return m;
+}
+
+// A vertical wall from `origin` along the horizontal unit `along`, with an optional window hole.
+void wall_with_window(Scene& s, const Vec3& origin, const Vec3& along, double length, double height, int material,
+                      bool window, Rng& rng) {
+  const Vec3 up(0, 0, height);
+  if (!window) {
+    s.add(quad(origin, along * length, up, material));
+    return;
+  }
+  const double w = rng.uniform(1.0, std::min(2.5, length * 0.4));
+  const double a0 = rng.uniform(0.5, length - w - 0.5), a1 = a0 + w;
+  const double h0 = rng.uniform(0.7, 1.1), h1 = std::min(height - 0.3, h0 + rng.uniform(1.0, 1.6));
+  const Vec3 z(0, 0, 1);
+  s.add(quad(origin, along * a0, up, material));
+  s.add(quad(origin + along * a1, along * (length - a1), up, material));
+  s.add(quad(origin + along * a0, along * w, z * h0, material));
+  s.add(quad(origin + along * a0 + z * h1, along * w, z * (height - h1), material));
+}
+
+void table(Scene& s, const Vec3& c, double yaw_angle, int top_mat, int leg_mat, Rng& rng) {
+  const double w = rng.uniform(0.5, 0.8), d = rng.uniform(0.35, 0.5), h = rng.uniform(0.7, 0.78);
+  s.add(box(c + Vec3(0, 0, h), Vec3(w, d, 0.025), yaw_angle, top_mat));
+  const Mat3 R = yaw(yaw_angle);
+  for (int sx : {-1, 1})
+    for (int sy : {-1, 1}) {
+      const Vec3 off = R * Vec3(sx * (w - 0.05), sy * (d - 0.05), 0);
+      s.add(box(c + off + Vec3(0, 0, h / 2), Vec3(0.022, 0.022, h / 2), yaw_angle, leg_mat));  // thin legs
+    }
+}
+
+void shelf(Scene& s, const Vec3& c, double yaw_angle, int mat, Rng& rng) {
+  const double w = rng.uniform(0.4, 0.7), d = 0.18, h = rng.uniform(1.4, 2.0);
+  const Mat3 R = yaw(yaw_angle);
+  for (int sx : {-1, 1}) s.add(box(c + R * Vec3(sx * w, 0, 0) + Vec3(0, 0, h / 2), Vec3(0.02, d, h / 2), yaw_angle, mat));
+  const int boards = rng.integer(3, 5);
+  for (int b = 0; b <= boards; ++b)
+    s.add(box(c + Vec3(0, 0, 0.05 + b * (h - 0.1) / boards), Vec3(w, d, 0.015), yaw_angle, mat));
+}
+
+void lamp(Scene& s, const Vec3& base, int pole_mat, int shade_mat, Rng& rng) {
+  const double h = rng.uniform(1.3, 1.7);
+  s.add(cylinder(base, Vec3::UnitZ(), 0.015, h, pole_mat));  // thin structure
+  s.add(sphere(base + Vec3(0, 0, h + 0.15), rng.uniform(0.12, 0.2), shade_mat));
+}
+
+void tree(Scene& s, const Vec3& base, int trunk_mat, int crown_mat, Rng& rng) {
+  const double h = rng.uniform(2.0, 3.2);
+  s.add(cylinder(base, Vec3::UnitZ(), rng.uniform(0.1, 0.18), h, trunk_mat));
+  s.add(sphere(base + Vec3(0, 0, h + 0.6), rng.uniform(0.9, 1.4), crown_mat));
+}
+
+}  // namespace
+
+Scene build_room(uint64_t seed) {
+  Rng rng(seed);
+  Scene s;
+  s.style = "room";
+  const double W = rng.uniform(5.0, 7.5), D = rng.uniform(7.5, 11.0), H = rng.uniform(2.6, 3.2);
+  const int floor_m = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Tiles, Pattern::Checker, Pattern::Marble}),
+                                         rng.uniform(0.4, 1.0), 0.35, 0.8, 0.1));
+  const int ceil_m = s.add_material(mat(rng, Pattern::Noise, 2.0, 0.75, 0.9));
+  const std::vector<Pattern> wall_patterns = {Pattern::Bricks, Pattern::Stripes, Pattern::Noise, Pattern::Grid};
+  int wall_m[4];
+  for (int k = 0; k < 4; ++k)
+    wall_m[k] = s.add_material(mat(rng, rng.pick(wall_patterns), rng.uniform(0.25, 0.9), 0.45, 0.9));
+  s.add(quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, D, 0), floor_m));
+  s.add(quad(Vec3(0, 0, H), Vec3(W, 0, 0), Vec3(0, D, 0), ceil_m));
+  // Windows open onto the sky (no geometry: NaN depth, as in Hypersim); both end walls, which the
+  // trajectories look at, always have one.
+  const bool win_x0 = rng.chance(0.6), win_xW = !win_x0 || rng.chance(0.3);
+  wall_with_window(s, Vec3(0, 0, 0), Vec3(0, 1, 0), D, H, wall_m[0], win_x0, rng);
+  wall_with_window(s, Vec3(W, 0, 0), Vec3(0, 1, 0), D, H, wall_m[1], win_xW, rng);
+  wall_with_window(s, Vec3(0, 0, 0), Vec3(1, 0, 0), W, H, wall_m[2], true, rng);
+  wall_with_window(s, Vec3(0, D, 0), Vec3(1, 0, 0), W, H, wall_m[3], true, rng);
+
+  const int wood = s.add_material(mat(rng, Pattern::Wood, rng.uniform(0.3, 0.7), 0.35, 0.7, 0.05));
+  const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.15, 0.4, 0.4));
+  const int fabric = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Checker, Pattern::Stripes, Pattern::Dots}),
+                                        rng.uniform(0.08, 0.2), 0.3, 0.9));
+  const int decor = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Marble, Pattern::Dots, Pattern::Noise}),
+                                       rng.uniform(0.05, 0.2), 0.3, 0.95, 0.3));
+  // Furniture stands along the side walls, leaving the central walkway free for the cameras.
+  auto side_x = [&](bool left) { return left ? rng.uniform(0.5, W * 0.27) : rng.uniform(W * 0.73, W - 0.5); };
+  const int pieces = rng.integer(5, 8);
+  for (int k = 0; k < pieces; ++k) {
+    const bool left = k % 2 == 0;
+    const Vec3 c(side_x(left), rng.uniform(0.8, D - 0.8), 0);
+    switch (rng.integer(0, 5)) {
+      case 0: table(s, c, rng.uniform(-0.4, 0.4), wood, metal, rng); break;
+      case 1: shelf(s, Vec3(left ? 0.25 : W - 0.25, c.y(), 0), kPi / 2, wood, rng); break;
+      case 2: {
+        const Vec3 half(rng.uniform(0.25, 0.5), rng.uniform(0.2, 0.45), rng.uniform(0.4, 0.9));
+        s.add(box(c + Vec3(0, 0, half.z()), half, rng.uniform(-0.5, 0.5), rng.chance(0.5) ? fabric : wood));
+        s.add(sphere(c + Vec3(0, 0, 2 * half.z() + 0.12), 0.12, decor));
+        break;
+      }
+      case 3: lamp(s, c, metal, decor, rng); break;
+      case 4: s.add(cylinder(c, Vec3::UnitZ(), rng.uniform(0.15, 0.3), H, rng.chance(0.5) ? decor : wall_m[0])); break;
+      default: {  // a board leaning against the wall: a slanted plane
+        const double len = rng.uniform(1.2, 2.0), width = rng.uniform(0.5, 1.0), lean = rng.uniform(0.25, 0.6);
+        const double x_wall = left ? 0.02 : W - 0.02, sgn = left ? 1.0 : -1.0;
+        s.add(quad(Vec3(x_wall + sgn * len * std::sin(lean), c.y(), 0), Vec3(0, width, 0),
+                   Vec3(-sgn * len * std::sin(lean), 0, len * std::cos(lean)), fabric));
+      }
+    }
+  }
+  // Pictures on the walls (thin boxes with high-frequency patterns) and a thin rail.
+  for (int k = 0; k < rng.integer(2, 4); ++k) {
+    const int pm = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Dots, Pattern::Checker, Pattern::Stripes, Pattern::Marble}),
+                                      rng.uniform(0.04, 0.12), 0.1, 0.95));
+    const bool on_end = rng.chance(0.5);
+    const Vec3 half(rng.uniform(0.25, 0.6), 0.015, rng.uniform(0.2, 0.45));
+    if (on_end)
+      s.add(box(Vec3(rng.uniform(1.0, W - 1.0), D - 0.02, rng.uniform(1.3, H - 0.6)), half, 0.0, pm));
+    else
+      s.add(box(Vec3(rng.chance(0.5) ? 0.02 : W - 0.02, rng.uniform(1.0, D - 1.0), rng.uniform(1.3, H - 0.6)), half, kPi / 2, pm));
+  }
+  s.add(cylinder(Vec3(0.05, 0.3, H - 0.35), Vec3::UnitY(), 0.012, D - 0.6, metal));
+  // A free-standing pillar near one end gives a strong depth discontinuity and disocclusions.
+  s.add(box(Vec3(W / 2 + (rng.chance(0.5) ? -1.3 : 1.3), rng.chance(0.5) ? 1.2 : D - 1.2, H / 2), Vec3(0.2, 0.2, H / 2),
+            0.0, wall_m[2]));
+
+  const int n_lights = rng.integer(2, 3);
+  for (int k = 0; k < n_lights; ++k)
+    s.lights.push_back({Vec3(W * rng.uniform(0.3, 0.7), D * (k + 0.5) / n_lights, H - 0.6), rng.color(20.0, 32.0)});
+  s.ambient = Vec3::Constant(rng.uniform(0.06, 0.12));
+  s.sun_dir = Vec3(win_x0 ? -0.6 : 0.6, rng.uniform(-0.3, 0.3), 0.55).normalized();
+  s.sun_radiance = Vec3(3.0, 2.8, 2.5) * rng.uniform(0.6, 1.0);
+  s.walk_min = Vec3(W * 0.35, 0.9, 1.3);
+  s.walk_max = Vec3(W * 0.65, D - 0.9, 1.7);
+  s.focus_a = Vec3(W / 2, D - 0.1, 1.2);
+  s.focus_b = Vec3(W / 2, 0.1, 1.2);
+  s.build();
+  return s;
+}
+
+Scene build_courtyard(uint64_t seed) {
+  Rng rng(seed);
+  Scene s;
+  s.style = "courtyard";
+  const double X = rng.uniform(14.0, 20.0), Y = rng.uniform(16.0, 22.0);
+  const int ground = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Tiles, Pattern::Bricks}), rng.uniform(0.5, 1.0), 0.4, 0.75));
+  s.add(quad(Vec3(-15, -15, 0), Vec3(X + 30, 0, 0), Vec3(0, Y + 30, 0), ground));
+  // Facades around the yard: big boxes with window grids.
+  for (int side = 0; side < 4; ++side) {
+    const int fm = s.add_material(mat(rng, Pattern::Grid, rng.uniform(1.2, 2.0), 0.5, 0.9));
+    const double h = rng.uniform(6.0, 12.0);
+    Vec3 c, half;
+    if (side < 2) {
+      c = Vec3(side == 0 ? -3.0 : X + 3.0, Y / 2, h / 2);
+      half = Vec3(3.0, Y / 2 + 6.0, h / 2);
+    } else {
+      c = Vec3(X / 2, side == 2 ? -3.0 : Y + 3.0, h / 2);
+      half = Vec3(X / 2, 3.0, h / 2);
+    }
+    s.add(box(c, half, 0.0, fm));
+  }
+  // An arcade: columns with a beam along one side.
+  const int stone = s.add_material(mat(rng, Pattern::Marble, rng.uniform(0.3, 0.8), 0.6, 0.9, 0.1));
+  const double ax = rng.chance(0.5) ? 2.0 : X - 2.0;
+  for (double y = 2.0; y < Y - 1.5; y += rng.uniform(2.5, 3.5)) s.add(cylinder(Vec3(ax, y, 0), Vec3::UnitZ(), 0.28, 4.0, stone));
+  s.add(box(Vec3(ax, Y / 2, 4.25), Vec3(0.35, Y / 2 - 1.0, 0.25), 0.0, stone));
+  // Fountain, trees, benches with thin legs, a sculpture.
+  const int water = s.add_material(mat(rng, Pattern::Noise, 0.3, 0.2, 0.5, 0.5));
+  const Vec3 fc(X * rng.uniform(0.4, 0.6), Y * rng.uniform(0.4, 0.6), 0);
+  s.add(cylinder(fc, Vec3::UnitZ(), rng.uniform(1.2, 1.8), 0.6, stone));
+  s.add(sphere(fc + Vec3(0, 0, 1.2), 0.45, water));
+  const int trunk = s.add_material(mat(rng, Pattern::Wood, 0.2, 0.25, 0.45));
+  const int leaves = s.add_material([&] {
+    Material m = mat(rng, Pattern::Noise, 0.15, 0.1, 0.35);
+    m.a = Vec3(rng.uniform(0.1, 0.25), rng.uniform(0.35, 0.6), rng.uniform(0.05, 0.2));
+    return m;
+  }());
+  for (int k = 0; k < rng.integer(2, 4); ++k) {
+    const Vec3 base(rng.chance(0.5) ? rng.uniform(1.0, 3.5) : rng.uniform(X - 3.5, X - 1.0), rng.uniform(2.0, Y - 2.0), 0);
+    tree(s, base, trunk, leaves, rng);
+  }
+  const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.1, 0.3, 0.5));
+  for (int k = 0; k < rng.integer(2, 3); ++k) {
+    const Vec3 c(rng.uniform(2.5, X - 2.5), rng.chance(0.5) ? rng.uniform(1.5, 3.0) : rng.uniform(Y - 3.0, Y - 1.5), 0);
+    table(s, c, rng.uniform(0, kPi), trunk, metal, rng);
+  }
+  for (int k = 0; k < 3; ++k)  // lamp posts: thin poles
+    lamp(s, Vec3(rng.uniform(3.0, X - 3.0), rng.uniform(3.0, Y - 3.0), 0), metal, water, rng);
+  s.ambient = Vec3(0.25, 0.28, 0.33) * rng.uniform(0.8, 1.2);
+  s.sun_dir = Vec3(rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(0.5, 0.9)).normalized();
+  s.sun_radiance = Vec3(2.8, 2.6, 2.3) * rng.uniform(0.8, 1.1);
+  s.walk_min = Vec3(4.0, 3.0, 1.4);
+  s.walk_max = Vec3(X - 4.0, Y - 3.0, 1.8);
+  s.focus_a = Vec3(X / 2, Y + 0.5, 2.0);
+  s.focus_b = Vec3(X / 2, -0.5, 2.0);
+  s.build();
+  return s;
+}
+
+Scene build_atrium(uint64_t seed) {
+  Rng rng(seed);
+  Scene s;
+  s.style = "atrium";
+  const double W = rng.uniform(12.0, 16.0), D = rng.uniform(18.0, 24.0), H = rng.uniform(7.0, 9.0);
+  const int floor_m = s.add_material(mat(rng, Pattern::Marble, rng.uniform(0.6, 1.2), 0.6, 0.9, 0.3));
+  const int concrete = s.add_material(mat(rng, Pattern::Noise, rng.uniform(0.5, 1.5), 0.45, 0.7));
+  const int panel = s.add_material(mat(rng, Pattern::Grid, rng.uniform(0.8, 1.5), 0.4, 0.8));
+  s.add(quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, D, 0), floor_m));
+  // Ceiling with a skylight opening (sky, invalid depth).
+  const double sx0 = W * 0.3, sx1 = W * 0.7, sy0 = D * 0.3, sy1 = D * 0.7;
+  s.add(quad(Vec3(0, 0, H), Vec3(sx0, 0, 0), Vec3(0, D, 0), concrete));
+  s.add(quad(Vec3(sx1, 0, H), Vec3(W - sx1, 0, 0), Vec3(0, D, 0), concrete));
+  s.add(quad(Vec3(sx0, 0, H), Vec3(sx1 - sx0, 0, 0), Vec3(0, sy0, 0), concrete));
+  s.add(quad(Vec3(sx0, sy1, H), Vec3(sx1 - sx0, 0, 0), Vec3(0, D - sy1, 0), concrete));
+  s.add(quad(Vec3(0, 0, 0), Vec3(0, D, 0), Vec3(0, 0, H), panel));
+  s.add(quad(Vec3(W, 0, 0), Vec3(0, D, 0), Vec3(0, 0, H), panel));
+  s.add(quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, 0, H), concrete));
+  s.add(quad(Vec3(0, D, 0), Vec3(W, 0, 0), Vec3(0, 0, H), concrete));
+  // Balconies along both long walls, with thin railings.
+  const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.15, 0.35, 0.6));
+  const double bh = rng.uniform(3.2, 4.0);
+  for (int side : {0, 1}) {
+    const double x = side == 0 ? 1.2 : W - 1.2;
+    s.add(box(Vec3(x, D / 2, bh), Vec3(1.2, D / 2 - 0.5, 0.12), 0.0, concrete));
+    const double rx = side == 0 ? 2.35 : W - 2.35;
+    s.add(cylinder(Vec3(rx, 0.6, bh + 1.0), Vec3::UnitY(), 0.025, D - 1.2, metal));
+    for (double y = 0.8; y < D - 0.6; y += 1.2) s.add(cylinder(Vec3(rx, y, bh), Vec3::UnitZ(), 0.015, 1.0, metal));
+  }
+  const int col = s.add_material(mat(rng, Pattern::Marble, 0.4, 0.7, 0.95, 0.2));
+  for (double y = 3.0; y < D - 2.0; y += rng.uniform(4.0, 5.0))
+    for (double x : {3.2, W - 3.2}) s.add(cylinder(Vec3(x, y, 0), Vec3::UnitZ(), 0.35, bh, col));
+  const int plant = s.add_material([&] {
+    Material m = mat(rng, Pattern::Noise, 0.12, 0.1, 0.4);
+    m.a = Vec3(0.15, rng.uniform(0.4, 0.6), 0.15);
+    return m;
+  }());
+  for (int k = 0; k < rng.integer(3, 5); ++k) {
+    const Vec3 c(rng.chance(0.5) ? rng.uniform(4.2, W * 0.35) : rng.uniform(W * 0.65, W - 4.2), rng.uniform(2.0, D - 2.0), 0);
+    s.add(box(c + Vec3(0, 0, 0.35), Vec3(0.5, 0.5, 0.35), rng.uniform(0, kPi), concrete));
+    s.add(sphere(c + Vec3(0, 0, 1.2), rng.uniform(0.45, 0.7), plant));
+  }
+  for (int k = 0; k < 4; ++k)
+    s.lights.push_back({Vec3(W * (k % 2 ? 0.25 : 0.75), D * (k / 2 ? 0.7 : 0.3), bh - 0.4), rng.color(60.0, 90.0)});
+  s.ambient = Vec3::Constant(rng.uniform(0.1, 0.16));
+  s.sun_dir = Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 1.0).normalized();
+  s.sun_radiance = Vec3(2.6, 2.5, 2.3);
+  s.walk_min = Vec3(W * 0.35, 1.5, 1.4);
+  s.walk_max = Vec3(W * 0.65, D - 1.5, 1.8);
+  s.focus_a = Vec3(W / 2, D - 0.2, 2.5);
+  s.focus_b = Vec3(W / 2, 0.2, 2.5);
+  s.build();
+  return s;
+}
+
+Scene build_scene(const std::string& style, uint64_t seed) {
+  if (style == "room") return build_room(seed);
+  if (style == "courtyard") return build_courtyard(seed);
+  if (style == "atrium") return build_atrium(seed);
+  throw std::invalid_argument("unknown scene style '" + style + "' (room | courtyard | atrium)");
+}
+
+Mat3 look_rotation(const Vec3& center, const Vec3& target) {
+  const Vec3 f = (target - center).normalized();
+  Vec3 r = f.cross(Vec3::UnitZ());
+  if (r.norm() < 1e-6) r = Vec3::UnitX();
+  r.normalize();
+  const Vec3 d = f.cross(r);
+  Mat3 R;
+  R.col(0) = r;
+  R.col(1) = d;
+  R.col(2) = f;
+  return R;
+}
+
+std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t seed, double min_step, double max_step) {
+  Rng rng(seed);
+  const Vec3 lo = scene.walk_min, hi = scene.walk_max;
+  // Walk back and forth along the long axis (y) while looking towards one end.
+  const bool towards_a = rng.chance(0.5);
+  const Vec3 focus = towards_a ? scene.focus_a : scene.focus_b;
+  auto free_point = [&](double y_frac) {
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      Vec3 p(rng.uniform(lo.x(), hi.x()), lo.y() + (hi.y() - lo.y()) * std::clamp(y_frac + rng.uniform(-0.1, 0.1), 0.0, 1.0),
+             rng.uniform(lo.z(), hi.z()));
+      if (!scene.blocked(p, 0.35)) return p;
+    }
+    return Vec3(((lo + hi) / 2).eval());
+  };
+  // Start at the end facing away from the focus, so the camera looks across the scene.
+  std::vector<Vec3> waypoints = {free_point(towards_a ? 0.0 : 1.0)};
+  for (int k = 1; k < 8; ++k) {
+    const double frac = (k % 2) ? 0.55 : 0.05;
+    waypoints.push_back(free_point(towards_a ? frac : 1.0 - frac));
+  }
+  std::vector<CameraPose> out;
+  Vec3 pos = waypoints[0];
+  size_t wp = 1;
+  double step = std::exp(rng.uniform(std::log(min_step), std::log(max_step)));
+  double look_phase = rng.uniform(0, 2 * kPi);
+  for (int i = 0; i < frames; ++i) {
+    // Gaze drifts smoothly around the focus point.
+    const Vec3 target = focus + Vec3(2.0 * std::sin(look_phase + 0.23 * i), 0, 0.6 * std::sin(0.7 * look_phase + 0.17 * i));
+    out.push_back({pos, look_rotation(pos, target)});
+    // Advance along the waypoint polyline by `step`, re-drawing the step length at each waypoint.
+    double remaining = step;
+    while (remaining > 0 && wp < waypoints.size()) {
+      const Vec3 to = waypoints[wp] - pos;
+      const double len = to.norm();
+      if (len > remaining) {
+        const Vec3 next = pos + to * (remaining / len);
+        if (!scene.blocked(next, 0.2)) pos = next;
+        remaining = 0;
+      } else {
+        pos = waypoints[wp++];
+        remaining -= len;
+        step = std::exp(rng.uniform(std::log(min_step), std::log(max_step)));
+      }
+    }
+    if (wp >= waypoints.size()) {
+      waypoints.push_back(free_point(rng.uniform(0.0, 1.0)));
+    }
+  }
+  return out;
+}
+
+}  // namespace isplat::synth

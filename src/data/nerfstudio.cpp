@@ -1,0 +1,139 @@
+// nerfstudio transforms.json reading and writing.
+#include "data/nerfstudio.h"
+
+#include <Eigen/Dense>
+#include <filesystem>
+
+#include "core/error.h"
+#include "geometry/convert.h"
+#include "io/atomic_file.h"
+
+namespace isplat {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+double number(const json& j, const char* key, const std::string& where) {
+  if (!j.contains(key)) fail(where, ": missing key '", key, "'");
+  if (!j[key].is_number()) fail(where, ": key '", key, "' must be a number, got ", j[key].dump());
+  return j[key].get<double>();
+}
+
+Eigen::Matrix4d matrix(const json& j, int rows, const std::string& where, const char* key) {
+  if (!j.is_array() || static_cast<int>(j.size()) != rows) fail(where, ": '", key, "' must have ", rows, " rows of 4");
+  Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < rows; ++r) {
+    if (!j[r].is_array() || j[r].size() != 4) fail(where, ": '", key, "' row ", r, " must have 4 numbers");
+    for (int c = 0; c < 4; ++c) {
+      if (!j[r][c].is_number()) fail(where, ": '", key, "' has a non-number at [", r, "][", c, "]");
+      M(r, c) = j[r][c].get<double>();
+    }
+  }
+  if (!M.allFinite()) fail(where, ": '", key, "' is not finite");
+  return M;
+}
+
+// Intrinsics from an object holding fl_x/fl_y/cx/cy/w/h (frame keys override the global ones).
+Intrinsics intrinsics(const json& global, const json& frame, const std::string& where, std::vector<double>& dist) {
+  auto pick = [&](const char* key) -> const json& { return frame.contains(key) ? frame : global; };
+  Intrinsics k;
+  k.fx = number(pick("fl_x"), "fl_x", where);
+  k.fy = pick("fl_y").contains("fl_y") ? number(pick("fl_y"), "fl_y", where) : k.fx;
+  k.width = static_cast<int>(number(pick("w"), "w", where));
+  k.height = static_cast<int>(number(pick("h"), "h", where));
+  k.cx = pick("cx").contains("cx") ? number(pick("cx"), "cx", where) : k.width / 2.0;
+  k.cy = pick("cy").contains("cy") ? number(pick("cy"), "cy", where) : k.height / 2.0;
+  const std::string model = pick("camera_model").value("camera_model", std::string("OPENCV"));
+  auto coef = [&](const char* key) { return pick(key).contains(key) ? number(pick(key), key, where) : 0.0; };
+  dist.clear();
+  if (model == "OPENCV") {
+    dist = {coef("k1"), coef("k2"), coef("p1"), coef("p2"), coef("k3"), coef("k4"), 0.0, 0.0};
+  } else if (model == "OPENCV_FISHEYE") {
+    if (coef("k1") != 0 || coef("k2") != 0 || coef("k3") != 0 || coef("k4") != 0)
+      fail(where, ": camera_model OPENCV_FISHEYE with non-zero distortion is not supported; undistort first");
+  } else if (model != "PINHOLE" && model != "SIMPLE_PINHOLE") {
+    fail(where, ": unsupported camera_model '", model, "' (PINHOLE, OPENCV, OPENCV_FISHEYE without distortion)");
+  }
+  if (std::all_of(dist.begin(), dist.end(), [](double x) { return x == 0.0; })) dist.clear();
+  return k;
+}
+
+}  // namespace
+
+Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset, const std::string& transforms_name) {
+  const std::string path = (fs::path(scene_dir) / transforms_name).string();
+  json j;
+  try {
+    j = json::parse(read_file_bytes(path));
+  } catch (const json::parse_error& e) {
+    fail(path, ": invalid JSON: ", e.what());
+  }
+  if (!j.is_object() || !j.contains("frames") || !j["frames"].is_array()) fail(path, ": missing 'frames' list");
+  if (j["frames"].empty()) fail(path, ": 'frames' is empty (empty sequence)");
+  Eigen::Matrix4d undo = Eigen::Matrix4d::Identity();
+  if (j.contains("applied_transform")) undo = matrix(j["applied_transform"], 3, path, "applied_transform").inverse();
+
+  Sequence seq;
+  seq.dataset = dataset;
+  seq.scene = fs::path(scene_dir).filename().string();
+  seq.name = "nerfstudio";
+  std::vector<json> frames(j["frames"].begin(), j["frames"].end());
+  for (size_t i = 0; i < frames.size(); ++i)
+    if (!frames[i].is_object() || !frames[i].contains("file_path") || !frames[i]["file_path"].is_string())
+      fail(path, ": frame ", i, " has no 'file_path'");
+  std::sort(frames.begin(), frames.end(), [](const json& a, const json& b) {
+    return a["file_path"].get<std::string>() < b["file_path"].get<std::string>();
+  });
+  for (const auto& fr : frames) {
+    const std::string rel = fr["file_path"].get<std::string>();
+    const std::string where = path + " frame '" + rel + "'";
+    FrameRecord f;
+    f.name = seq.scene + "/" + rel;
+    f.image_path = (fs::path(scene_dir) / rel).string();
+    if (!fs::exists(f.image_path)) fail(where, ": image file ", f.image_path, " does not exist");
+    if (!fr.contains("transform_matrix")) fail(where, ": missing 'transform_matrix'");
+    const Eigen::Matrix4d c2w = undo * matrix(fr["transform_matrix"], 4, where, "transform_matrix");
+    f.view.T_cw = pose_from_opengl_c2w(c2w);
+    f.view.intr = intrinsics(j, fr, where, f.distortion);
+    f.rescale_to_image = true;
+    if (fr.contains("depth_file_path")) {
+      const std::string d = (fs::path(scene_dir) / fr["depth_file_path"].get<std::string>()).string();
+      const std::string ext = fs::path(d).extension().string();
+      if (fs::exists(d)) {
+        f.depth_path = d;
+        f.depth = ext == ".exr" ? DepthSource::PlanarExr : DepthSource::Png16Millimetres;
+      }
+    }
+    seq.frames.push_back(std::move(f));
+  }
+  return seq;
+}
+
+void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr, const std::vector<NerfstudioFrameOut>& frames,
+                      const Eigen::Matrix4d& applied_transform) {
+  json j;
+  j["camera_model"] = "OPENCV";
+  j["fl_x"] = intr.fx;
+  j["fl_y"] = intr.fy;
+  j["cx"] = intr.cx;
+  j["cy"] = intr.cy;
+  j["w"] = intr.width;
+  j["h"] = intr.height;
+  for (const char* k : {"k1", "k2", "p1", "p2"}) j[k] = 0.0;
+  json at = json::array();
+  for (int r = 0; r < 3; ++r) at.push_back({applied_transform(r, 0), applied_transform(r, 1), applied_transform(r, 2), applied_transform(r, 3)});
+  j["applied_transform"] = at;
+  j["frames"] = json::array();
+  for (const auto& f : frames) {
+    const Eigen::Matrix4d c2w = applied_transform * opengl_c2w_from_pose(f.T_cw);
+    json m = json::array();
+    for (int r = 0; r < 4; ++r) m.push_back({c2w(r, 0), c2w(r, 1), c2w(r, 2), c2w(r, 3)});
+    json fr = {{"file_path", f.file_path}, {"transform_matrix", m}};
+    if (!f.depth_file_path.empty()) fr["depth_file_path"] = f.depth_file_path;
+    j["frames"].push_back(fr);
+  }
+  write_file_atomic((fs::path(scene_dir) / "transforms.json").string(), j.dump(2));
+}
+
+}  // namespace isplat

@@ -1,0 +1,37 @@
+// Tiny generated datasets for tests.
+#include "support/tiny_dataset.h"
+
+#include "core/log.h"
+#include "support/test_util.h"
+
+namespace isplat::test {
+
+GenerateOptions tiny_dataset_options(const std::string& out, int frames) {
+  GenerateOptions o;
+  o.out = out;
+  o.seed = 3;
+  o.train_scenes = 1;
+  o.val_scenes = 1;
+  o.test_scenes = 0;
+  o.frames = frames;
+  o.width = 64;
+  o.height = 48;
+  o.supersample = 1;
+  o.tilt_shift_every = 2;  // the second scene (val) uses a tilt-shift camera
+  o.eval_scenes = 1;
+  o.eval_frames = frames;
+  o.eval_width = 64;
+  o.eval_height = 48;
+  return o;
+}
+
+GenerateOptions make_tiny_dataset(const std::string& tag, int frames) {
+  GenerateOptions o = tiny_dataset_options(temp_dir(tag), frames);
+  const LogLevel before = log_level();
+  set_log_level(LogLevel::Warn);
+  generate_datasets(o);
+  set_log_level(before);
+  return o;
+}
+
+}  // namespace isplat::test

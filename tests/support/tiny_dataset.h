@@ -1,0 +1,15 @@
+// Tiny generated datasets for tests: a few low-resolution frames in every layout, made in well under a second.
+#pragma once
+#include <string>
+
+#include "data/synth/generate.h"
+
+namespace isplat::test {
+
+// Options for a small dataset: 1 train (tilt-shift) + 1 val scene of `frames` frames at 64x48, and one
+// scene per evaluation layout; callers may adjust before generating.
+GenerateOptions tiny_dataset_options(const std::string& out, int frames = 8);
+// Generates into a fresh temp folder and returns GenerateOptions used (options.out is the folder).
+GenerateOptions make_tiny_dataset(const std::string& tag, int frames = 8);
+
+}  // namespace isplat::test
