@@ -1,0 +1,103 @@
+// The release's bounded update rules: position in pixels, inverse depth through softplus, scale
+// through a sigmoid with unit value and slope at zero, rotation, colour and opacity through logits.
+#include "decoder/composer.h"
+
+#include <torch/torch.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "geometry/camera_torch.h"
+
+namespace isplat {
+
+void ComposerOptions::visit(ConfigVisitor& v) {
+  v.field("lambda_xy", lambda_xy, "position update step in pixels (release: 1e-3 NDC at 1536 px = 0.77 px)", Range::at_least(0));
+  v.field("lambda_z", lambda_z, "inverse-depth update step", Range::at_least(0));
+  v.field("color_step", color_step, "colour logit update step", Range::at_least(0));
+  v.field("scale_min", scale_min, "lower bound of the scale multiplier", Range::between(0, 1));
+  v.field("scale_max", scale_max, "upper bound of the scale multiplier (> 1)", Range::above(1));
+  v.field("linear_rgb", linear_rgb, "composite in linear RGB (sRGB -> linear on the colours)");
+}
+
+torch::Tensor srgb_to_linear(const torch::Tensor& x) {
+  return torch::where(x <= 0.04045, x / 12.92, torch::pow((torch::clamp_min(x, 0.04045) + 0.055) / 1.055, 2.4));
+}
+
+torch::Tensor linear_to_srgb(const torch::Tensor& x) {
+  auto c = torch::clamp_min(x, 0.0);
+  return torch::where(c <= 0.0031308, c * 12.92, 1.055 * torch::pow(torch::clamp_min(c, 0.0031308), 1.0 / 2.4) - 0.055);
+}
+
+torch::Tensor inverse_softplus(const torch::Tensor& y) {
+  // log(exp(y) - 1) = y + log(1 - exp(-y)); exact for small y, no overflow for large y.
+  return y + torch::log(-torch::expm1(-y));
+}
+
+torch::Tensor quaternion_multiply(const torch::Tensor& a, const torch::Tensor& b) {
+  auto aw = a.select(-1, 0), ax = a.select(-1, 1), ay = a.select(-1, 2), az = a.select(-1, 3);
+  auto bw = b.select(-1, 0), bx = b.select(-1, 1), by = b.select(-1, 2), bz = b.select(-1, 3);
+  return torch::stack({aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                       aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw},
+                      -1);
+}
+
+torch::Tensor quaternion_from_matrix(const torch::Tensor& R) {
+  auto r = R.to(torch::kFloat64).contiguous();
+  const double* m = r.data_ptr<double>();
+  Eigen::Matrix3d M;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) M(i, j) = m[i * 3 + j];
+  Eigen::Quaterniond q(M);
+  q.normalize();
+  return torch::tensor({q.w(), q.x(), q.y(), q.z()}, torch::kFloat64).to(R.scalar_type());
+}
+
+Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
+                         const ComposerOptions& o) {
+  const int64_t N = base.count();
+  ISPLAT_CHECK(delta.dim() == 2 && delta.size(0) == N && delta.size(1) == kDeltaDim, "composer: delta must be [", N, ", ",
+               kDeltaDim, "], got ", delta.sizes());
+  const auto dt = delta.scalar_type();
+  auto uv = base.uv.to(dt), z_n = base.z_n.to(dt), s_n = base.scale_n.to(dt), color = base.color.to(dt);
+  auto d_uv = delta.narrow(1, 0, 2), dz = delta.select(1, 2), ds = delta.narrow(1, 3, 3), dq = delta.narrow(1, 6, 4),
+       dc = delta.narrow(1, 10, 3), da = delta.select(1, 13);
+
+  // Position: pixel offset, then inverse depth through softplus (bounded away from zero depth).
+  auto uv2 = uv + o.lambda_xy * d_uv;
+  auto inv_z = torch::softplus(inverse_softplus(1.0 / z_n) + o.lambda_z * dz);
+  auto z2_n = 1.0 / inv_z;
+  auto means_n = backproject_points(uv2, z2_n, K.to(dt));
+  // Scale: s = s_base * (z'/z) * [(smax - smin) * sigmoid(a*ds + b) + smin], equal to s_base at ds = 0.
+  const double span = o.scale_max - o.scale_min;
+  const double a = span / ((1.0 - o.scale_min) * (o.scale_max - 1.0));
+  const double p = (1.0 - o.scale_min) / span, b = std::log(p / (1.0 - p));
+  auto factor = span * torch::sigmoid(a * ds + b) + o.scale_min;
+  auto scales_n = (s_n * (z2_n / z_n)).unsqueeze(1) * factor;
+  // Rotation, colour and opacity.
+  auto identity = torch::tensor({1.0, 0.0, 0.0, 0.0}, delta.options());
+  auto quats = identity + dq;
+  auto c = torch::sigmoid(torch::logit(color) + o.color_step * dc);
+  c = torch::clamp(c, 0.01, 0.99);
+  if (o.linear_rgb) c = srgb_to_linear(c);
+  auto opacity = torch::clamp(torch::sigmoid(da + std::log(0.5 / 0.5)), 0.01, 0.99);
+  // Back to metres.
+  const double inv_df = 1.0 / base.depth_factor;
+  return {means_n * inv_df, scales_n * inv_df, quats, c, opacity};
+}
+
+Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw) {
+  auto T_wc = invert_poses(T_cw.to(g.means.scalar_type()));
+  auto q_wc = quaternion_from_matrix(T_wc.narrow(0, 0, 3).narrow(1, 0, 3)).to(g.quats.scalar_type());
+  return {transform_points(T_wc, g.means), g.scales, quaternion_multiply(q_wc.expand_as(g.quats), g.quats), g.colors,
+          g.opacities};
+}
+
+Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K, const torch::Tensor& T_cw,
+                  const ComposerOptions& o) {
+  return camera_to_world(compose_camera(base, delta, K, o), T_cw);
+}
+
+}  // namespace isplat

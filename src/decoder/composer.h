@@ -1,0 +1,38 @@
+// GaussianComposer: base Gaussians + bounded 14-dim updates -> metric Gaussians (DESIGN §3, release).
+#pragma once
+#include <torch/types.h>
+
+#include "core/gaussians.h"
+#include "sampler/base_gaussians.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+// Delta layout: du, dv, dz, ds(3), dq(4, wxyz), dc(3), dalpha.
+constexpr int64_t kDeltaDim = 14;
+
+struct ComposerOptions {
+  double lambda_xy = 0.77;    // pixels per unit du/dv (release: 1e-3 NDC at 1536 px)
+  double lambda_z = 1e-3;     // inverse-depth step per unit dz
+  double color_step = 0.1;    // logit colour step per unit dc
+  double scale_min = 0.0, scale_max = 4.0;
+  bool linear_rgb = true;     // convert colours sRGB -> linear for compositing (release behaviour)
+  void visit(ConfigVisitor& v);
+};
+
+// Gaussians in the source camera frame (metres). delta: [N,14]; K: [3,3].
+Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
+                         const ComposerOptions& options);
+// The same, moved to the world frame with the source pose T_cw [4,4].
+Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K, const torch::Tensor& T_cw,
+                  const ComposerOptions& options);
+Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
+
+torch::Tensor srgb_to_linear(const torch::Tensor& x);
+torch::Tensor linear_to_srgb(const torch::Tensor& x);
+torch::Tensor inverse_softplus(const torch::Tensor& y);  // overflow-safe for large y
+torch::Tensor quaternion_multiply(const torch::Tensor& a, const torch::Tensor& b);  // [...,4] wxyz
+torch::Tensor quaternion_from_matrix(const torch::Tensor& R);  // [3,3] -> [4] wxyz
+
+}  // namespace isplat

@@ -1,0 +1,106 @@
+// Feature query, gated fusion and the update MLP; the dense ablation head.
+#include "decoder/implicit_decoder.h"
+
+#include <torch/torch.h>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "decoder/composer.h"
+
+namespace isplat {
+namespace nn = torch::nn;
+namespace F = torch::nn::functional;
+
+void DecoderOptions::visit(ConfigVisitor& v) {
+  v.field("mode", mode, "implicit (paper), dense (pixel-aligned conv head: 'w/o implicit decoder'), none "
+                        "(base Gaussians only: 'w/o learned updates')",
+          {"implicit", "dense", "none"});
+  v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C", Range::at_least(1));
+  v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
+}
+
+torch::Tensor query_features(const torch::Tensor& features, const torch::Tensor& uv, int64_t width, int64_t height) {
+  ISPLAT_CHECK(features.dim() == 4 && features.size(0) == 1, "query_features: features must be [1,C,h,w], got ",
+               features.sizes());
+  const double lim = 1.0 - 1e-6;
+  auto x = torch::clamp(uv.select(1, 0) * (2.0 / width) - 1.0, -lim, lim);
+  auto y = torch::clamp(uv.select(1, 1) * (2.0 / height) - 1.0, -lim, lim);
+  auto grid = torch::stack({x, y}, -1).view({1, 1, -1, 2}).to(features.dtype());
+  auto out = F::grid_sample(features, grid, F::GridSampleFuncOptions().mode(torch::kBilinear).padding_mode(torch::kBorder).align_corners(false));
+  return out.view({features.size(1), -1}).t();  // [N,C]
+}
+
+ImplicitDecoderImpl::ImplicitDecoderImpl(const DecoderOptions& o, int64_t dd, int64_t cd)
+    : dino_dim(dd), cnn_dim(cd), chunk(o.chunk) {
+  ISPLAT_CHECK(dd > 0 || cd > 0, "decoder: both encoder branches are off");
+  fused_dim = dd > 0 ? dd : cd;
+  if (dd > 0 && cd > 0) {
+    cnn_proj = register_module("cnn_proj", nn::Linear(cd, dd));
+    gate = register_module("gate", nn::Linear(2 * dd, dd));
+  }
+  std::vector<int64_t> hidden = o.hidden;
+  if (hidden.empty()) hidden = {fused_dim, std::max<int64_t>(16, fused_dim / 4), std::max<int64_t>(16, fused_dim / 16)};
+  mlp = register_module("mlp", nn::ModuleList());
+  int64_t in = fused_dim;
+  for (int64_t h : hidden) {
+    mlp->push_back(nn::Linear(in, h));
+    in = h;
+  }
+  head = register_module("head", nn::Linear(in, kDeltaDim));
+  torch::NoGradGuard g;
+  head->weight.zero_();  // step 0 renders the base Gaussians
+  head->bias.zero_();
+}
+
+torch::Tensor ImplicitDecoderImpl::decode_features(const torch::Tensor& f_dino, const torch::Tensor& f_cnn) {
+  torch::Tensor h;
+  if (dino_dim > 0 && cnn_dim > 0) {
+    auto c = cnn_proj->forward(f_cnn);
+    auto g = torch::sigmoid(gate->forward(torch::cat({f_dino, c}, 1)));
+    h = g * f_dino + (1 - g) * c;
+  } else {
+    h = dino_dim > 0 ? f_dino : f_cnn;
+  }
+  for (auto& layer : *mlp) h = torch::relu(layer->as<nn::Linear>()->forward(h));
+  return head->forward(h);
+}
+
+torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t width, int64_t height,
+                                           const EncoderFeatures& f) {
+  const int64_t N = uv.size(0);
+  std::vector<torch::Tensor> out;
+  for (int64_t s = 0; s < N; s += chunk) {
+    auto part = uv.narrow(0, s, std::min(chunk, N - s));
+    torch::Tensor fd, fc;
+    if (dino_dim > 0) fd = query_features(f.dino.narrow(0, 0, 1), part, width, height);
+    if (cnn_dim > 0) fc = query_features(f.cnn.narrow(0, 0, 1), part, width, height);
+    out.push_back(decode_features(fd, fc));
+  }
+  return out.size() == 1 ? out[0] : torch::cat(out, 0);
+}
+
+DenseHeadImpl::DenseHeadImpl(int64_t dd, int64_t cd, int64_t width) : dino_dim(dd), cnn_dim(cd) {
+  reduce = register_module("reduce", nn::Conv2d(nn::Conv2dOptions(dd + cd, width, 3).padding(1)));
+  refine1 = register_module("refine1", nn::Conv2d(nn::Conv2dOptions(width, width, 3).padding(1)));
+  refine2 = register_module("refine2", nn::Conv2d(nn::Conv2dOptions(width, width / 2, 3).padding(1)));
+  out = register_module("out", nn::Conv2d(nn::Conv2dOptions(width / 2, kDeltaDim, 1)));
+  torch::NoGradGuard g;
+  out->weight.zero_();
+  out->bias.zero_();
+}
+
+torch::Tensor DenseHeadImpl::forward(const EncoderFeatures& f, int64_t width, int64_t height) {
+  auto up = [](const torch::Tensor& x, int64_t h, int64_t w) {
+    return F::interpolate(x, F::InterpolateFuncOptions().size(std::vector<int64_t>{h, w}).mode(torch::kBilinear).align_corners(false));
+  };
+  const int64_t h4 = (height + 3) / 4, w4 = (width + 3) / 4;
+  std::vector<torch::Tensor> parts;
+  if (dino_dim > 0) parts.push_back(up(f.dino.narrow(0, 0, 1), h4, w4));
+  if (cnn_dim > 0) parts.push_back(up(f.cnn.narrow(0, 0, 1), h4, w4));
+  auto x = torch::relu(reduce->forward(torch::cat(parts, 1)));
+  x = torch::relu(refine1->forward(up(x, (height + 1) / 2, (width + 1) / 2)));
+  x = torch::relu(refine2->forward(up(x, height, width)));
+  return out->forward(x);
+}
+
+}  // namespace isplat

@@ -1,0 +1,51 @@
+// The shared implicit decoder (DESIGN §3, release): query both feature maps bilinearly at each support,
+// fuse them with a gate, and predict the 14-dim update through an MLP with a zero-initialized head.
+// Also the pixel-aligned dense head used by the "w/o implicit decoder" ablation.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <torch/nn/module.h>
+#include <torch/nn/modules/container/modulelist.h>
+#include <torch/nn/modules/conv.h>
+#include <torch/nn/modules/linear.h>
+#include <torch/nn/pimpl.h>
+
+#include "encoder/dual_encoder.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct DecoderOptions {
+  std::string mode = "implicit";  // implicit | dense | none
+  std::vector<int64_t> hidden;    // MLP widths; empty = [C, C/4, C/16] with C the fused width (ViT-L: 1024, 256, 64)
+  int64_t chunk = 80000;          // supports decoded per chunk
+  void visit(ConfigVisitor& v);
+};
+
+// Bilinear query of a feature map [1,C,h,w] at continuous pixel coordinates uv [N,2] of a W x H image
+// (grid_sample, align_corners = false, coordinates clamped to +-(1 - 1e-6)): returns [N,C].
+torch::Tensor query_features(const torch::Tensor& features, const torch::Tensor& uv, int64_t width, int64_t height);
+
+struct ImplicitDecoderImpl : torch::nn::Module {
+  ImplicitDecoderImpl(const DecoderOptions& options, int64_t dino_dim, int64_t cnn_dim);
+  // Updates [N,14] for supports uv [N,2] of a W x H image, from one image's features (batch index 0).
+  torch::Tensor forward(const torch::Tensor& uv, int64_t width, int64_t height, const EncoderFeatures& features);
+  torch::Tensor decode_features(const torch::Tensor& f_dino, const torch::Tensor& f_cnn);  // [N,*] -> [N,14]
+  torch::nn::Linear cnn_proj{nullptr}, gate{nullptr}, head{nullptr};
+  torch::nn::ModuleList mlp{nullptr};
+  int64_t dino_dim, cnn_dim, fused_dim, chunk;
+};
+TORCH_MODULE(ImplicitDecoder);
+
+// DPT-style head: fuses both maps at H/4, upsamples to full resolution and predicts 14 channels per pixel.
+struct DenseHeadImpl : torch::nn::Module {
+  DenseHeadImpl(int64_t dino_dim, int64_t cnn_dim, int64_t width = 64);
+  torch::Tensor forward(const EncoderFeatures& features, int64_t width, int64_t height);  // [1,14,H,W]
+  torch::nn::Conv2d reduce{nullptr}, refine1{nullptr}, refine2{nullptr}, out{nullptr};
+  int64_t dino_dim, cnn_dim;
+};
+TORCH_MODULE(DenseHead);
+
+}  // namespace isplat

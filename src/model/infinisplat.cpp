@@ -1,0 +1,93 @@
+// Model assembly with per-stage timings; ablations are switches on one code path.
+#include "model/infinisplat.h"
+
+#include <torch/torch.h>
+
+#include <chrono>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "core/log.h"
+
+namespace isplat {
+
+void ModelOptions::visit(ConfigVisitor& v) {
+  v.field("variant", variant, "rgb (monocular prior) or lidar (sparse-prompt prior); recorded in checkpoints",
+          {"rgb", "lidar"});
+  v.section("prior", "the frozen depth prior", prior);
+  v.section("sampler", "geometry-guided support sampling", sampler);
+  v.section("encoder", "the dual-branch encoder", encoder);
+  v.section("decoder", "the implicit decoder", decoder);
+  v.section("composer", "bounded Gaussian updates", composer);
+}
+
+InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o) {
+  encoder = register_module("encoder", DualEncoder(o.encoder));
+  const int64_t dd = encoder->dino_dim(), cd = o.encoder.cnn ? o.encoder.cnn_options.out_channels : 0;
+  if (o.decoder.mode == "implicit") decoder = register_module("decoder", ImplicitDecoder(o.decoder, dd, cd));
+  if (o.decoder.mode == "dense") dense = register_module("dense", DenseHead(dd, cd));
+  if (o.decoder.mode == "dense" && o.sampler.mode != "pixel")
+    log_warn("decoder.mode = dense predicts per pixel; the paper's ablation pairs it with sampler.mode = pixel");
+}
+
+namespace {
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
+                                    const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed) {
+  ISPLAT_CHECK(image.dim() == 3 && image.size(0) == 3, "model: image must be [3, H, W], got ", image.sizes());
+  const int64_t H = image.size(1), W = image.size(2);
+  ISPLAT_CHECK(depth.dim() == 2 && depth.size(0) == H && depth.size(1) == W, "model: depth ", depth.sizes(),
+               " must match the image ", H, "x", W);
+  Prediction p;
+  auto t0 = std::chrono::steady_clock::now();
+  p.supports = sample_supports(depth, valid, K, image, options.sampler, seed);
+  p.base = make_base_gaussians(p.supports);
+  p.timings_ms["sampler"] = ms_since(t0);
+  const int64_t N = p.supports.count();
+  if (options.decoder.mode == "none") {
+    p.delta = torch::zeros({N, kDeltaDim});
+  } else {
+    t0 = std::chrono::steady_clock::now();
+    const EncoderFeatures f = encoder->forward(image.unsqueeze(0));
+    p.timings_ms["encoder"] = ms_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    if (options.decoder.mode == "implicit") {
+      p.delta = decoder->forward(p.supports.uv, W, H, f);
+    } else {
+      p.delta = query_features(dense->forward(f, W, H), p.supports.uv, W, H);
+    }
+    p.timings_ms["decoder"] = ms_since(t0);
+  }
+  t0 = std::chrono::steady_clock::now();
+  p.gaussians = compose(p.base, p.delta, K.to(torch::kFloat32), T_cw.to(torch::kFloat32), options.composer);
+  p.timings_ms["composer"] = ms_since(t0);
+  return p;
+}
+
+Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
+                                    const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed) {
+  torch::NoGradGuard no_grad;
+  const bool was_training = is_training();
+  eval();
+  Prediction p = forward(image, K, T_cw, depth, valid, seed);
+  if (was_training) train();
+  return p;
+}
+
+Pipeline::Pipeline(const ModelOptions& options) : prior_(make_depth_prior(options.prior)), model_(options) {}
+
+Prediction Pipeline::run(const PriorInput& input, const torch::Tensor& T_cw, bool train) {
+  auto t0 = std::chrono::steady_clock::now();
+  const PriorOutput prior = prior_->predict(input);
+  const double prior_ms = ms_since(t0);
+  Prediction p = train ? model_->forward(input.image, prior.K, T_cw, prior.depth, prior.valid, input.seed)
+                       : model_->predict(input.image, prior.K, T_cw, prior.depth, prior.valid, input.seed);
+  p.timings_ms["prior"] = prior_ms;
+  return p;
+}
+
+}  // namespace isplat

@@ -1,0 +1,73 @@
+// The InfiniSplat model, end to end: supports from depth -> base Gaussians; image -> dual features;
+// implicit decoder -> 14-dim updates; composer -> metric Gaussians in the world frame.
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+
+#include <torch/nn/module.h>
+#include <torch/nn/pimpl.h>
+
+#include "core/gaussians.h"
+#include "decoder/composer.h"
+#include "decoder/implicit_decoder.h"
+#include "encoder/dual_encoder.h"
+#include "prior/depth_prior.h"
+#include "sampler/base_gaussians.h"
+#include "sampler/sampler.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct ModelOptions {
+  std::string variant = "rgb";  // rgb | lidar: which prior family the checkpoint was trained with
+  PriorOptions prior;
+  SamplerOptions sampler;
+  EncoderOptions encoder;
+  DecoderOptions decoder;
+  ComposerOptions composer;
+  void visit(ConfigVisitor& v);
+};
+
+struct Prediction {
+  Gaussians gaussians;    // world frame, metres
+  Supports supports;
+  BaseGaussians base;
+  torch::Tensor delta;    // [N,14]
+  std::map<std::string, double> timings_ms;  // sampler, encoder, decoder, composer
+};
+
+struct InfiniSplatImpl : torch::nn::Module {
+  explicit InfiniSplatImpl(const ModelOptions& options);
+
+  // image [3,H,W] sRGB; K [3,3]; T_cw [4,4]; depth/valid [H,W] from the prior. Differentiable in the
+  // network weights (supports and base Gaussians are fixed functions of the prior).
+  Prediction forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
+                     const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
+  // Inference: no autograd, decoder chunks bound memory.
+  Prediction predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
+                     const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
+
+  ModelOptions options;
+  DualEncoder encoder{nullptr};
+  ImplicitDecoder decoder{nullptr};
+  DenseHead dense{nullptr};
+};
+TORCH_MODULE(InfiniSplat);
+
+// Prior + model: the whole path from one photograph (and optional depth/prompts) to Gaussians.
+class Pipeline {
+ public:
+  explicit Pipeline(const ModelOptions& options);
+  Prediction run(const PriorInput& input, const torch::Tensor& T_cw, bool train);
+  PriorOutput prior_only(const PriorInput& input) { return prior_->predict(input); }
+  InfiniSplat& model() { return model_; }
+  const DepthPrior& prior() const { return *prior_; }
+
+ private:
+  std::unique_ptr<DepthPrior> prior_;
+  InfiniSplat model_;
+};
+
+}  // namespace isplat

@@ -1,0 +1,296 @@
+// Depth prior implementations and the sparse-prompt alignment.
+#include "prior/depth_prior.h"
+
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "io/safetensors.h"
+#include "prior/learned_depth.h"
+
+namespace isplat {
+namespace F = torch::nn::functional;
+
+void SparsePriorOptions::visit(ConfigVisitor& v) {
+  v.field("prompts", prompts, "sparse depth prompts drawn from the source depth (paper: 1500)", Range::at_least(3));
+  v.field("noise", noise, "multiplicative prompt noise sigma (Table 4 uses 0, 0.01, 0.03, 0.05)", Range::at_least(0));
+  v.field("mono", mono, "monocular prior aligned to the prompts", {"learned", "torchscript", "none"});
+  v.field("bandwidth", bandwidth, "residual scale field kernel width, fraction of the image diagonal", Range::above(0));
+}
+
+void PriorOptions::visit(ConfigVisitor& v) {
+  v.field("type", type, "depth prior: the tuple's own depth (oracle), sparse prompts (LiDAR variant), a TorchScript "
+                        "model, or the project's learned net (RGB-only default)",
+          {"dataset", "sparse", "torchscript", "learned"});
+  v.field("hfov_deg", hfov_deg, "horizontal field of view assumed when an image comes without intrinsics",
+          Range::between(1, 179));
+  v.field("torchscript", torchscript, "traced depth model: input [1,3,H,W] in [0,1], output metric depth [1,1,H,W]");
+  v.field("learned_weights", learned_weights, "safetensors of the learned depth net (train it with task: depth); "
+                                              "empty = untrained, which the log says");
+  v.field("learned_width", learned_width, "channel width of the learned depth net", Range::at_least(4));
+  v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
+}
+
+torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg) {
+  const double f = 0.5 * width / std::tan(0.5 * hfov_deg * M_PI / 180.0);
+  return torch::tensor({f, 0.0, width / 2.0, 0.0, f, height / 2.0, 0.0, 0.0, 1.0}, torch::kFloat64).reshape({3, 3}).to(torch::kFloat32);
+}
+
+namespace {
+
+torch::Tensor intrinsics_for(const PriorInput& in, double hfov) {
+  return in.K.defined() ? in.K.to(torch::kFloat32) : estimate_K(in.image.size(2), in.image.size(1), hfov);
+}
+
+void check_image(const PriorInput& in) {
+  ISPLAT_CHECK(in.image.defined() && in.image.dim() == 3 && in.image.size(0) == 3,
+               "depth prior: image must be [3, H, W], got ", in.image.defined() ? in.image.sizes() : torch::IntArrayRef{});
+}
+
+PriorOutput finish(torch::Tensor depth, torch::Tensor K) {
+  depth = depth.to(torch::kFloat32);
+  auto valid = (torch::isfinite(depth) & (depth > 0)).to(torch::kFloat32);
+  return {torch::where(valid > 0, depth, torch::zeros_like(depth)), K, valid};
+}
+
+class DatasetPrior final : public DepthPrior {
+ public:
+  explicit DatasetPrior(const PriorOptions& o) : o_(o) {}
+  PriorOutput predict(const PriorInput& in) override {
+    check_image(in);
+    ISPLAT_CHECK(in.depth.defined(), "prior.type = dataset needs the frame's depth, and this input has none; use "
+                                     "prior.type = learned | torchscript | sparse");
+    auto d = in.depth.to(torch::kFloat32);
+    if (in.valid.defined()) d = torch::where(in.valid > 0, d, torch::zeros_like(d));
+    return finish(d, intrinsics_for(in, o_.hfov_deg));
+  }
+  std::string describe() const override { return "dataset depth (oracle)"; }
+
+ private:
+  PriorOptions o_;
+};
+
+class LearnedPrior final : public DepthPrior {
+ public:
+  explicit LearnedPrior(const PriorOptions& o) : o_(o), net_(o.learned_width) {
+    if (o.learned_weights.empty()) {
+      log_warn("depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
+               "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
+    } else {
+      const SafeTensors st = read_safetensors(o.learned_weights);
+      torch::NoGradGuard g;
+      for (auto& p : net_->named_parameters(true)) {
+        if (!st.has(p.key())) fail(o.learned_weights, ": missing tensor '", p.key(), "' (learned_width must match)");
+        const auto& t = st.at(p.key());
+        if (t.sizes() != p.value().sizes())
+          fail(o.learned_weights, ": tensor '", p.key(), "' has shape ", t.sizes(), ", the net expects ", p.value().sizes(),
+               " (prior.learned_width must match the trained net)");
+        p.value().copy_(t);
+      }
+    }
+    net_->eval();
+  }
+  PriorOutput predict(const PriorInput& in) override {
+    check_image(in);
+    torch::NoGradGuard g;
+    auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32))[0][0];
+    return finish(d, intrinsics_for(in, o_.hfov_deg));
+  }
+  std::string describe() const override {
+    return o_.learned_weights.empty() ? "learned depth net (untrained)" : "learned depth net (" + o_.learned_weights + ")";
+  }
+
+ private:
+  PriorOptions o_;
+  LearnedDepthNet net_;
+};
+
+class TorchScriptPrior final : public DepthPrior {
+ public:
+  explicit TorchScriptPrior(const PriorOptions& o) : o_(o) {
+    ISPLAT_CHECK(!o.torchscript.empty(), "prior.type = torchscript needs prior.torchscript (path of a traced model)");
+    ISPLAT_CHECK(std::filesystem::exists(o.torchscript), o.torchscript, ": no such file (prior.torchscript)");
+    try {
+      module_ = torch::jit::load(o.torchscript);
+    } catch (const std::exception& e) {
+      fail(o.torchscript, ": cannot load TorchScript model: ", e.what());
+    }
+    module_.eval();
+  }
+  PriorOutput predict(const PriorInput& in) override {
+    check_image(in);
+    torch::NoGradGuard g;
+    const int64_t H = in.image.size(1), W = in.image.size(2);
+    torch::jit::IValue out;
+    try {
+      out = module_.forward({in.image.unsqueeze(0).to(torch::kFloat32)});
+    } catch (const std::exception& e) {
+      fail(o_.torchscript, ": the depth model failed on a [1,3,", H, ",", W, "] input: ", e.what());
+    }
+    ISPLAT_CHECK(out.isTensor(), o_.torchscript, ": the depth model must return one tensor (metric depth [1,1,H,W])");
+    auto d = out.toTensor();
+    // Contract: [1,1,H,W]; [1,H,W] and [H,W] are accepted as the same thing.
+    if (d.dim() == 4 && d.size(0) == 1 && d.size(1) == 1) d = d[0][0];
+    else if (d.dim() == 3 && d.size(0) == 1) d = d[0];
+    if (d.dim() != 2 || d.size(0) != H || d.size(1) != W)
+      fail(o_.torchscript, ": depth model returned shape ", out.toTensor().sizes(), ", expected [1, 1, ", H, ", ", W,
+           "] (metric depth at the input size)");
+    return finish(d, intrinsics_for(in, o_.hfov_deg));
+  }
+  std::string describe() const override { return "TorchScript depth model (" + o_.torchscript + ")"; }
+
+ private:
+  PriorOptions o_;
+  torch::jit::Module module_;
+};
+
+class SparsePrior final : public DepthPrior {
+ public:
+  explicit SparsePrior(const PriorOptions& o) : o_(o) {
+    if (o.sparse.mono == "learned") {
+      mono_ = std::make_unique<LearnedPrior>(o);
+    } else if (o.sparse.mono == "torchscript") {
+      mono_ = std::make_unique<TorchScriptPrior>(o);
+    }
+  }
+  PriorOutput predict(const PriorInput& in) override {
+    check_image(in);
+    torch::NoGradGuard g;
+    torch::Tensor prompts = in.prompts;
+    if (!prompts.defined()) {
+      ISPLAT_CHECK(in.depth.defined(), "prior.type = sparse needs prompts or the frame's depth to draw them from");
+      prompts = draw_prompts(in.depth, in.valid.defined() ? in.valid : (in.depth > 0), o_.sparse.prompts, o_.sparse.noise, in.seed);
+    }
+    ISPLAT_CHECK(prompts.dim() == 2 && prompts.size(1) == 3 && prompts.size(0) >= 3,
+                 "sparse prior: prompts must be [P>=3, 3] (u, v, z), got ", prompts.sizes());
+    const int64_t H = in.image.size(1), W = in.image.size(2);
+    torch::Tensor mono = mono_ ? mono_->predict(in).depth : torch::ones({H, W});
+    return finish(align_to_prompts(mono, prompts, o_.sparse.bandwidth), intrinsics_for(in, o_.hfov_deg));
+  }
+  std::string describe() const override {
+    return cat("sparse prompts (", o_.sparse.prompts, ", noise ", o_.sparse.noise, ") aligning ",
+               mono_ ? mono_->describe() : std::string("a constant"));
+  }
+
+ private:
+  PriorOptions o_;
+  std::unique_ptr<DepthPrior> mono_;
+};
+
+float sample_bilinear(const float* m, int64_t H, int64_t W, double u, double v) {
+  const double x = std::clamp(u - 0.5, 0.0, W - 1.0), y = std::clamp(v - 0.5, 0.0, H - 1.0);
+  const int64_t j = std::min<int64_t>(static_cast<int64_t>(x), W - 2 < 0 ? 0 : W - 2), i = std::min<int64_t>(static_cast<int64_t>(y), H - 2 < 0 ? 0 : H - 2);
+  const int64_t j1 = std::min(j + 1, W - 1), i1 = std::min(i + 1, H - 1);
+  const double fx = x - j, fy = y - i;
+  return static_cast<float>((m[i * W + j] * (1 - fx) + m[i * W + j1] * fx) * (1 - fy) + (m[i1 * W + j] * (1 - fx) + m[i1 * W + j1] * fx) * fy);
+}
+
+}  // namespace
+
+torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise, uint64_t seed) {
+  auto d = depth.to(torch::kFloat32).contiguous();
+  auto ok = ((valid != 0) & torch::isfinite(d) & (d > 0)).contiguous();
+  auto idx = torch::nonzero(ok.flatten()).squeeze(1);
+  ISPLAT_CHECK(idx.numel() > 0, "sparse prior: the source depth has no valid pixel to draw prompts from");
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 12345);
+  std::normal_distribution<double> eps(0.0, 1.0);
+  const int64_t W = d.size(1), n = std::min<int64_t>(count, idx.numel());
+  auto out = torch::empty({n, 3});
+  const int64_t* ip = idx.data_ptr<int64_t>();
+  const float* dp = d.data_ptr<float>();
+  float* op = out.data_ptr<float>();
+  // Partial Fisher-Yates: n distinct pixels.
+  std::vector<int64_t> pool(ip, ip + idx.numel());
+  for (int64_t k = 0; k < n; ++k) {
+    const int64_t r = k + static_cast<int64_t>(rng() % static_cast<uint64_t>(pool.size() - k));
+    std::swap(pool[k], pool[r]);
+    const int64_t p = pool[k];
+    op[3 * k] = static_cast<float>(p % W + 0.5);
+    op[3 * k + 1] = static_cast<float>(p / W + 0.5);
+    op[3 * k + 2] = static_cast<float>(dp[p] * std::max(0.05, 1.0 + noise * eps(rng)));
+  }
+  return out;
+}
+
+torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts, double bandwidth) {
+  auto mono = mono_depth.to(torch::kFloat32).contiguous();
+  auto pr = prompts.to(torch::kFloat32).contiguous();
+  const int64_t H = mono.size(0), W = mono.size(1), P = pr.size(0);
+  const float* m = mono.data_ptr<float>();
+  const float* p = pr.data_ptr<float>();
+  // 1. Global scale/shift in inverse depth: a * r + b = 1/z, least squares with one trimming pass.
+  std::vector<double> r(P), t(P);
+  for (int64_t i = 0; i < P; ++i) {
+    r[i] = 1.0 / std::max(1e-6f, sample_bilinear(m, H, W, p[3 * i], p[3 * i + 1]));
+    t[i] = 1.0 / std::max(1e-6f, p[3 * i + 2]);
+  }
+  std::vector<char> use(P, 1);
+  double a = 1, b = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    double sr = 0, st = 0, srr = 0, srt = 0, n = 0;
+    for (int64_t i = 0; i < P; ++i)
+      if (use[i]) sr += r[i], st += t[i], srr += r[i] * r[i], srt += r[i] * t[i], n += 1;
+    const double den = n * srr - sr * sr;
+    if (n >= 2 && std::fabs(den) > 1e-12 * n * srr) {
+      a = (n * srt - sr * st) / den;
+      b = (st - a * sr) / n;
+    } else {  // constant mono depth: shift only
+      a = 0;
+      b = st / std::max(1.0, n);
+    }
+    if (a < 0) {  // an inverted prior is useless: fall back to a pure shift
+      a = 0;
+      b = st / std::max(1.0, n);
+    }
+    std::vector<double> res;
+    for (int64_t i = 0; i < P; ++i) res.push_back(std::fabs(a * r[i] + b - t[i]));
+    std::vector<double> sorted = res;
+    std::nth_element(sorted.begin(), sorted.begin() + P / 2, sorted.end());
+    const double mad = sorted[P / 2] + 1e-9;
+    for (int64_t i = 0; i < P; ++i) use[i] = res[i] <= 4.0 * mad;
+  }
+  // 2. Residual log-scale at the prompts, spread by a Gaussian kernel on a coarse grid.
+  auto aligned = torch::empty({H, W});
+  float* al = aligned.data_ptr<float>();
+  for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
+  std::vector<double> logs(P);
+  for (int64_t i = 0; i < P; ++i) logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, sample_bilinear(al, H, W, p[3 * i], p[3 * i + 1])));
+  const int64_t cell = 8, gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
+  const double sigma = bandwidth * std::sqrt(double(H) * H + double(W) * W), inv2s2 = 1.0 / (2 * sigma * sigma);
+  auto field = torch::empty({1, 1, gh, gw});
+  float* f = field.data_ptr<float>();
+  at::parallel_for(0, gh, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t gy = b0; gy < b1; ++gy)
+      for (int64_t gx = 0; gx < gw; ++gx) {
+        const double cx = (gx + 0.5) * cell, cy = (gy + 0.5) * cell;
+        double sw = 0, s = 0;
+        for (int64_t i = 0; i < P; ++i) {
+          const double dx = p[3 * i] - cx, dy = p[3 * i + 1] - cy;
+          const double w = std::exp(-(dx * dx + dy * dy) * inv2s2);
+          sw += w;
+          s += w * logs[i];
+        }
+        f[gy * gw + gx] = static_cast<float>(s / (sw + 1e-3));  // far from every prompt: no correction
+      }
+  });
+  auto up = F::interpolate(field, F::InterpolateFuncOptions().size(std::vector<int64_t>{gh * cell, gw * cell}).mode(torch::kBilinear).align_corners(false));
+  up = up[0][0].narrow(0, 0, H).narrow(1, 0, W);
+  return aligned * torch::exp(up);
+}
+
+std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o) {
+  if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);
+  if (o.type == "learned") return std::make_unique<LearnedPrior>(o);
+  if (o.type == "torchscript") return std::make_unique<TorchScriptPrior>(o);
+  if (o.type == "sparse") return std::make_unique<SparsePrior>(o);
+  fail("prior.type: unknown '", o.type, "'");
+}
+
+}  // namespace isplat

@@ -1,0 +1,64 @@
+// Frozen depth priors behind one interface (DESIGN §3): the tuple's own depth, the sparse-prompt "LiDAR"
+// variant, a user's TorchScript model, and the project's own small learned network.
+#pragma once
+#include <memory>
+#include <string>
+
+#include <torch/types.h>
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct SparsePriorOptions {
+  int64_t prompts = 1500;      // paper: 1,500 LiDAR-like prompts
+  double noise = 0.0;          // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
+  std::string mono = "learned";// monocular prior aligned to the prompts: learned | torchscript | none
+  double bandwidth = 0.08;     // residual scale field: Gaussian kernel width as a fraction of the image diagonal
+  void visit(ConfigVisitor& v);
+};
+
+struct PriorOptions {
+  std::string type = "dataset";     // dataset | sparse | torchscript | learned
+  double hfov_deg = 60.0;           // field of view assumed when no intrinsics are given
+  std::string torchscript;          // path of a traced model: input [1,3,H,W] in [0,1] -> metric depth [1,1,H,W]
+  std::string learned_weights;      // safetensors of the learned depth net (from `task: depth` training)
+  int64_t learned_width = 32;       // channel width of the learned depth net
+  SparsePriorOptions sparse;
+  void visit(ConfigVisitor& v);
+};
+
+struct PriorInput {
+  torch::Tensor image;    // [3,H,W] sRGB in [0,1]
+  torch::Tensor K;        // [3,3] or undefined (estimated from hfov_deg)
+  torch::Tensor depth;    // [H,W] dataset depth (dataset prior; prompt source for sparse), may be undefined
+  torch::Tensor valid;    // [H,W]
+  torch::Tensor prompts;  // [P,3] (u, v, z) sparse prompts given directly (e.g. from COLMAP points), optional
+  uint64_t seed = 0;      // prompt draw and noise
+};
+
+struct PriorOutput {
+  torch::Tensor depth;  // [H,W] planar metres, 0 where invalid
+  torch::Tensor K;      // [3,3]
+  torch::Tensor valid;  // [H,W] float 0/1
+};
+
+class DepthPrior {
+ public:
+  virtual ~DepthPrior() = default;
+  virtual PriorOutput predict(const PriorInput& input) = 0;  // frozen: no gradients
+  virtual std::string describe() const = 0;
+};
+
+std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& options);
+
+// Pinhole K for a W x H image with the given horizontal field of view.
+torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);
+
+// Sparse alignment (exposed for tests): mono depth [H,W] aligned to prompts [P,3] with a global
+// scale/shift in inverse depth, then a smooth residual scale field.
+torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts, double bandwidth);
+// Draws `count` prompts (u, v, z) from valid depth, with multiplicative noise sigma (deterministic in seed).
+torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise, uint64_t seed);
+
+}  // namespace isplat

@@ -1,0 +1,347 @@
+// Area-weighted stratified support sampling: per-row passes over raw pointers with at::parallel_for.
+// Rows are processed in a fixed chunking, so results do not depend on the thread count.
+#include "sampler/sampler.h"
+
+#include <ATen/Parallel.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace isplat {
+
+void SamplerOptions::visit(ConfigVisitor& v) {
+  v.field("mode", mode, "support placement: area-weighted on the depth surface (paper), one per pixel (ablation), "
+                        "or the release's gradient-priority vertices + area-weighted faces",
+          {"area", "pixel", "vertex_face"});
+  v.field("budget_mode", budget_mode, "fixed count, or adaptive: per image pixel, or per steradian of valid surface",
+          {"fixed", "per_pixel", "solid_angle"});
+  v.field("budget", budget, "number of supports when budget_mode = fixed (paper: 1.5M at 1536x1024)", Range::at_least(1));
+  v.field("density", density, "supports per pixel (per_pixel) or per steradian (solid_angle)", Range::above(0));
+  v.field("min_budget", min_budget, "lower bound for adaptive budgets", Range::at_least(1));
+  v.field("max_budget", max_budget, "upper bound for adaptive budgets", Range::at_least(1));
+  v.field("vertex_fraction", vertex_fraction, "vertex_face: fraction of supports on gradient-priority vertices",
+          Range::unit());
+}
+
+double discontinuity_threshold(double z_mean) {
+  const double t = std::clamp(std::log10(std::max(z_mean, 1e-12)) / 2.0, 0.0, 1.0);
+  return 1.05 + 0.05 * t;
+}
+
+namespace {
+
+struct Grid {
+  const float* depth;
+  const float* valid;
+  const float* image;  // [3,H,W]
+  int64_t H, W;
+  double fx, fy, cx, cy, skew;
+};
+
+Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K, const torch::Tensor& image,
+               torch::Tensor& d_keep, torch::Tensor& v_keep, torch::Tensor& i_keep) {
+  ISPLAT_CHECK(depth.dim() == 2, "sampler: depth must be [H, W], got ", depth.sizes());
+  ISPLAT_CHECK(valid.sizes() == depth.sizes(), "sampler: valid ", valid.sizes(), " differs from depth ", depth.sizes());
+  ISPLAT_CHECK(image.dim() == 3 && image.size(0) == 3 && image.size(1) == depth.size(0) && image.size(2) == depth.size(1),
+               "sampler: image must be [3, H, W] matching depth ", depth.sizes(), ", got ", image.sizes());
+  ISPLAT_CHECK(K.sizes() == torch::IntArrayRef({3, 3}), "sampler: K must be [3, 3], got ", K.sizes());
+  d_keep = depth.detach().to(torch::kFloat32).contiguous();
+  // NaN/inf/<=0 depth is invalid whatever the mask says.
+  v_keep = ((valid.detach().to(torch::kFloat32) != 0) & torch::isfinite(d_keep) & (d_keep > 0)).to(torch::kFloat32).contiguous();
+  i_keep = image.detach().to(torch::kFloat32).contiguous();
+  auto Kd = K.detach().to(torch::kFloat64).contiguous();
+  const double* k = Kd.data_ptr<double>();
+  return {d_keep.data_ptr<float>(), v_keep.data_ptr<float>(), i_keep.data_ptr<float>(), depth.size(0), depth.size(1),
+          k[0], k[4], k[2], k[5], k[1]};
+}
+
+inline void backproject(const Grid& g, double u, double v, double z, double* X) {
+  const double y = (v - g.cy) / g.fy;
+  X[0] = (u - g.cx - g.skew * y) / g.fx * z;
+  X[1] = y * z;
+  X[2] = z;
+}
+
+// Triangle t of quad (i, j): 0 = (i,j),(i,j+1),(i+1,j); 1 = (i,j+1),(i+1,j+1),(i+1,j).
+inline void triangle_pixels(int64_t i, int64_t j, int t, int64_t (&r)[3], int64_t (&c)[3]) {
+  if (t == 0) {
+    r[0] = i, c[0] = j, r[1] = i, c[1] = j + 1, r[2] = i + 1, c[2] = j;
+  } else {
+    r[0] = i, c[0] = j + 1, r[1] = i + 1, c[1] = j + 1, r[2] = i + 1, c[2] = j;
+  }
+}
+
+// Area of an accepted triangle, 0 when a vertex is invalid or it spans a depth discontinuity.
+double triangle_area(const Grid& g, int64_t i, int64_t j, int t) {
+  int64_t r[3], c[3];
+  triangle_pixels(i, j, t, r, c);
+  double z[3], P[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const int64_t idx = r[k] * g.W + c[k];
+    if (g.valid[idx] == 0.0f) return 0.0;
+    z[k] = g.depth[idx];
+    backproject(g, c[k] + 0.5, r[k] + 0.5, z[k], P[k]);
+  }
+  const double zmin = std::min({z[0], z[1], z[2]}), zmax = std::max({z[0], z[1], z[2]});
+  if (zmax / zmin >= discontinuity_threshold((z[0] + z[1] + z[2]) / 3.0)) return 0.0;
+  double e1[3], e2[3];
+  for (int k = 0; k < 3; ++k) e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
+  const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+  return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+}
+
+inline float bilinear(const float* m, int64_t H, int64_t W, double u, double v) {
+  const double x = std::clamp(u - 0.5, 0.0, static_cast<double>(W - 1)), y = std::clamp(v - 0.5, 0.0, static_cast<double>(H - 1));
+  const int64_t j0 = std::min<int64_t>(static_cast<int64_t>(x), W - 1), i0 = std::min<int64_t>(static_cast<int64_t>(y), H - 1);
+  const int64_t j1 = std::min(j0 + 1, W - 1), i1 = std::min(i0 + 1, H - 1);
+  const double fx = x - j0, fy = y - i0;
+  return static_cast<float>((m[i0 * W + j0] * (1 - fx) + m[i0 * W + j1] * fx) * (1 - fy) +
+                            (m[i1 * W + j0] * (1 - fx) + m[i1 * W + j1] * fx) * fy);
+}
+
+// 64-bit mix for per-triangle sequence offsets.
+inline uint64_t mix(uint64_t x) {
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdull;
+  x ^= x >> 33;
+  x *= 0xc4ceb9fe1a85ec53ull;
+  return x ^ (x >> 33);
+}
+inline double unit(uint64_t x) { return static_cast<double>(mix(x) >> 11) * (1.0 / 9007199254740992.0); }
+
+struct Output {
+  float *uv, *depth, *color, *area;
+};
+
+void write_support(const Grid& g, const Output& o, int64_t k, double u, double v, float z, float area) {
+  o.uv[2 * k] = static_cast<float>(u);
+  o.uv[2 * k + 1] = static_cast<float>(v);
+  o.depth[k] = z;
+  for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear(g.image + c * g.H * g.W, g.H, g.W, u, v);
+  o.area[k] = area;
+}
+
+// Fixed row chunks (independent of the thread count) so sums and outputs are reproducible.
+constexpr int64_t kRowChunk = 8;
+
+// Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
+double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first) {
+  const int64_t Hq = g.H - 1, Wq = g.W - 1;
+  ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
+  std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
+  std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
+  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
+    for (int64_t chunk = b; chunk < e; ++chunk)
+      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
+        double s = 0;
+        for (int64_t j = 0; j < Wq; ++j)
+          for (int t = 0; t < 2; ++t) {
+            const double a = triangle_area(g, i, j, t);
+            area[(i * Wq + j) * 2 + t] = static_cast<float>(a);
+            s += static_cast<float>(a);
+          }
+        row_sum[i] = s;
+      }
+  });
+  std::vector<double> row_start(static_cast<size_t>(Hq) + 1, 0.0);
+  for (int64_t i = 0; i < Hq; ++i) row_start[i + 1] = row_start[i] + row_sum[i];
+  const double total = row_start[Hq];
+  ISPLAT_CHECK(total > 0, "sampler: the depth map has no valid triangle (all depth is invalid, NaN/inf/<=0, or broken "
+                          "by discontinuities)");
+  if (n == 0) return total;
+  // Systematic (stratified) allocation over the cumulative area, in exact integer arithmetic so that
+  // row boundaries agree and rejected (zero-area) triangles can never receive a support:
+  // triangle q gets floor((C_end*n + X)/Q) - floor((C_start*n + X)/Q) supports.
+  std::vector<int64_t> qarea(area.size());
+  std::vector<int64_t> row_qsum(static_cast<size_t>(Hq), 0);
+  const double quantum = std::ldexp(1.0, 40) / total;
+  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
+    for (int64_t chunk = b; chunk < e; ++chunk)
+      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
+        int64_t rs = 0;
+        for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) rs += qarea[q] = std::llround(area[q] * quantum);
+        row_qsum[i] = rs;
+      }
+  });
+  std::vector<int64_t> row_qstart(static_cast<size_t>(Hq) + 1, 0);
+  for (int64_t i = 0; i < Hq; ++i) row_qstart[i + 1] = row_qstart[i] + row_qsum[i];
+  const __int128 Q = row_qstart[Hq];
+  ISPLAT_CHECK(Q > 0, "sampler: the depth map has no valid triangle");
+  const __int128 X = static_cast<__int128>(unit(seed * 2654435761ull + 17) * static_cast<double>(Q));
+  std::vector<int32_t> counts(area.size());
+  std::vector<int64_t> row_count(static_cast<size_t>(Hq), 0);
+  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
+    for (int64_t chunk = b; chunk < e; ++chunk)
+      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
+        __int128 c = row_qstart[i];
+        __int128 prev = (c * n + X) / Q;
+        int64_t rc = 0;
+        for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) {
+          c += qarea[q];
+          const __int128 cur = (c * n + X) / Q;
+          counts[q] = static_cast<int32_t>(cur - prev);
+          rc += counts[q];
+          prev = cur;
+        }
+        row_count[i] = rc;
+      }
+  });
+  std::vector<int64_t> row_first(static_cast<size_t>(Hq) + 1, first);
+  for (int64_t i = 0; i < Hq; ++i) row_first[i + 1] = row_first[i] + row_count[i];
+  ISPLAT_CHECK(row_first[Hq] - first == n, "sampler: allocated ", row_first[Hq] - first, " supports, expected ", n);
+  // R2 low-discrepancy sequence inside each triangle, offset per triangle.
+  constexpr double g2 = 1.32471795724474602596;
+  const double a1 = 1.0 / g2, a2 = 1.0 / (g2 * g2);
+  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
+    for (int64_t chunk = b; chunk < e; ++chunk)
+      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
+        int64_t k = row_first[i];
+        for (int64_t j = 0; j < Wq; ++j)
+          for (int t = 0; t < 2; ++t) {
+            const int64_t q = (i * Wq + j) * 2 + t;
+            const int32_t cnt = counts[q];
+            if (cnt == 0) continue;
+            int64_t r[3], c[3];
+            triangle_pixels(i, j, t, r, c);
+            // Bilinear depth only when the quad's other triangle is accepted too (no discontinuity).
+            const bool quad_ok = area[(i * Wq + j) * 2 + (1 - t)] > 0;
+            // Allocation is proportional to area, so every support stands for the same area, total / n
+            // (= A_t / n_t in expectation). Unlike A_t / n_t it stays right when n is below the triangle
+            // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
+            const float rep = static_cast<float>(total / n);
+            const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
+                         s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
+            for (int32_t m = 0; m < cnt; ++m, ++k) {
+              double b1 = s1 + (m + 1) * a1, b2 = s2 + (m + 1) * a2;
+              b1 -= std::floor(b1);
+              b2 -= std::floor(b2);
+              if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
+              const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
+              const double v = r[0] + 0.5 + b1 * (r[1] - r[0]) + b2 * (r[2] - r[0]);
+              float z;
+              if (quad_ok) {
+                z = bilinear(g.depth, g.H, g.W, u, v);
+              } else {
+                const float z0 = g.depth[r[0] * g.W + c[0]], z1 = g.depth[r[1] * g.W + c[1]], z2 = g.depth[r[2] * g.W + c[2]];
+                z = static_cast<float>(z0 + b1 * (z1 - z0) + b2 * (z2 - z0));
+              }
+              write_support(g, o, k, u, v, z, rep);
+            }
+          }
+      }
+  });
+  return total;
+}
+
+// Footprint of pixel (i, j): the area of its quad's accepted triangles, else z^2 / (fx fy).
+float pixel_area(const Grid& g, int64_t i, int64_t j) {
+  if (i + 1 < g.H && j + 1 < g.W) {
+    const double a = triangle_area(g, i, j, 0) + triangle_area(g, i, j, 1);
+    if (a > 0) return static_cast<float>(a);
+  }
+  const double z = g.depth[i * g.W + j];
+  return static_cast<float>(z * z / (g.fx * g.fy));
+}
+
+Supports allocate(int64_t n) {
+  Supports s;
+  s.uv = torch::empty({n, 2});
+  s.depth = torch::empty({n});
+  s.color = torch::empty({n, 3});
+  s.area = torch::empty({n});
+  return s;
+}
+
+Output pointers(Supports& s) {
+  return {s.uv.data_ptr<float>(), s.depth.data_ptr<float>(), s.color.data_ptr<float>(), s.area.data_ptr<float>()};
+}
+
+}  // namespace
+
+int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K) {
+  if (o.budget_mode == "fixed") return o.budget;
+  int64_t n = 0;
+  if (o.budget_mode == "per_pixel") {
+    n = static_cast<int64_t>(std::llround(o.density * depth.size(0) * depth.size(1)));
+  } else if (o.budget_mode == "solid_angle") {
+    // Solid angle of the valid pixels: each pixel subtends ~ cos^3(theta) / (fx fy) steradians.
+    auto Kd = K.to(torch::kFloat64);
+    const double fx = Kd[0][0].item<double>(), fy = Kd[1][1].item<double>(), cx = Kd[0][2].item<double>(),
+                 cy = Kd[1][2].item<double>();
+    auto uv = torch::stack(torch::meshgrid({torch::arange(depth.size(0), torch::kFloat64) + 0.5,
+                                            torch::arange(depth.size(1), torch::kFloat64) + 0.5}, "ij"), -1);
+    auto x = (uv.select(-1, 1) - cx) / fx, y = (uv.select(-1, 0) - cy) / fy;
+    auto cos3 = torch::pow(1.0 + x * x + y * y, -1.5);
+    auto ok = ((valid != 0) & torch::isfinite(depth) & (depth > 0)).to(torch::kFloat64);
+    const double omega = (cos3 * ok).sum().item<double>() / (fx * fy);
+    n = static_cast<int64_t>(std::llround(o.density * omega));
+  } else {
+    fail("sampler.budget_mode: unknown '", o.budget_mode, "'");
+  }
+  return std::clamp(n, o.min_budget, std::max(o.min_budget, o.max_budget));
+}
+
+Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
+                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
+  torch::NoGradGuard no_grad;
+  torch::Tensor dk, vk, ik;
+  const Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
+  if (options.mode == "pixel") {
+    std::vector<int64_t> idx;
+    for (int64_t p = 0; p < g.H * g.W; ++p)
+      if (g.valid[p] != 0.0f) idx.push_back(p);
+    ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
+    Supports s = allocate(static_cast<int64_t>(idx.size()));
+    const Output o = pointers(s);
+    at::parallel_for(0, static_cast<int64_t>(idx.size()), 4096, [&](int64_t b, int64_t e) {
+      for (int64_t k = b; k < e; ++k) {
+        const int64_t i = idx[k] / g.W, j = idx[k] % g.W;
+        write_support(g, o, k, j + 0.5, i + 0.5, g.depth[idx[k]], pixel_area(g, i, j));
+      }
+    });
+    return s;
+  }
+  const int64_t n = resolve_budget(options, dk, vk, K);
+  if (options.mode == "area") {
+    Supports s = allocate(n);
+    sample_faces(g, n, seed, pointers(s), 0);
+    return s;
+  }
+  ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode, "' (area | pixel | vertex_face)");
+  // Vertices: valid pixel centres with the strongest image gradients (the release's priority).
+  std::vector<std::pair<float, int64_t>> priority;
+  for (int64_t i = 0; i < g.H; ++i)
+    for (int64_t j = 0; j < g.W; ++j) {
+      if (g.valid[i * g.W + j] == 0.0f) continue;
+      float grad = 0;
+      for (int c = 0; c < 3; ++c) {
+        const float* m = g.image + c * g.H * g.W;
+        const float gx = m[i * g.W + std::min(j + 1, g.W - 1)] - m[i * g.W + std::max<int64_t>(j - 1, 0)];
+        const float gy = m[std::min(i + 1, g.H - 1) * g.W + j] - m[std::max<int64_t>(i - 1, 0) * g.W + j];
+        grad += gx * gx + gy * gy;
+      }
+      priority.emplace_back(-grad, i * g.W + j);  // ties broken by pixel index: deterministic
+    }
+  ISPLAT_CHECK(!priority.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
+  const int64_t nv = std::min<int64_t>(static_cast<int64_t>(std::llround(options.vertex_fraction * n)),
+                                       static_cast<int64_t>(priority.size()));
+  std::partial_sort(priority.begin(), priority.begin() + nv, priority.end());
+  Supports s = allocate(n);
+  const Output o = pointers(s);
+  for (int64_t k = 0; k < nv; ++k) {
+    const int64_t i = priority[k].second / g.W, j = priority[k].second % g.W;
+    write_support(g, o, k, j + 0.5, i + 0.5, g.depth[priority[k].second], pixel_area(g, i, j));
+  }
+  const double total = sample_faces(g, n - nv, seed, o, nv);
+  // Vertices and faces both stand for the surface: rescale so the areas sum to the surface area once.
+  const double sum = s.area.sum().item<double>();
+  if (sum > 0) s.area.mul_(total / sum);
+  return s;
+}
+
+}  // namespace isplat

@@ -1,0 +1,46 @@
+// Geometry-guided support sampling on the back-projected depth surface (DESIGN §3): supports are placed
+// in proportion to 3D triangle area, not on the pixel grid; plus the pixel and vertex+face modes.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include <torch/types.h>
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct SamplerOptions {
+  std::string mode = "area";          // area | pixel | vertex_face
+  std::string budget_mode = "fixed";  // fixed | per_pixel | solid_angle
+  int64_t budget = 100000;            // supports, for budget_mode "fixed"
+  double density = 1.0;               // supports per image pixel (per_pixel) or per steradian (solid_angle)
+  int64_t min_budget = 1000, max_budget = 4000000;
+  double vertex_fraction = 0.65;      // vertex_face: share of the budget spent on gradient-priority vertices
+  void visit(ConfigVisitor& v);
+};
+
+// Supports in the source camera. Depth and colour are read bilinearly at uv (barycentric inside a triangle
+// whose quad neighbour was rejected, so values never mix across a depth discontinuity).
+struct Supports {
+  torch::Tensor uv;     // [N,2] continuous pixel coordinates (pixel centres at +0.5)
+  torch::Tensor depth;  // [N] planar metres
+  torch::Tensor color;  // [N,3] sRGB in [0,1]
+  torch::Tensor area;   // [N] surface area each support stands for, m² (area mode: total / N)
+  int64_t count() const { return uv.size(0); }
+};
+
+// The number of supports the options ask for on this depth map (valid: [H,W] 0/1, K: [3,3]).
+int64_t resolve_budget(const SamplerOptions& options, const torch::Tensor& depth, const torch::Tensor& valid,
+                       const torch::Tensor& K);
+
+// depth [H,W] float (planar metres), valid [H,W] (nonzero = valid), K [3,3], image [3,H,W] sRGB.
+// Deterministic in `seed`; the count equals the resolved budget (pixel mode: one per valid pixel).
+// Throws Error when no triangle (or pixel) is valid.
+Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
+                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed = 0);
+
+// The release's discontinuity test: a triangle is rejected when zmax/zmin >= this threshold.
+double discontinuity_threshold(double z_mean);
+
+}  // namespace isplat

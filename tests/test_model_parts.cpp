@@ -1,0 +1,161 @@
+// Encoder, decoder and composer: shapes, the DINOv3 checkpoint names, grid_sample conventions at pixel
+// centres and corners, zero updates reproducing the base Gaussians, and bad input.
+#include <catch2/catch.hpp>
+
+#include <torch/torch.h>
+
+#include "core/error.h"
+#include "decoder/composer.h"
+#include "decoder/implicit_decoder.h"
+#include "encoder/dual_encoder.h"
+#include "geometry/camera_torch.h"
+#include "io/safetensors.h"
+#include "support/test_util.h"
+
+using namespace isplat;
+
+namespace {
+ViTOptions tiny_vit() {
+  ViTOptions v;
+  v.size = "custom";
+  v.embed_dim = 32;
+  v.depth = 2;
+  v.heads = 2;
+  return v;
+}
+}  // namespace
+
+TEST_CASE("encoder: ViT and CNN give feature maps at 1/16 and 1/4", "[encoder]") {
+  EncoderOptions o;
+  o.vit = tiny_vit();
+  o.cnn_options.width = 8;
+  DualEncoder enc(o);
+  auto f = enc->forward(torch::rand({2, 3, 64, 96}));
+  CHECK(f.dino.sizes() == torch::IntArrayRef({2, 32, 4, 6}));
+  CHECK(f.cnn.sizes() == torch::IntArrayRef({2, 128, 16, 24}));
+  auto g = enc->forward(torch::rand({1, 3, 50, 70}));  // resized to 48x64
+  CHECK(g.dino.sizes() == torch::IntArrayRef({1, 32, 3, 4}));
+  CHECK_THROWS_WITH(enc->forward(torch::rand({1, 3, 12, 40})), Catch::Contains("smaller than one 16x16 ViT patch"));
+  o.dino = false;
+  DualEncoder cnn_only(o);
+  CHECK_FALSE(cnn_only->forward(torch::rand({1, 3, 32, 32})).dino.defined());
+  o.cnn = false;
+  CHECK_THROWS_WITH(DualEncoder(o), Catch::Contains("cannot both be false"));
+}
+
+TEST_CASE("encoder: parameters carry the official DINOv3 names and a checkpoint loads", "[encoder]") {
+  DinoViT a(tiny_vit()), b(tiny_vit());
+  std::map<std::string, torch::Tensor> state;
+  for (const auto& p : a->named_parameters(true)) state[p.key()] = p.value().detach().clone();
+  for (const auto& p : a->named_buffers(true)) state[p.key()] = p.value().detach().clone();
+  for (const char* name : {"cls_token", "storage_tokens", "mask_token", "patch_embed.proj.weight", "rope_embed.periods",
+                           "blocks.0.norm1.weight", "blocks.0.attn.qkv.weight", "blocks.0.attn.qkv.bias",
+                           "blocks.0.attn.qkv.bias_mask", "blocks.0.attn.proj.weight", "blocks.0.ls1.gamma",
+                           "blocks.1.mlp.fc1.weight", "blocks.1.mlp.fc2.bias", "blocks.1.ls2.gamma", "norm.bias"})
+    CHECK(state.count(name) == 1);
+  CHECK(state.at("storage_tokens").sizes() == torch::IntArrayRef({1, 4, 32}));
+  CHECK(state.at("rope_embed.periods").sizes() == torch::IntArrayRef({4}));  // head dim 16 / 4
+  CHECK(state.at("blocks.0.attn.qkv.bias_mask").narrow(0, 32, 32).abs().sum().item<float>() == 0.0f);  // K bias masked
+  const auto dir = test::temp_dir("dinov3");
+  state["local_cls_norm.weight"] = torch::ones({32});  // present in some official checkpoints; ignored
+  write_safetensors(dir + "/vit.safetensors", state);
+  auto x = torch::rand({1, 3, 32, 48});
+  CHECK_FALSE(torch::allclose(a->forward(x), b->forward(x)));
+  load_dinov3_safetensors(b, dir + "/vit.safetensors");
+  CHECK(torch::allclose(a->forward(x), b->forward(x)));
+
+  state.erase("norm.bias");
+  state["blocks.7.attn.qkv.weight"] = torch::zeros({96, 32});
+  state["blocks.0.ls1.gamma"] = torch::zeros({31});
+  write_safetensors(dir + "/bad.safetensors", state);
+  try {
+    load_dinov3_safetensors(b, dir + "/bad.safetensors");
+    FAIL("expected an error");
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    CHECK_THAT(msg, Catch::Contains("missing keys: norm.bias"));
+    CHECK_THAT(msg, Catch::Contains("unexpected keys: blocks.7.attn.qkv.weight"));
+    CHECK_THAT(msg, Catch::Contains("shape mismatches: blocks.0.ls1.gamma"));
+  }
+}
+
+TEST_CASE("decoder: grid_sample query matches hand-computed bilinear values", "[decoder]") {
+  // A 4x4 map over a 16x16 image: texel (i, j) covers pixels [4j, 4j+4) x [4i, 4i+4), centre at 4j+2.
+  auto f = torch::arange(16, torch::kFloat32).view({1, 1, 4, 4});
+  auto uv = torch::tensor({{2.0f, 2.0f},     // centre of texel (0,0)
+                           {10.0f, 6.0f},    // centre of texel (1,2)
+                           {4.0f, 2.0f},     // halfway between texels (0,0) and (0,1)
+                           {0.0f, 0.0f},     // image corner: clamped to the border texel
+                           {16.0f, 16.0f},   // opposite corner
+                           {4.0f, 4.0f}});   // centre of texels (0,0),(0,1),(1,0),(1,1)
+  auto q = query_features(f, uv, 16, 16).squeeze(1);
+  CHECK(q[0].item<float>() == Approx(0.0f));
+  CHECK(q[1].item<float>() == Approx(6.0f));
+  CHECK(q[2].item<float>() == Approx(0.5f));
+  CHECK(q[3].item<float>() == Approx(0.0f).margin(1e-5));
+  CHECK(q[4].item<float>() == Approx(15.0f).margin(1e-4));
+  CHECK(q[5].item<float>() == Approx(2.5f));
+}
+
+TEST_CASE("decoder: zero-initialized head and gated fusion shapes", "[decoder]") {
+  DecoderOptions o;
+  o.chunk = 7;  // several chunks
+  ImplicitDecoder d(o, 32, 128);
+  EncoderFeatures f{torch::rand({1, 32, 3, 4}), torch::rand({1, 128, 12, 16})};
+  auto uv = torch::rand({20, 2}) * 48;
+  auto delta = d->forward(uv, 64, 48, f);
+  CHECK(delta.sizes() == torch::IntArrayRef({20, 14}));
+  CHECK(delta.abs().max().item<float>() == 0.0f);  // step 0 renders the base Gaussians
+  CHECK(d->mlp->size() == 3);
+  ImplicitDecoder cnn_only(o, 0, 128);
+  CHECK(cnn_only->forward(uv, 64, 48, EncoderFeatures{torch::Tensor(), f.cnn}).sizes() == torch::IntArrayRef({20, 14}));
+  DenseHead dense(32, 128);
+  auto map = dense->forward(f, 64, 48);
+  CHECK(map.sizes() == torch::IntArrayRef({1, 14, 48, 64}));
+}
+
+TEST_CASE("composer: zero updates reproduce the base Gaussians exactly", "[composer]") {
+  BaseGaussians b;
+  b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}});
+  b.depth_factor = 0.5;  // min depth 2 m
+  b.z_n = torch::tensor({1.0f, 2.5f});
+  b.scale_n = torch::tensor({0.01f, 0.02f});
+  b.color = torch::tensor({{0.2f, 0.5f, 0.9f}, {0.01f, 0.99f, 0.5f}});
+  b.opacity = torch::full({2}, 0.5f);
+  auto K = make_K(50, 55, 32, 24, torch::kFloat64);
+  ComposerOptions o;
+  auto g = compose_camera(b, torch::zeros({2, 14}, torch::kFloat64), K, o);
+  auto z = torch::tensor({2.0, 5.0}, torch::kFloat64);
+  auto expect_means = backproject_points(b.uv.to(torch::kFloat64), z, K);
+  CHECK(torch::allclose(g.means, expect_means, 1e-9, 1e-12));
+  auto expect_scales = (b.scale_n.to(torch::kFloat64) / b.depth_factor).unsqueeze(1).expand({2, 3});
+  CHECK(torch::allclose(g.scales, expect_scales, 1e-9, 1e-12));
+  CHECK(torch::allclose(g.quats, torch::tensor({{1.0, 0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}}, torch::kFloat64)));
+  CHECK(torch::allclose(g.colors, srgb_to_linear(torch::clamp(b.color.to(torch::kFloat64), 0.01, 0.99)), 1e-9, 1e-12));
+  CHECK(torch::allclose(g.opacities, torch::full({2}, 0.5, torch::kFloat64)));
+  // Scale multiplier: 1 with slope 1 at ds = 0, bounded by [0, 4].
+  auto d = torch::zeros({2, 14}, torch::kFloat64);
+  d.select(1, 3).fill_(1e-4);
+  auto g2 = compose_camera(b, d, K, o);
+  CHECK((g2.scales.select(1, 0) / g.scales.select(1, 0) - 1.0)[0].item<double>() == Approx(1e-4).epsilon(1e-3));
+  d.select(1, 3).fill_(1e3);
+  CHECK((compose_camera(b, d, K, o).scales.select(1, 0) / g.scales.select(1, 0))[0].item<double>() == Approx(4.0));
+  // Depth stays positive however large dz is.
+  d.zero_();
+  d.select(1, 2).fill_(-1e6);
+  CHECK((compose_camera(b, d, K, o).means.select(1, 2) > 0).all().item<bool>());
+  CHECK(inverse_softplus(torch::tensor({100.0})).item<double>() == Approx(100.0));
+}
+
+TEST_CASE("composer: world transform moves means and rotates quaternions", "[composer]") {
+  Gaussians g{torch::tensor({{0.0, 0.0, 2.0}}), torch::ones({1, 3}) * 0.1, torch::tensor({{1.0, 0.0, 0.0, 0.0}}),
+              torch::full({1, 3}, 0.5), torch::full({1}, 0.5)};
+  // Camera at world (1, 0, 0) rotated 90 degrees about y.
+  auto T_cw = torch::eye(4, torch::kFloat64);
+  T_cw.narrow(0, 0, 3).narrow(1, 0, 3).copy_(torch::tensor({0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0}, torch::kFloat64).view({3, 3}));
+  T_cw.narrow(0, 0, 3).select(1, 3).copy_(-torch::matmul(T_cw.narrow(0, 0, 3).narrow(1, 0, 3), torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64)));
+  auto w = camera_to_world(g.to(torch::kFloat64), T_cw);
+  auto back = transform_points(T_cw, w.means);
+  CHECK(torch::allclose(back, g.means.to(torch::kFloat64), 1e-9, 1e-12));
+  CHECK(std::abs(w.quats[0][0].item<double>()) == Approx(std::sqrt(0.5)));
+}

@@ -1,0 +1,101 @@
+// Depth priors: dataset passthrough, TorchScript contract and errors, sparse-prompt alignment and its
+// determinism, the learned net's shapes.
+#include <catch2/catch.hpp>
+
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include "core/error.h"
+#include "prior/depth_prior.h"
+#include "prior/learned_depth.h"
+#include "support/test_util.h"
+
+using namespace isplat;
+
+namespace {
+// Smooth positive depth field over H x W.
+torch::Tensor scene_depth(int64_t H, int64_t W) {
+  auto y = torch::linspace(0, 1, H).view({H, 1}), x = torch::linspace(0, 1, W).view({1, W});
+  return 2.0 + 1.5 * x + 0.5 * torch::sin(3.0 * y) * x;
+}
+std::string save_module(const std::string& dir, const std::string& name, const std::string& body) {
+  torch::jit::Module m(name);
+  m.define(body);
+  const std::string path = dir + "/" + name + ".pt";
+  m.save(path);
+  return path;
+}
+}  // namespace
+
+TEST_CASE("prior: dataset depth passes through with its mask and an estimated K", "[prior]") {
+  PriorOptions o;
+  auto prior = make_depth_prior(o);
+  PriorInput in;
+  in.image = torch::rand({3, 24, 32});
+  in.depth = scene_depth(24, 32);
+  in.depth[0][0] = std::numeric_limits<float>::quiet_NaN();
+  auto out = prior->predict(in);
+  CHECK(out.valid[0][0].item<float>() == 0.0f);
+  CHECK(out.depth[0][0].item<float>() == 0.0f);
+  CHECK(out.valid.sum().item<float>() == 24 * 32 - 1);
+  CHECK(out.K[0][0].item<float>() == Approx(16.0 / std::tan(M_PI / 6)));  // 60 degrees by default
+  in.depth = torch::Tensor();
+  CHECK_THROWS_WITH(prior->predict(in), Catch::Contains("needs the frame's depth"));
+}
+
+TEST_CASE("prior: a TorchScript model follows the documented contract", "[prior]") {
+  const auto dir = test::temp_dir("prior_ts");
+  PriorOptions o;
+  o.type = "torchscript";
+  o.torchscript = save_module(dir, "good", "def forward(self, x):\n    return x.mean(1, keepdim=True) * 2.0 + 1.0\n");
+  auto prior = make_depth_prior(o);
+  PriorInput in;
+  in.image = torch::full({3, 16, 20}, 0.5f);
+  auto out = prior->predict(in);
+  CHECK(out.depth.sizes() == torch::IntArrayRef({16, 20}));
+  CHECK(out.depth[3][4].item<float>() == Approx(2.0f));
+  o.torchscript = save_module(dir, "bad", "def forward(self, x):\n    return x[:, :, ::2, :]\n");
+  auto bad = make_depth_prior(o);
+  CHECK_THROWS_WITH(bad->predict(in), Catch::Contains("returned shape [1, 3, 8, 20], expected [1, 1, 16, 20]"));
+  o.torchscript = dir + "/none.pt";
+  CHECK_THROWS_WITH(make_depth_prior(o), Catch::Contains("none.pt: no such file"));
+}
+
+TEST_CASE("prior: sparse prompts align a wrong-scale monocular depth", "[prior]") {
+  const int64_t H = 48, W = 64;
+  auto truth = scene_depth(H, W);
+  // A monocular prior off by an affine map in inverse depth and a smooth multiplicative bias.
+  auto inv = (1.0 / truth - 0.05) / 2.0;
+  auto mono = 1.0 / inv * (1.0 + 0.1 * torch::linspace(-1, 1, H).view({H, 1}));
+  auto prompts = draw_prompts(truth, torch::ones({H, W}), 300, 0.0, 7);
+  auto aligned = align_to_prompts(mono, prompts, 0.15);
+  const double before = ((mono - truth).abs() / truth).mean().item<double>();
+  const double after = ((aligned - truth).abs() / truth).mean().item<double>();
+  INFO("relative error before " << before << " after " << after);
+  CHECK(before > 0.5);
+  CHECK(after < 0.02);
+  // Prompts are deterministic in the seed, and noise perturbs them.
+  CHECK(torch::equal(prompts, draw_prompts(truth, torch::ones({H, W}), 300, 0.0, 7)));
+  auto noisy = draw_prompts(truth, torch::ones({H, W}), 300, 0.05, 7);
+  CHECK(torch::equal(noisy.narrow(1, 0, 2), prompts.narrow(1, 0, 2)));
+  CHECK_FALSE(torch::allclose(noisy.select(1, 2), prompts.select(1, 2)));
+  // The full prior with no monocular net densifies from the prompts alone.
+  PriorOptions o;
+  o.type = "sparse";
+  o.sparse.mono = "none";
+  o.sparse.prompts = 1500;
+  auto prior = make_depth_prior(o);
+  PriorInput in;
+  in.image = torch::rand({3, H, W});
+  in.depth = truth;
+  auto out = prior->predict(in);
+  CHECK(((out.depth - truth).abs() / truth).mean().item<double>() < 0.05);
+}
+
+TEST_CASE("prior: the learned net predicts positive metric depth at the input size", "[prior]") {
+  LearnedDepthNet net(8);
+  auto d = net->forward(torch::rand({2, 3, 40, 56}));
+  CHECK(d.sizes() == torch::IntArrayRef({2, 1, 40, 56}));
+  CHECK((d > 0).all().item<bool>());
+  CHECK(d.mean().item<float>() == Approx(3.0f).epsilon(0.3));  // starts at room scale
+}

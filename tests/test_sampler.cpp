@@ -1,0 +1,168 @@
+// Geometry-guided sampler: density follows 3D area, discontinuities and holes get no supports, the
+// count equals the budget, seeds are reproducible, and adaptive budgets scale with the scene.
+#include <catch2/catch.hpp>
+
+#include <torch/torch.h>
+
+#include "geometry/camera_torch.h"
+#include "sampler/base_gaussians.h"
+#include "sampler/sampler.h"
+
+using namespace isplat;
+
+namespace {
+// 48 x 64 quads, so 8x8 blocks and 4 column strips align with whole quads.
+constexpr int64_t H = 49, W = 65;
+const double fx = 60.0, fy = 60.0, cx = 32.0, cy = 24.0;
+torch::Tensor K() { return make_K(fx, fy, cx, cy); }
+torch::Tensor image() { return torch::rand({3, H, W}); }
+torch::Tensor ones() { return torch::ones({H, W}); }
+SamplerOptions fixed(int64_t n) {
+  SamplerOptions o;
+  o.budget = n;
+  return o;
+}
+// Counts of supports whose u falls in each of `bins` vertical strips.
+std::vector<double> column_histogram(const Supports& s, int bins) {
+  std::vector<double> h(bins, 0.0);
+  auto u = s.uv.select(1, 0);
+  for (int64_t k = 0; k < s.count(); ++k) {
+    const double x = (u[k].item<double>() - 0.5) / (W - 1);
+    h[std::min(bins - 1, static_cast<int>(x * bins))] += 1;
+  }
+  return h;
+}
+}  // namespace
+
+TEST_CASE("sampler: a fronto-parallel plane gets a uniform density and the exact count", "[sampler]") {
+  auto depth = torch::full({H, W}, 2.0f);
+  const Supports s = sample_supports(depth, ones(), K(), image(), fixed(6000), 1);
+  REQUIRE(s.count() == 6000);
+  // Stratified allocation runs over quads in row-major order: each quad row (a contiguous stretch)
+  // gets its share N/48 +- 1, and each 8x6-quad block, made of 6 row stretches, N/64 +- 6.
+  std::vector<int> rows(H - 1, 0), blocks(8 * 8, 0);
+  auto uv = s.uv.contiguous();
+  const float* p = uv.data_ptr<float>();
+  for (int64_t k = 0; k < s.count(); ++k) {
+    const int row = std::min<int>(H - 2, static_cast<int>(p[2 * k + 1] - 0.5));
+    rows[row]++;
+    blocks[(row / 6) * 8 + std::min(7, static_cast<int>((p[2 * k] - 0.5) / 8))]++;
+  }
+  for (int c : rows) CHECK(std::abs(c - 6000.0 / 48) <= 1.0);
+  for (int c : blocks) CHECK(std::abs(c - 6000.0 / 64) <= 6.0);
+  // Represented areas add up to the plane's area between pixel centres.
+  const double area = ((W - 1) * 2.0 / fx) * ((H - 1) * 2.0 / fy);
+  CHECK(s.area.sum().item<double>() == Approx(area).epsilon(1e-4));
+  CHECK(torch::allclose(s.depth, torch::full({6000}, 2.0f)));
+}
+
+TEST_CASE("sampler: a slanted plane gets density proportional to its 3D area", "[sampler]") {
+  // Plane z = 1 + 0.9 * X, i.e. depth rising to the right: columns far away cover more surface.
+  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto x = (u - cx) / fx;
+  auto z_row = 1.0 / (1.0 - 0.9 * x);  // z = 1 + 0.9 * x * z
+  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  const Supports s = sample_supports(depth, ones(), K(), image(), fixed(20000), 3);
+  // Expected share of each strip from the areas of its triangles, computed independently.
+  auto P = backproject_depth(depth, K());
+  std::vector<double> area(4, 0.0);
+  for (int64_t j = 0; j + 1 < W; ++j) {
+    double col = 0;
+    for (int64_t i = 0; i + 1 < H; ++i) {
+      auto a = P[i][j], b = P[i][j + 1], c = P[i + 1][j], d = P[i + 1][j + 1];
+      col += 0.5 * torch::cross(b - a, c - a).norm().item<double>() + 0.5 * torch::cross(d - b, c - b).norm().item<double>();
+    }
+    area[std::min<int64_t>(3, j * 4 / (W - 1))] += col;
+  }
+  const double total = area[0] + area[1] + area[2] + area[3];
+  const auto h = column_histogram(s, 4);
+  for (int b = 0; b < 4; ++b) CHECK(h[b] / 20000.0 == Approx(area[b] / total).margin(0.005));
+  CHECK(h[3] > 1.5 * h[0]);  // really non-uniform in the image
+}
+
+TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
+  auto depth = torch::full({H, W}, 1.0f);
+  depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40
+  auto valid = ones();
+  depth.narrow(0, 10, 8).narrow(1, 5, 10).fill_(std::numeric_limits<float>::quiet_NaN());  // a hole
+  const Supports s = sample_supports(depth, valid, K(), image(), fixed(8000), 5);
+  CHECK(s.count() == 8000);
+  auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
+  // Triangles spanning the step lie between the pixel centres 39.5 and 40.5.
+  CHECK(((u > 39.5 + 1e-4) & (u < 40.5 - 1e-4)).sum().item<int64_t>() == 0);
+  // Triangles touching a NaN pixel lie within one pixel of the hole.
+  CHECK(((u > 4.5 + 1e-4) & (u < 15.5 - 1e-4) & (v > 9.5 + 1e-4) & (v < 18.5 - 1e-4)).sum().item<int64_t>() == 0);
+  CHECK(torch::isfinite(s.depth).all().item<bool>());
+  // Depth never mixes across the step.
+  CHECK(((s.depth > 1.01) & (s.depth < 2.99)).sum().item<int64_t>() == 0);
+}
+
+TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {
+  auto depth = 1.0 + torch::rand({H, W});
+  auto img = image();
+  const Supports a = sample_supports(depth, ones(), K(), img, fixed(3000), 11);
+  const Supports b = sample_supports(depth, ones(), K(), img, fixed(3000), 11);
+  const Supports c = sample_supports(depth, ones(), K(), img, fixed(3000), 12);
+  CHECK(torch::equal(a.uv, b.uv));
+  CHECK(torch::equal(a.color, b.color));
+  CHECK_FALSE(torch::equal(a.uv, c.uv));
+}
+
+TEST_CASE("sampler: pixel and vertex_face modes, and adaptive budgets", "[sampler]") {
+  auto depth = torch::full({H, W}, 2.0f);
+  auto valid = ones();
+  valid.narrow(0, 0, 12).zero_();  // top quarter invalid (sky)
+  SamplerOptions px;
+  px.mode = "pixel";
+  const Supports p = sample_supports(depth, valid, K(), image(), px);
+  CHECK(p.count() == (H - 12) * W);
+  CHECK(p.uv[0][0].item<float>() == 0.5f);
+  CHECK(p.uv[0][1].item<float>() == 12.5f);
+
+  SamplerOptions vf = fixed(2000);
+  vf.mode = "vertex_face";
+  auto img = torch::zeros({3, H, W});
+  img.narrow(2, 30, 4).fill_(1.0f);  // strong vertical edges at columns 29/30 and 33/34
+  const Supports v = sample_supports(depth, valid, K(), img, vf);
+  CHECK(v.count() == 2000);
+  auto first = v.uv.narrow(0, 0, 10).select(1, 0);  // top-priority vertices sit on the edges
+  CHECK(((first > 28) & (first < 35)).all().item<bool>());
+
+  SamplerOptions pp;
+  pp.budget_mode = "per_pixel";
+  pp.density = 0.5;
+  pp.min_budget = 1;
+  CHECK(resolve_budget(pp, depth, valid, K()) == (H * W + 1) / 2);
+  SamplerOptions sa;
+  sa.budget_mode = "solid_angle";
+  sa.density = 20000.0;
+  sa.min_budget = 1;
+  const int64_t full = resolve_budget(sa, depth, ones(), K());
+  const int64_t part = resolve_budget(sa, depth, valid, K());
+  CHECK(full > 0);
+  CHECK(static_cast<double>(part) / full == Approx(37.0 / 49.0).margin(0.05));  // the top 12 rows are sky
+  CHECK(sample_supports(depth, valid, K(), image(), sa).count() == part);
+}
+
+TEST_CASE("sampler: all-invalid depth is a clear error", "[sampler]") {
+  auto depth = torch::full({H, W}, std::numeric_limits<float>::quiet_NaN());
+  CHECK_THROWS_WITH(sample_supports(depth, ones(), K(), image(), fixed(100)), Catch::Contains("no valid triangle"));
+  SamplerOptions px;
+  px.mode = "pixel";
+  CHECK_THROWS_WITH(sample_supports(torch::zeros({H, W}), ones(), K(), image(), px), Catch::Contains("no valid pixel"));
+  CHECK_THROWS_WITH(sample_supports(torch::ones({H, W}), ones(), K(), torch::rand({3, 8, 8}), fixed(10)),
+                    Catch::Contains("image must be [3, H, W]"));
+}
+
+TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]") {
+  auto depth = torch::full({H, W}, 2.0f);
+  depth.narrow(1, 0, 8).fill_(0.5f);
+  const Supports s = sample_supports(depth, ones(), K(), image(), fixed(1000), 2);
+  const BaseGaussians b = make_base_gaussians(s);
+  CHECK(b.depth_factor == Approx(1.0 / s.depth.min().item<double>()));
+  CHECK(b.z_n.min().item<float>() == Approx(1.0f));
+  CHECK(torch::allclose(b.scale_n, torch::sqrt(s.area) * b.depth_factor));
+  CHECK(b.color.min().item<float>() >= 0.01f);
+  CHECK(b.color.max().item<float>() <= 0.99f);
+  CHECK((b.opacity == 0.5f).all().item<bool>());
+}
