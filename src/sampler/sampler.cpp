@@ -314,29 +314,39 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode, "' (area | pixel | vertex_face)");
   // Vertices: valid pixel centres with the strongest image gradients (the release's priority).
-  std::vector<std::pair<float, int64_t>> priority;
-  for (int64_t i = 0; i < g.H; ++i)
-    for (int64_t j = 0; j < g.W; ++j) {
-      if (g.valid[i * g.W + j] == 0.0f) continue;
-      float grad = 0;
-      for (int c = 0; c < 3; ++c) {
-        const float* m = g.image + c * g.H * g.W;
-        const float gx = m[i * g.W + std::min(j + 1, g.W - 1)] - m[i * g.W + std::max<int64_t>(j - 1, 0)];
-        const float gy = m[std::min(i + 1, g.H - 1) * g.W + j] - m[std::max<int64_t>(i - 1, 0) * g.W + j];
-        grad += gx * gx + gy * gy;
+  std::vector<float> grad(static_cast<size_t>(g.H * g.W), -1.0f);
+  at::parallel_for(0, g.H, 16, [&](int64_t b, int64_t e) {
+    for (int64_t i = b; i < e; ++i)
+      for (int64_t j = 0; j < g.W; ++j) {
+        if (g.valid[i * g.W + j] == 0.0f) continue;
+        float s2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const float* m = g.image + c * g.H * g.W;
+          const float gx = m[i * g.W + std::min(j + 1, g.W - 1)] - m[i * g.W + std::max<int64_t>(j - 1, 0)];
+          const float gy = m[std::min(i + 1, g.H - 1) * g.W + j] - m[std::max<int64_t>(i - 1, 0) * g.W + j];
+          s2 += gx * gx + gy * gy;
+        }
+        grad[i * g.W + j] = s2;
       }
-      priority.emplace_back(-grad, i * g.W + j);  // ties broken by pixel index: deterministic
-    }
+  });
+  std::vector<int64_t> priority;
+  priority.reserve(grad.size());
+  for (int64_t p = 0; p < g.H * g.W; ++p)
+    if (grad[p] >= 0) priority.push_back(p);
   ISPLAT_CHECK(!priority.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
   const int64_t nv = std::min<int64_t>(static_cast<int64_t>(std::llround(options.vertex_fraction * n)),
                                        static_cast<int64_t>(priority.size()));
-  std::partial_sort(priority.begin(), priority.begin() + nv, priority.end());
+  // The nv strongest gradients (ties by pixel index); nth_element is deterministic for equal input.
+  auto stronger = [&](int64_t a, int64_t b) { return grad[a] > grad[b] || (grad[a] == grad[b] && a < b); };
+  std::nth_element(priority.begin(), priority.begin() + nv, priority.end(), stronger);
   Supports s = allocate(n);
   const Output o = pointers(s);
-  for (int64_t k = 0; k < nv; ++k) {
-    const int64_t i = priority[k].second / g.W, j = priority[k].second % g.W;
-    write_support(g, o, k, j + 0.5, i + 0.5, g.depth[priority[k].second], pixel_area(g, i, j));
-  }
+  at::parallel_for(0, nv, 4096, [&](int64_t b, int64_t e) {
+    for (int64_t k = b; k < e; ++k) {
+      const int64_t i = priority[k] / g.W, j = priority[k] % g.W;
+      write_support(g, o, k, j + 0.5, i + 0.5, g.depth[priority[k]], pixel_area(g, i, j));
+    }
+  });
   const double total = sample_faces(g, n - nv, seed, o, nv);
   // Vertices and faces both stand for the surface: rescale so the areas sum to the surface area once.
   const double sum = s.area.sum().item<double>();
