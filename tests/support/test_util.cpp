@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace isplat::test {
 namespace fs = std::filesystem;
@@ -23,9 +24,14 @@ std::string temp_dir(const std::string& tag) {
 }
 
 std::string shared_weights_dir() {
-  const char* env = std::getenv("ISPLAT_WEIGHTS_DIR");
-  fs::path dir = env ? fs::path(env) : fs::path(ISPLAT_SOURCE_DIR) / ".." / "shared" / "weights";
-  return fs::exists(dir) ? fs::weakly_canonical(dir).string() : std::string();
+  // $ISPLAT_WEIGHTS_DIR, else ../shared/weights beside the source tree, else this workplace's shared folder.
+  std::vector<fs::path> candidates;
+  if (const char* env = std::getenv("ISPLAT_WEIGHTS_DIR")) candidates.emplace_back(env);
+  candidates.push_back(fs::path(ISPLAT_SOURCE_DIR) / ".." / "shared" / "weights");
+  candidates.emplace_back("/work/shared/weights");
+  for (const auto& dir : candidates)
+    if (fs::exists(dir / "squeezenet1_1_features.safetensors")) return fs::weakly_canonical(dir).string();
+  return std::string();
 }
 
 void write_bytes(const std::string& path, const std::string& bytes) {

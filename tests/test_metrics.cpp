@@ -1,0 +1,113 @@
+// Metrics: PSNR and SSIM against hand-computed values and an independent reference SSIM, and LPIPS-squeeze
+// against the properties it must have (zero on identical images, symmetric, monotone in blur and noise).
+#include <catch2/catch.hpp>
+
+#include <torch/torch.h>
+
+#include "metrics/metrics.h"
+#include "support/test_util.h"
+
+using namespace isplat;
+
+namespace {
+// Straightforward SSIM: a 2D Gaussian window at every valid pixel, no separability, double precision.
+double reference_ssim(const torch::Tensor& a, const torch::Tensor& b) {
+  const int R = 5;
+  double w[11][11], sum = 0;
+  for (int y = -R; y <= R; ++y)
+    for (int x = -R; x <= R; ++x) sum += w[y + R][x + R] = std::exp(-(x * x + y * y) / (2 * 1.5 * 1.5));
+  const int64_t C = a.size(0), H = a.size(1), W = a.size(2);
+  auto A = a.to(torch::kFloat64).contiguous(), B = b.to(torch::kFloat64).contiguous();
+  const double *pa = A.data_ptr<double>(), *pb = B.data_ptr<double>();
+  double total = 0;
+  int64_t n = 0;
+  for (int64_t i = R; i < H - R; ++i)
+    for (int64_t j = R; j < W - R; ++j) {
+      double s = 0;
+      for (int64_t c = 0; c < C; ++c) {
+        double mx = 0, my = 0, xx = 0, yy = 0, xy = 0;
+        for (int y = -R; y <= R; ++y)
+          for (int x = -R; x <= R; ++x) {
+            const double wt = w[y + R][x + R] / sum, u = pa[(c * H + i + y) * W + j + x], v = pb[(c * H + i + y) * W + j + x];
+            mx += wt * u, my += wt * v, xx += wt * u * u, yy += wt * v * v, xy += wt * u * v;
+          }
+        const double C1 = 1e-4, C2 = 9e-4;
+        s += ((2 * mx * my + C1) * (2 * (xy - mx * my) + C2)) / ((mx * mx + my * my + C1) * (xx - mx * mx + yy - my * my + C2));
+      }
+      total += s / C;
+      ++n;
+    }
+  return total / n;
+}
+
+torch::Tensor test_image(int64_t H, int64_t W) {
+  auto y = torch::linspace(0, 1, H).view({1, H, 1}), x = torch::linspace(0, 1, W).view({1, 1, W});
+  auto c = torch::tensor({1.0f, 0.6f, 0.3f}).view({3, 1, 1});
+  return (0.5 + 0.4 * torch::sin(9 * x * c + 5 * y) * torch::cos(7 * y * c)).expand({3, H, W}).contiguous();
+}
+
+torch::Tensor blur(const torch::Tensor& img, int r) {
+  namespace F = torch::nn::functional;
+  auto k = torch::ones({3, 1, 2 * r + 1, 2 * r + 1}) / ((2 * r + 1) * (2 * r + 1));
+  return F::conv2d(F::pad(img.unsqueeze(0), F::PadFuncOptions({r, r, r, r}).mode(torch::kReplicate)), k,
+                   F::Conv2dFuncOptions().groups(3))[0];
+}
+}  // namespace
+
+TEST_CASE("metrics: PSNR, masked and not, against hand-computed values", "[metrics]") {
+  auto a = torch::full({3, 8, 8}, 0.5f), b = torch::full({3, 8, 8}, 0.6f);
+  CHECK(psnr(a, b) == Approx(20.0).epsilon(1e-6));
+  CHECK(std::isinf(psnr(a, a)));
+  b.narrow(2, 4, 4).fill_(0.5f + 0.01f);  // right half: error 0.01
+  auto left = torch::zeros({8, 8});
+  left.narrow(1, 0, 4).fill_(1);
+  CHECK(psnr(a, b, left) == Approx(20.0).epsilon(1e-6));
+  CHECK(psnr(a, b, 1 - left) == Approx(40.0).epsilon(1e-4));
+  CHECK(psnr(a, b) == Approx(-10 * std::log10(0.5 * (0.01 + 1e-4))).epsilon(1e-6));
+  CHECK(std::isnan(psnr(a, b, torch::zeros({8, 8}))));
+}
+
+TEST_CASE("metrics: SSIM matches a reference implementation to 1e-4", "[metrics]") {
+  torch::manual_seed(1);
+  auto a = test_image(40, 52);
+  for (double noise : {0.02, 0.1, 0.3}) {
+    auto b = (a + noise * torch::randn_like(a)).clamp(0, 1);
+    const double ours = ssim(a, b), ref = reference_ssim(a, b);
+    INFO("noise " << noise << " ours " << ours << " reference " << ref);
+    CHECK(std::abs(ours - ref) < 1e-4);
+  }
+  CHECK(ssim(a, a) == Approx(1.0));
+  CHECK(ssim(a, blur(a, 2)) < ssim(a, blur(a, 1)));
+  // Masked: only the left half's window centres count.
+  auto b = a.clone();
+  b.narrow(2, 26, 26).copy_((a.narrow(2, 26, 26) + 0.3 * torch::randn({3, 40, 26})).clamp(0, 1));
+  auto left = torch::zeros({40, 52});
+  left.narrow(1, 0, 20).fill_(1);
+  CHECK(ssim(a, b, left) == Approx(1.0));
+  CHECK(ssim(a, b) < 0.9);
+}
+
+TEST_CASE("metrics: LPIPS-squeeze is zero on identical images, symmetric and monotone", "[metrics][lpips]") {
+  std::string why;
+  auto lp = Lpips::from_folder("squeeze", test::shared_weights_dir(), why);
+  if (!lp) {
+    SUCCEED("LPIPS-squeeze weights not present (" + why + "); test skipped");
+    return;
+  }
+  torch::manual_seed(4);
+  auto a = test_image(64, 64);
+  CHECK((*lp)(a, a) == Approx(0.0).margin(1e-9));
+  auto n1 = (a + 0.05 * torch::randn_like(a)).clamp(0, 1), n2 = (a + 0.15 * torch::randn_like(a)).clamp(0, 1),
+       n3 = (a + 0.3 * torch::randn_like(a)).clamp(0, 1);
+  const double l1 = (*lp)(a, n1), l2 = (*lp)(a, n2), l3 = (*lp)(a, n3);
+  CHECK(l1 > 0);
+  CHECK(l1 < l2);
+  CHECK(l2 < l3);
+  CHECK((*lp)(n2, a) == Approx(l2).epsilon(1e-5));
+  const double b1 = (*lp)(a, blur(a, 1)), b2 = (*lp)(a, blur(a, 2)), b3 = (*lp)(a, blur(a, 4));
+  CHECK(b1 < b2);
+  CHECK(b2 < b3);
+  std::string why2;
+  CHECK(Lpips::from_folder("alex", test::shared_weights_dir(), why2) == nullptr);  // no AlexNet backbone here
+  CHECK_THAT(why2, Catch::Contains("alexnet_features.safetensors"));
+}
