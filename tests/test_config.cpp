@@ -133,3 +133,36 @@ TEST_CASE("config: reference lists every key with type, default and doc", "[conf
   CHECK_THAT(ref, Catch::Contains("number of supports"));
   CHECK_THAT(ref, Catch::Contains("inner.mode  (area|pixel, default \"area\")"));
 }
+
+namespace {
+struct Item {
+  std::string name = "x";
+  int64_t count = 1;
+  void visit(ConfigVisitor& v) {
+    v.field("name", name, "item name");
+    v.field("count", count, "how many", Range::at_least(0));
+  }
+};
+struct WithList {
+  std::vector<Item> items = {Item{"default", 2}};
+  void visit(ConfigVisitor& v) { v.list("items", "a list of items", items); }
+};
+}  // namespace
+
+TEST_CASE("config: lists of sections read, write, validate and document", "[config]") {
+  CHECK(load_config<WithList>("").items.at(0).name == "default");
+  const auto dir = test::temp_dir("config_list");
+  const auto path = write_json(dir, "l.json", R"({"items": [{"name": "a"}, {"name": "b", "count": 5}]})");
+  auto o = load_config<WithList>(path);
+  REQUIRE(o.items.size() == 2);
+  CHECK(o.items[0].count == 1);  // element defaults come from the struct
+  CHECK(o.items[1].count == 5);
+  CHECK(config_to_json(o)["items"][1]["name"] == "b");
+  CHECK(config_from_json<WithList>(config_to_json(o), "x").items.size() == 2);
+  const auto bad = write_json(dir, "b.json", R"({"items": [{"name": "a", "cnt": 3}]})");
+  CHECK_THAT(error_of([&] { load_config<WithList>(bad); }), Catch::Contains("unknown key 'items[0].cnt'"));
+  const auto neg = write_json(dir, "n.json", R"({"items": [{"count": -1}]})");
+  CHECK_THAT(error_of([&] { load_config<WithList>(neg); }), Catch::Contains("'items[0].count' must be an integer >= 0"));
+  CHECK_THAT(error_of([&] { load_config<WithList>("", {"items=3"}); }), Catch::Contains("must be a list of sections"));
+  CHECK_THAT(config_reference(WithList{}), Catch::Contains("items[].count  (int >= 0, default 1)"));
+}

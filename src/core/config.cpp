@@ -245,8 +245,35 @@ class JsonReader final : public ConfigVisitor {
     check_unknown(stack_.back());
     stack_.pop_back();
   }
+  int64_t begin_list(const char* key, const char* doc, int64_t) override {
+    Frame& top = stack_.back();
+    top.known.insert(key);
+    if (!top.node || !top.node->contains(key)) return -1;
+    const json& arr = (*top.node)[key];
+    if (!arr.is_array()) bad(key, "must be a list of sections (JSON array of objects)", doc, arr);
+    lists_.push_back({&arr, path(key)});
+    return static_cast<int64_t>(arr.size());
+  }
+  bool rebuilds_lists() const override { return true; }
+  void begin_element(int64_t index) override {
+    const auto& l = lists_.back();
+    const json& e = (*l.array)[static_cast<size_t>(index)];
+    const std::string name = cat(l.prefix, "[", index, "]");
+    if (!e.is_object()) fail(doc_.source_of(l.prefix), ": '", name, "' must be a section (JSON object); got ", short_json(e));
+    stack_.push_back({&e, name, {}});
+  }
+  void end_element() override {
+    check_unknown(stack_.back());
+    stack_.pop_back();
+  }
+  void end_list() override { lists_.pop_back(); }
 
  private:
+  struct ListFrame {
+    const json* array;
+    std::string prefix;
+  };
+  std::vector<ListFrame> lists_;
   struct Frame {
     const json* node;
     std::string prefix;
@@ -338,8 +365,21 @@ class JsonWriter final : public ConfigVisitor {
     stack_.push_back(&child);
   }
   void leave() override { stack_.pop_back(); }
+  int64_t begin_list(const char* key, const char*, int64_t current) override {
+    auto& arr = (*stack_.back())[key];
+    arr = nlohmann::ordered_json::array();
+    lists_.push_back(&arr);
+    return current;
+  }
+  void begin_element(int64_t) override {
+    lists_.back()->push_back(nlohmann::ordered_json::object());
+    stack_.push_back(&lists_.back()->back());
+  }
+  void end_element() override { stack_.pop_back(); }
+  void end_list() override { lists_.pop_back(); }
 
  private:
+  std::vector<nlohmann::ordered_json*> lists_;
   nlohmann::ordered_json root_ = nlohmann::ordered_json::object();
   std::vector<nlohmann::ordered_json*> stack_;
 };
@@ -379,6 +419,15 @@ class DocWriter final : public ConfigVisitor {
     out_ << "\n[" << full("") << "]  " << doc << "\n";
   }
   void leave() override { prefix_.pop_back(); }
+  int64_t begin_list(const char* key, const char* doc, int64_t) override {
+    prefix_.push_back(std::string(key) + "[]");
+    out_ << "\n[" << full("") << "]  (list) " << doc << "\n";
+    return 1;  // document one default element
+  }
+  bool rebuilds_lists() const override { return true; }
+  void begin_element(int64_t) override {}
+  void end_element() override {}
+  void end_list() override { prefix_.pop_back(); }
 
  private:
   static std::string join(const std::string& a, const std::string& b) { return b.empty() ? a : a + " " + b; }

@@ -53,9 +53,29 @@ class ConfigVisitor {
     leave();
   }
 
+  // A list of sections (JSON array of objects), e.g. the datasets of an evaluation.
+  template <class T>
+  void list(const char* key, const char* doc, std::vector<T>& items) {
+    const int64_t n = begin_list(key, doc, static_cast<int64_t>(items.size()));
+    if (n < 0) return;  // absent from the document: keep the defaults
+    if (rebuilds_lists()) items.assign(static_cast<size_t>(n), T{});
+    for (int64_t i = 0; i < n; ++i) {
+      begin_element(i);
+      items[static_cast<size_t>(i)].visit(*this);
+      end_element();
+    }
+    end_list();
+  }
+
  protected:
   virtual void enter(const char* key, const char* doc) = 0;
   virtual void leave() = 0;
+  // Lists: begin_list returns the element count to visit (-1 = skip); readers rebuild the vector.
+  virtual int64_t begin_list(const char* key, const char* doc, int64_t current) = 0;
+  virtual bool rebuilds_lists() const { return false; }
+  virtual void begin_element(int64_t index) = 0;
+  virtual void end_element() = 0;
+  virtual void end_list() = 0;
 };
 
 // A merged JSON document (base files, the config file, then --set overrides) and where each key came from.
