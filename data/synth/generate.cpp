@@ -261,7 +261,7 @@ void write_eval_scene(const GenerateOptions& o, const std::string& dataset, cons
   const Scene scene = synth::build_scene(style, seed);
   const std::string dir = (fs::path(generated_eval_root(o.out, dataset)) / cat("scene_", index)).string();
   const Intrinsics intr = eval_intrinsics(o, style == "courtyard" ? 70.0 * kPi / 180 : 65.0 * kPi / 180);
-  const double max_step = style == "room" ? 0.5 : 0.7;
+  const double max_step = style == "room" ? 0.5 : 0.9;  // open scenes: more pairs in the [2 m, inf) bin
   const auto poses = synth::make_trajectory(scene, static_cast<int>(o.eval_frames), mix_seed(seed, 3), 0.04, max_step);
   std::vector<EvalFrame> frames;
   double exposure = -1;

@@ -424,9 +424,14 @@ Sequence colmap_sequence(const std::string& scene_dir, const std::string& datase
            ") is distorted and undistortion is off");
     f.view.T_cw = pose_from_colmap(img->qvec, img->tvec);
     if (depth_kind != DepthSource::None) {
+      std::string name = img->name;
+      if (!layout.depth_replace_from.empty()) {
+        const auto pos = name.find(layout.depth_replace_from);
+        if (pos != std::string::npos) name.replace(pos, layout.depth_replace_from.size(), layout.depth_replace_to);
+      }
       const fs::path dpath = fs::path(scene_dir) / layout.depth_dir /
-                             (depth_kind == DepthSource::RawFloat32 ? img->name + layout.depth_suffix
-                                                                    : fs::path(img->name).replace_extension("").string() +
+                             (depth_kind == DepthSource::RawFloat32 ? name + layout.depth_suffix
+                                                                    : fs::path(name).replace_extension("").string() +
                                                                           layout.depth_suffix);
       if (fs::exists(dpath)) {
         f.depth_path = dpath.string();

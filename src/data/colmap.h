@@ -73,6 +73,7 @@ struct ColmapSceneLayout {
   std::string depth_dir = "depth";             // relative to the scene; may be absent
   std::string depth_format = "exr";            // exr | png16_mm | raw_float32
   std::string depth_suffix = ".exr";           // appended to the image name's stem (raw: to the full name)
+  std::string depth_replace_from, depth_replace_to;  // rewrite of the image name for its depth file (ETH3D)
   bool allow_undistort = true;                 // undistort OpenCV-model images, else reject them
 };
 

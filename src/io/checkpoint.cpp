@@ -1,0 +1,83 @@
+// Checkpoint packing on top of safetensors.
+#include "io/checkpoint.h"
+
+#include <torch/torch.h>
+
+#include "core/error.h"
+#include "io/safetensors.h"
+
+namespace isplat {
+
+int64_t Checkpoint::step() const {
+  auto it = metadata.find("step");
+  return it == metadata.end() ? 0 : std::stoll(it->second);
+}
+
+const std::string& Checkpoint::config_json() const {
+  static const std::string empty = "{}";
+  auto it = metadata.find("config");
+  return it == metadata.end() ? empty : it->second;
+}
+
+void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::string& prefix) {
+  for (const auto& p : module.named_parameters(true)) ck.tensors[prefix + p.key()] = p.value().detach().clone();
+  for (const auto& b : module.named_buffers(true)) ck.tensors[prefix + b.key()] = b.value().detach().clone();
+}
+
+void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix) {
+  std::map<std::string, torch::Tensor> ours;
+  for (const auto& p : module.named_parameters(true)) ours[p.key()] = p.value();
+  for (const auto& b : module.named_buffers(true)) ours[b.key()] = b.value();
+  std::vector<std::string> missing, unexpected, mismatched;
+  for (const auto& [name, t] : ours) {
+    auto it = ck.tensors.find(prefix + name);
+    if (it == ck.tensors.end())
+      missing.push_back(name);
+    else if (it->second.sizes() != t.sizes())
+      mismatched.push_back(cat(name, " ", it->second.sizes(), " vs ", t.sizes()));
+  }
+  for (const auto& [name, t] : ck.tensors)
+    if (name.rfind(prefix, 0) == 0 && !ours.count(name.substr(prefix.size()))) unexpected.push_back(name.substr(prefix.size()));
+  if (!missing.empty() || !unexpected.empty() || !mismatched.empty()) {
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (size_t i = 0; i < v.size() && i < 8; ++i) s += (i ? ", " : "") + v[i];
+      return v.size() > 8 ? s + cat(", ... (", v.size(), ")") : s;
+    };
+    std::string msg = source + ": checkpoint does not fit the model built from its config.";
+    if (!missing.empty()) msg += "\n  missing: " + list(missing);
+    if (!unexpected.empty()) msg += "\n  unexpected: " + list(unexpected);
+    if (!mismatched.empty()) msg += "\n  shape mismatch: " + list(mismatched);
+    fail(msg);
+  }
+  torch::NoGradGuard g;
+  for (auto& [name, t] : ours) t.copy_(ck.tensors.at(prefix + name));
+}
+
+void save_checkpoint(const std::string& path, const Checkpoint& ck) {
+  auto meta = ck.metadata;
+  meta["format"] = kCheckpointFormat;
+  write_safetensors(path, ck.tensors, meta);
+}
+
+Checkpoint load_checkpoint(const std::string& path) {
+  SafeTensors st = read_safetensors(path);
+  auto it = st.metadata.find("format");
+  if (it == st.metadata.end() || it->second != kCheckpointFormat)
+    fail(path, ": not an InfiniSplat checkpoint (metadata 'format' is '",
+         it == st.metadata.end() ? std::string("<none>") : it->second, "', expected '", kCheckpointFormat, "')");
+  return {std::move(st.tensors), std::move(st.metadata)};
+}
+
+torch::Tensor bytes_to_tensor(const std::string& bytes) {
+  auto t = torch::empty({static_cast<int64_t>(bytes.size())}, torch::kUInt8);
+  std::memcpy(t.data_ptr(), bytes.data(), bytes.size());
+  return t;
+}
+
+std::string tensor_to_bytes(const torch::Tensor& t) {
+  auto c = t.contiguous();
+  return std::string(static_cast<const char*>(c.data_ptr()), static_cast<size_t>(c.numel()));
+}
+
+}  // namespace isplat

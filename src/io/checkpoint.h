@@ -1,0 +1,34 @@
+// Checkpoints: one safetensors file holding the model weights under their module names ("model/..."),
+// optional extra tensors, and metadata (format, step, config JSON, RNG state). Written atomically.
+#pragma once
+#include <map>
+#include <string>
+
+#include <torch/nn/module.h>
+#include <torch/types.h>
+
+namespace isplat {
+
+struct Checkpoint {
+  std::map<std::string, torch::Tensor> tensors;      // "model/<param>", "optim/state", "rng/torch", ...
+  std::map<std::string, std::string> metadata;       // "format", "step", "config", ...
+  int64_t step() const;
+  const std::string& config_json() const;
+};
+
+constexpr const char* kCheckpointFormat = "infinisplat-checkpoint-v1";
+
+// Weights and buffers of `module` under "model/<name>" (prefix configurable).
+void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::string& prefix = "model/");
+// Copies "model/<name>" tensors into `module`; any missing, unexpected or mis-shaped tensor is listed in
+// one Error naming the file.
+void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix = "model/");
+
+void save_checkpoint(const std::string& path, const Checkpoint& ck);  // atomic
+Checkpoint load_checkpoint(const std::string& path);                  // checks the format tag
+
+// Opaque bytes (e.g. a serialized optimizer) carried as a uint8 tensor.
+torch::Tensor bytes_to_tensor(const std::string& bytes);
+std::string tensor_to_bytes(const torch::Tensor& t);
+
+}  // namespace isplat
