@@ -36,71 +36,20 @@ struct ProjectSettings {
 };
 
 // Per-Gaussian screen-space record written by project_fwd, one row of `packed` [N, kRec].
+// clang-format off
 enum Rec : int {
-  kU = 0,
-  kV,  // mean in continuous pixel coordinates
-  kConA,
-  kConB,
-  kConC,   // conic Σ'⁻¹ = [[A, B], [B, C]]
-  kOpac,   // effective opacity o' (compensated in antialiased mode)
-  kCut,    // max power: min(4.5, ln(255·o')); beyond it the pixel is skipped
-  kDepth,  // camera-space z of the mean
-  kR,
-  kG,
-  kB,  // colour
-  kNx,
-  kNy,
-  kNz,       // shortest axis in camera space, facing the camera
-  kRec = 16  // padded to one 64-byte line in float
+  kU = 0, kV,           // mean in continuous pixel coordinates
+  kConA, kConB, kConC,  // conic Σ'⁻¹ = [[A, B], [B, C]]
+  kOpac,                // effective opacity o' (compensated in antialiased mode)
+  kCut,                 // max power: min(4.5, ln(255·o')); beyond it the pixel is skipped
+  kDepth,               // camera-space z of the mean
+  kR, kG, kB,           // colour
+  kNx, kNy, kNz,        // shortest axis in camera space, facing the camera
+  kRx, kRy,             // half extents (px) of the cut ellipse's bounding box, slightly enlarged
+  kRec = 16             // one 64-byte line in float
 };
+// clang-format on
 constexpr int kGrad2d = 10;  // per-Gaussian 2D gradient: u, v, A, B, C, o', r, g, b, z
-
-// The per-pixel rule of the forward model, used verbatim by both passes so their skip decisions agree
-// bit for bit. `rec` is a kRec record, (dx, dy) = pixel centre − mean. Returns false if the Gaussian is
-// skipped at this pixel; otherwise alpha = min(0.99, o'·G) and raw = o'·G (raw > 0.99 means clamped).
-template <class T>
-inline bool splat_alpha(const T* rec, T dx, T dy, T& alpha, T& G, T& raw) {
-  const T power = T(0.5) * (rec[kConA] * dx * dx + rec[kConC] * dy * dy) + rec[kConB] * dx * dy;
-  if (!(power <= rec[kCut])) return false;  // outside 3σ / can never reach 1/255: no exp
-  G = std::exp(-power);
-  raw = rec[kOpac] * G;
-  if (raw < T(kAlphaMin)) return false;
-  alpha = std::min(T(kAlphaMax), raw);
-  return true;
-}
-
-// The cut ellipse of a record, for enumerating only the pixels it may cover. Slightly conservative
-// (kSpanMargin plus one pixel); splat_alpha makes the exact decision per pixel.
-struct Ellipse {
-  double u, v, beta, invA, Ak2, detc;
-
-  template <class T>
-  explicit Ellipse(const T* rec) {
-    const double A = rec[kConA], B = rec[kConB], C = rec[kConC];
-    const double k2 = 2.0 * (double(rec[kCut]) * (1.0 + kSpanMargin) + kSpanMargin);
-    u = rec[kU], v = rec[kV], beta = -B / A, invA = 1.0 / A, Ak2 = A * k2, detc = A * C - B * B;
-  }
-  // Rows [ys, ye) clipped to [lo, hi) whose pixel centres (py + 0.5) may meet the ellipse.
-  bool rows(int64_t lo, int64_t hi, int64_t& ys, int64_t& ye) const {
-    const double ry = std::sqrt(Ak2 / detc);
-    return clip(v - ry - 0.5, v + ry - 0.5, lo, hi, ys, ye);
-  }
-  // Pixels [xs, xe) of row py, clipped to [lo, hi).
-  bool span(int64_t py, int64_t lo, int64_t hi, int64_t& xs, int64_t& xe) const {
-    const double dy = double(py) + 0.5 - v;
-    const double disc = Ak2 - detc * dy * dy;
-    if (!(disc >= 0.0)) return false;
-    const double r = std::sqrt(disc) * invA, c = u + beta * dy - 0.5;
-    return clip(c - r, c + r, lo, hi, xs, xe);
-  }
-  // Integers in [a - 1, b + 1] intersected with [lo, hi); NaN-safe and overflow-safe.
-  static bool clip(double a, double b, int64_t lo, int64_t hi, int64_t& s, int64_t& e) {
-    if (!(a - 1.0 < double(hi)) || !(b + 1.0 >= double(lo))) return false;
-    s = std::max<int64_t>(lo, int64_t(std::ceil(std::max(a - 1.0, double(lo)))));
-    e = std::min<int64_t>(hi, int64_t(std::floor(std::min(b + 1.0, double(hi)))) + 1);
-    return s < e;
-  }
-};
 
 // ---- Projection (kernels_project.cpp) ----
 
@@ -154,5 +103,11 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_rgb,     // [3, H, W]
                             const torch::Tensor& grad_alpha,   // [1, H, W]
                             const torch::Tensor& grad_depth);  // [1, H, W]
+
+// The rasterizers run an AVX2 build of their pixel loops when the CPU has it (same arithmetic, no FMA,
+// so results match the generic build up to the order of the per-Gaussian lane sums in backward).
+// Tests can force the generic build; returns the previous setting.
+bool set_simd_enabled(bool enabled);
+bool simd_enabled();
 
 }  // namespace isplat::splat

@@ -11,74 +11,91 @@
 namespace isplat::splat {
 namespace {
 
-// Channels composited per pixel in backward: r, g, b, depth, and "one" (alpha = Σ wᵢ·1).
-constexpr int kCh = 5;
-// Pixel state: T, dL/dC[5], B[5] (what lies behind the current Gaussian, background included).
-constexpr int kStride = 1 + 2 * kCh;
+template <class T>
+ISPLAT_INLINE Splat<T> bwd_splat(const T* rec) {
+  return {rec[kU],    rec[kV],    rec[kConA], rec[kConB],
+          rec[kConC], rec[kOpac], rec[kCut],  {rec[kR], rec[kG], rec[kB], rec[kDepth], T(1)}};
+}
+
+// One tile back to front. Each pixel starts at its last contributor with T = T_final and reconstructs the
+// transmittance in front of every Gaussian by division; the skip rules are evaluated exactly as in forward.
+// Writes the tile's per-intersection gradients (kGrad2d each) to `out`. The AVX2 twin has the same loops.
+template <class T>
+void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                      const int32_t* last, int32_t max_last, T* out) {
+  std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
+  for (int64_t i = max_last - 1; i >= 0; --i) {
+    const T* rec = local + i * kRec;
+    LaneSums<T> sums{};
+    int64_t ys, ye, g0, g1;
+    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      const Splat<T> s = bwd_splat(rec);
+      for (int64_t py = ys; py < ye; ++py) {
+        const Row<T> r(s, py);
+        for (int64_t k = g0; k < g1; ++k)
+          bwd_group(s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), sums);
+      }
+    }
+    sums.reduce(out + i * kGrad2d);
+  }
+}
+
+__attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
+                                                   int64_t x1, int64_t y1, float* st, const int32_t* last,
+                                                   int32_t max_last, float* out) {
+  std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
+  for (int64_t i = max_last - 1; i >= 0; --i) {
+    const float* rec = local + i * kRec;
+    LaneSums<float> sums{};
+    int64_t ys, ye, g0, g1;
+    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      const Splat<float> s = bwd_splat(rec);
+      const Avx2Splat a = avx2_splat(s, kBwdCh);
+      Avx2Sums g;
+      g.zero();
+      for (int64_t py = ys; py < ye; ++py) {
+        const Row<float> r(s, py);
+        for (int64_t k = g0; k < g1; ++k)
+          bwd_group_avx2(a, s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), g);
+      }
+      g.store(sums);
+    }
+    sums.reduce(out + i * kGrad2d);
+  }
+}
 
 template <class T>
 void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const double* background, const T* final_T, const int32_t* n_contrib, const T* g_rgb,
                         const T* g_alpha, const T* g_depth, T* slots) {
   const int64_t W = cam.width, HW = W * cam.height;
+  auto tile_fn = bwd_tile_generic<T>;
+  if constexpr (std::is_same_v<T, float>)
+    if (simd_enabled()) tile_fn = bwd_tile_avx2;
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     if (count == 0) return;
-    T* st = scratch.pixel_state(kStride);
-    int32_t* last = scratch.last;
+    T* st = scratch.pixel_planes(kBwdPlanes);
+    int32_t* last = scratch.last.data();
+    std::fill(st, st + kBwdPlanes * kPix, T(0));
+    std::fill(last, last + kPix, 0);
     int32_t max_last = 0;
-    for (int64_t p = 0; p < kTile * kTile; ++p) last[p] = 0;
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        T* s = st + kStride * p;
-        s[0] = final_T[o];
-        s[1] = g_rgb[o], s[2] = g_rgb[HW + o], s[3] = g_rgb[2 * HW + o], s[4] = g_depth[o], s[5] = g_alpha[o];
-        s[6] = T(background[0]), s[7] = T(background[1]), s[8] = T(background[2]), s[9] = 0, s[10] = 0;
+        st[kPbT * kPix + p] = final_T[o];
+        const T dc[kBwdCh] = {g_rgb[o], g_rgb[HW + o], g_rgb[2 * HW + o], g_depth[o], g_alpha[o]};
+        const T behind[kBwdCh] = {T(background[0]), T(background[1]), T(background[2]), 0, 0};
+        for (int c = 0; c < kBwdCh; ++c) st[(kPbDC + c) * kPix + p] = dc[c], st[(kPbBehind + c) * kPix + p] = behind[c];
         last[p] = n_contrib[o];
         max_last = std::max(max_last, last[p]);
       }
-    const T* local = scratch.gather(packed, ids + begin, max_last);
-    T* out = slots + begin * kGrad2d;
-    std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
-    for (int64_t i = max_last - 1; i >= 0; --i) {
-      const T* rec = local + i * kRec;
-      const T f[kCh] = {rec[kR], rec[kG], rec[kB], rec[kDepth], T(1)};
-      T g[kGrad2d] = {0};
-      const Ellipse e(rec);
-      int64_t ys, ye;
-      if (e.rows(y0, y1, ys, ye))
-        for (int64_t py = ys; py < ye; ++py) {
-          int64_t xs, xe;
-          if (!e.span(py, x0, x1, xs, xe)) continue;
-          const T dy = T(py) + T(0.5) - rec[kV];
-          for (int64_t px = xs; px < xe; ++px) {
-            const int64_t p = (py - y0) * kTile + (px - x0);
-            if (i >= last[p]) continue;  // behind this pixel's stop
-            const T dx = T(px) + T(0.5) - rec[kU];
-            T alpha, G, raw;
-            if (!splat_alpha(rec, dx, dy, alpha, G, raw)) continue;  // the forward skipped it too
-            T* s = st + kStride * p;
-            const T Ti = s[0] / (1 - alpha);  // transmittance in front of Gaussian i
-            s[0] = Ti;
-            const T w = alpha * Ti;
-            T d_alpha = 0;
-            for (int c = 0; c < kCh; ++c) d_alpha += s[1 + c] * (f[c] - s[6 + c]);
-            d_alpha *= Ti;
-            g[6] += w * s[1], g[7] += w * s[2], g[8] += w * s[3], g[9] += w * s[4];
-            for (int c = 0; c < kCh; ++c) s[6 + c] = alpha * f[c] + (1 - alpha) * s[6 + c];
-            if (raw > T(kAlphaMax)) continue;  // clamped: α does not depend on the parameters
-            g[5] += G * d_alpha;
-            const T d_power = -alpha * d_alpha;
-            g[0] -= d_power * (rec[kConA] * dx + rec[kConB] * dy);
-            g[1] -= d_power * (rec[kConB] * dx + rec[kConC] * dy);
-            g[2] += d_power * T(0.5) * dx * dx;
-            g[3] += d_power * dx * dy;
-            g[4] += d_power * T(0.5) * dy * dy;
-          }
-        }
-      std::copy(g, g + kGrad2d, out + i * kGrad2d);
-    }
+    // Pixels outside the image keep T = 0 and last = 0: never a contributor, and no division by zero
+    // matters because their lanes are masked.
+    for (int p = 0; p < kPix; ++p)
+      if (st[kPbT * kPix + p] == 0) st[kPbT * kPix + p] = 1;
+    tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
+            slots + begin * kGrad2d);
   });
 }
 

@@ -112,69 +112,99 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
 }
 
 template <class T>
+ISPLAT_INLINE Splat<T> fwd_splat(const T* rec) {
+  return {rec[kU],    rec[kV],    rec[kConA], rec[kConB],
+          rec[kConC], rec[kOpac], rec[kCut],  {rec[kR], rec[kG], rec[kB], rec[kDepth], rec[kNx], rec[kNy], rec[kNz]}};
+}
+
+template <class T>
+ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
+  for (int p = 0; p < kPix; ++p) {
+    const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
+    st[kPlT * kPix + p] = 1, st[kPlDone * kPix + p] = inside ? 0 : 1, last[p] = 0;  // outside: never composited
+    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] = 0;
+  }
+}
+
+// Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
+// 8-pixel groups of its box; per pixel the order, skip rules and stop rule are those of the forward model.
+// The AVX2 twin below has the same loops around fwd_group_avx2.
+template <class T>
+void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                      int32_t* last) {
+  fwd_init(x0, y0, x1, y1, st, last);
+  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && active > 0; ++i) {
+    const T* rec = local + i * kRec;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    const Splat<T> s = fwd_splat(rec);
+    for (int64_t py = ys; py < ye; ++py) {
+      const Row<T> r(s, py);
+      for (int64_t g = g0; g < g1; ++g)
+        active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
+                                                   int64_t x1, int64_t y1, float* st, int32_t* last) {
+  fwd_init(x0, y0, x1, y1, st, last);
+  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && active > 0; ++i) {
+    const float* rec = local + i * kRec;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    const Splat<float> s = fwd_splat(rec);
+    const Avx2Splat a = avx2_splat(s, 7);
+    for (int64_t py = ys; py < ye; ++py) {
+      const Row<float> r(s, py);
+      for (int64_t g = g0; g < g1; ++g)
+        active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+    }
+  }
+}
+
+template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const double* background, T* rgb, T* alpha_out, T* depth_out, T* normal_out, T* final_T,
                         int32_t* n_contrib) {
-  const int64_t W = cam.width, H = cam.height, HW = W * H;
+  const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
+  auto tile_fn = fwd_tile_generic<T>;
+  if constexpr (std::is_same_v<T, float>)
+    if (simd_enabled()) tile_fn = fwd_tile_avx2;
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
-    // Per-pixel state, 8 scalars: r, g, b, depth, nx, ny, nz, T.
-    T* st = scratch.pixel_state(8);
-    int32_t* last = scratch.last;
-    uint8_t* done = scratch.done;
-    const int64_t tw = x1 - x0, th = y1 - y0;
-    for (int64_t p = 0; p < kTile * kTile; ++p) {
-      std::fill(st + 8 * p, st + 8 * p + 7, T(0));
-      st[8 * p + 7] = 1, last[p] = 0, done[p] = 0;
-    }
+    T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    const T* local = scratch.gather(packed, ids + begin, count);
-    int64_t active = tw * th;
-    for (int64_t i = 0; i < count && active > 0; ++i) {
-      const T* rec = local + i * kRec;
-      const Ellipse e(rec);
-      int64_t ys, ye;
-      if (!e.rows(y0, y1, ys, ye)) continue;
-      for (int64_t py = ys; py < ye && active > 0; ++py) {
-        int64_t xs, xe;
-        if (!e.span(py, x0, x1, xs, xe)) continue;
-        const T dy = T(py) + T(0.5) - rec[kV];
-        for (int64_t px = xs; px < xe; ++px) {
-          const int64_t p = (py - y0) * kTile + (px - x0);
-          if (done[p]) continue;
-          const T dx = T(px) + T(0.5) - rec[kU];
-          T alpha, G, raw;
-          if (!splat_alpha(rec, dx, dy, alpha, G, raw)) continue;
-          T* s = st + 8 * p;
-          const T next_T = s[7] * (1 - alpha);
-          if (next_T < T(kTransmittanceMin)) {  // this Gaussian would make the pixel opaque: stop before it
-            done[p] = 1;
-            --active;
-            continue;
-          }
-          const T w = alpha * s[7];
-          s[0] += w * rec[kR], s[1] += w * rec[kG], s[2] += w * rec[kB], s[3] += w * rec[kDepth];
-          s[4] += w * rec[kNx], s[5] += w * rec[kNy], s[6] += w * rec[kNz];
-          s[7] = next_T;
-          last[p] = int32_t(i + 1);
-        }
-      }
-    }
+    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data());
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        const T* s = st + 8 * p;
-        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = s[c] + s[7] * bg[c];
-        alpha_out[o] = 1 - s[7];
-        depth_out[o] = s[3];
-        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = s[4 + c];
-        final_T[o] = s[7];
-        n_contrib[o] = last[p];
+        const T t = st[kPlT * kPix + p];
+        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[(kPlAcc + c) * kPix + p] + t * bg[c];
+        alpha_out[o] = 1 - t;
+        depth_out[o] = st[(kPlAcc + 3) * kPix + p];
+        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[(kPlAcc + 4 + c) * kPix + p];
+        final_T[o] = t;
+        n_contrib[o] = scratch.last[p];
       }
   });
 }
 
 }  // namespace
+
+namespace {
+bool cpu_has_avx2() {
+  __builtin_cpu_init();  // may run before main (static initialization)
+  return __builtin_cpu_supports("avx2");
+}
+std::atomic<bool> g_simd{cpu_has_avx2()};
+}  // namespace
+bool set_simd_enabled(bool enabled) {
+  return g_simd.exchange(enabled && cpu_has_avx2());
+}
+bool simd_enabled() {
+  return g_simd.load();
+}
 
 TileBins bin_tiles(const Projection& proj, const CameraParams& cam) {
   TileBins bins;

@@ -128,6 +128,7 @@ void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* 
       rec[kOpac] = g.opac, rec[kCut] = cut, rec[kDepth] = g.t[2];
       rec[kR] = colors[3 * i], rec[kG] = colors[3 * i + 1], rec[kB] = colors[3 * i + 2];
       rec[kNx] = nrm[0], rec[kNy] = nrm[1], rec[kNz] = nrm[2];
+      rec[kRx] = T(rx), rec[kRy] = T(ry);
     }
   });
 }

@@ -1,21 +1,45 @@
-// Internal to the render kernels: the parallel loop over 16×16 tiles and its per-thread scratch.
+// Internal to the render kernels: the parallel loop over 16×16 tiles, per-thread scratch and a Gaussian's pixel box.
 #pragma once
 #include <ATen/Parallel.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <vector>
 
 #include "render/kernels.h"
+#include "render/lanes.h"
 
 namespace isplat::splat {
+
+// floor for values already clamped to a small range.
+ISPLAT_INLINE int64_t ifloor(double x) {
+  const int64_t i = int64_t(x);
+  return i - (double(i) > x);
+}
+
+// The rows [ys, ye) and lane groups [g0, g1) of tile (x0, y0, x1, y1) that the record's box may cover.
+template <class T>
+ISPLAT_INLINE bool pixel_box(const T* rec, int64_t x0, int64_t y0, int64_t x1, int64_t y1, int64_t& ys, int64_t& ye,
+                             int64_t& g0, int64_t& g1) {
+  // Pixel centre c = p + 0.5 lies in [m − r, m + r]  <=>  p in [m − r − 0.5, m + r − 0.5].
+  auto lo = [](double m, double r, int64_t a) { return std::max<int64_t>(a, ifloor(std::max(m - r - 0.5, a - 1.0))); };
+  auto hi = [](double m, double r, int64_t b) {
+    return std::min<int64_t>(b, ifloor(std::min(m + r - 0.5, b + 1.0)) + 1);
+  };
+  const double u = rec[kU], v = rec[kV], rx = rec[kRx], ry = rec[kRy];
+  ys = lo(v, ry, y0), ye = hi(v, ry, y1);
+  const int64_t xs = lo(u, rx, x0), xe = hi(u, rx, x1);
+  if (ys >= ye || xs >= xe) return false;
+  g0 = (xs - x0) / kLanes, g1 = (xe - 1 - x0) / kLanes + 1;
+  return true;
+}
 
 // Per-thread buffers reused across the tiles a thread renders.
 template <class T>
 struct TileScratch {
   std::vector<T> records, state;
-  int32_t last[kTile * kTile];
-  uint8_t done[kTile * kTile];
+  std::vector<int32_t> last = std::vector<int32_t>(kPix);
 
   // The tile's records gathered into one contiguous array, in list order (cache friendly).
   const T* gather(const T* packed, const int32_t* ids, int64_t count) {
@@ -24,8 +48,9 @@ struct TileScratch {
       std::memcpy(records.data() + i * kRec, packed + int64_t(ids[i]) * kRec, sizeof(T) * kRec);
     return records.data();
   }
-  T* pixel_state(int stride) {
-    state.resize(size_t(kTile * kTile * stride));
+  // `planes` arrays of kPix values (structure of arrays, so a lane group is contiguous).
+  T* pixel_planes(int planes) {
+    state.resize(size_t(kPix * planes));
     return state.data();
   }
 };
