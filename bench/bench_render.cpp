@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -164,6 +165,13 @@ double now_ms() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// CPU time of the whole process (all threads), immune to waiting for a busy machine.
+double cpu_ms() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -216,22 +224,23 @@ void run(const Case& cs) {
     cp.width = cs.W, cp.height = cs.H;
   }
   const double bg[3] = {0, 0, 0};
-  std::vector<double> t_proj, t_bin, t_rast, t_rbwd, t_pbwd;
+  std::vector<double> t_proj, t_bin, t_rast, t_rbwd, t_pbwd, c_fwd, c_bwd;
   int64_t isects = 0, visible = 0;
   double buffers_fwd = 0, buffers_bwd = 0;
   for (int r = 0; r < std::max(1, cs.fwd_runs / 2); ++r) {
-    double t0 = now_ms();
+    double c0 = cpu_ms(), t0 = now_ms();
     const auto proj = splat::project_fwd(g.means, g.scales, g.quats, g.colors, g.opacities, cp, {});
     double t1 = now_ms();
     const auto bins = splat::bin_tiles(proj, cp);
     double t2 = now_ms();
     const auto ras = splat::rasterize_fwd(proj.packed, bins, cp, bg);
-    double t3 = now_ms();
+    double t3 = now_ms(), c3 = cpu_ms();
     const auto ones = torch::ones({3, cs.H, cs.W}), one = torch::ones({1, cs.H, cs.W});
     const auto grad2d = splat::rasterize_bwd(proj.packed, bins, cp, bg, ras.final_T, ras.n_contrib, ones, one, one);
     double t4 = now_ms();
     const auto pg = splat::project_bwd(g.means, g.scales, g.quats, g.opacities, cp, {}, grad2d);
-    double t5 = now_ms();
+    double t5 = now_ms(), c5 = cpu_ms();
+    c_fwd.push_back(c3 - c0), c_bwd.push_back(c5 - c3);
     t_proj.push_back(t1 - t0), t_bin.push_back(t2 - t1), t_rast.push_back(t3 - t2);
     t_rbwd.push_back(t4 - t3), t_pbwd.push_back(t5 - t4);
     isects = bins.intersections();
@@ -281,7 +290,8 @@ void run(const Case& cs) {
             << std::setw(7) << median(t_rast) << " | " << std::setw(7) << median(t_rbwd) << " | " << std::setw(6)
             << median(t_pbwd) << " | " << std::setw(7) << peak_fwd << " | " << std::setw(7)
             << (cs.bwd_runs ? peak_all : NAN) << " | " << std::setw(6) << rss0 << " | " << std::setw(6) << buffers_fwd
-            << " | " << std::setw(6) << buffers_bwd << " | " << std::setw(6) << build_ms / 1000 << " |" << std::endl;
+            << " | " << std::setw(6) << buffers_bwd << " | " << std::setw(6) << build_ms / 1000 << " | " << std::setw(6)
+            << median(c_fwd) << " | " << std::setw(6) << median(c_bwd) << " |" << std::endl;
 }
 
 }  // namespace
@@ -305,10 +315,10 @@ int main(int argc, char** argv) {
            "fwd;\n      proj/bin/rast/rbwd/pbwd = phases (project, tile binning, rasterize fwd, rasterize bwd, "
            "project bwd);\n      peakF/peakFB = VmHWM (MB, process peak reset before the case) after the fwd "
            "runs / after fwd+bwd;\n      rss0 = VmRSS at the start of the case (scene inputs included); bufF/bufB "
-           "= renderer's own buffers (MB)\n\n";
+           "= renderer's own buffers (MB);\n      cpuF/cpuB = process CPU ms of the kernel phases fwd (proj+bin+rast) / bwd (rbwd+pbwd)\n\n";
     std::cout
         << "| case                 |        N |     image |  visible |    isects |   fwd ms | f+b ms   | Misect/s "
-           "|  proj |   bin |    rast |    rbwd |  pbwd |   peakF |  peakFB |   rss0 |   bufF |   bufB | build s |\n";
+           "|  proj |   bin |    rast |    rbwd |  pbwd |   peakF |  peakFB |   rss0 |   bufF |   bufB | build s | cpuF   | cpuB   |\n";
     const int k = int(std::max<int64_t>(1, runs_scale));
     std::vector<Case> cases = {{"20k", 20000, 256, 192, 1.0, 11 * k, 11 * k},
                                {"20k large splats", 20000, 256, 192, 3.0, 11 * k, 11 * k},

@@ -29,11 +29,13 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     LaneSums<T> sums{};
     int64_t ys, ye, g0, g1;
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
-      const Splat<T> s = bwd_splat(rec);
+      Splat<T> s = bwd_splat(rec);
+      s.prepare();
       for (int64_t py = ys; py < ye; ++py) {
         const Row<T> r(s, py);
         for (int64_t k = g0; k < g1; ++k)
-          bwd_group(s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), sums);
+          if (group_may_hit(s, r, x0 + k * kLanes))
+            bwd_group(s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), sums);
       }
     }
     sums.reduce(out + i * kGrad2d);
@@ -49,14 +51,16 @@ __attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t c
     LaneSums<float> sums{};
     int64_t ys, ye, g0, g1;
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
-      const Splat<float> s = bwd_splat(rec);
+      Splat<float> s = bwd_splat(rec);
+      s.prepare();
       const Avx2Splat a = avx2_splat(s, kBwdCh);
       Avx2Sums g;
       g.zero();
       for (int64_t py = ys; py < ye; ++py) {
         const Row<float> r(s, py);
         for (int64_t k = g0; k < g1; ++k)
-          bwd_group_avx2(a, s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), g);
+          if (group_may_hit(s, r, x0 + k * kLanes))
+            bwd_group_avx2(a, s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), g);
       }
       g.store(sums);
     }
@@ -85,8 +89,9 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
         st[kPbT * kPix + p] = final_T[o];
         const T dc[kBwdCh] = {g_rgb[o], g_rgb[HW + o], g_rgb[2 * HW + o], g_depth[o], g_alpha[o]};
-        const T behind[kBwdCh] = {T(background[0]), T(background[1]), T(background[2]), 0, 0};
-        for (int c = 0; c < kBwdCh; ++c) st[(kPbDC + c) * kPix + p] = dc[c], st[(kPbBehind + c) * kPix + p] = behind[c];
+        for (int c = 0; c < kBwdCh; ++c) st[(kPbDC + c) * kPix + p] = dc[c];
+        // Behind the last contributor lies the background (zero for depth and alpha).
+        st[kPbS * kPix + p] = dc[0] * T(background[0]) + dc[1] * T(background[1]) + dc[2] * T(background[2]);
         last[p] = n_contrib[o];
         max_last = std::max(max_last, last[p]);
       }

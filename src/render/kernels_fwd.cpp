@@ -121,7 +121,7 @@ template <class T>
 ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
   for (int p = 0; p < kPix; ++p) {
     const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
-    st[kPlT * kPix + p] = 1, st[kPlDone * kPix + p] = inside ? 0 : 1, last[p] = 0;  // outside: never composited
+    st[kPlT * kPix + p] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
     for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] = 0;
   }
 }
@@ -137,11 +137,13 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const T* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
-    const Splat<T> s = fwd_splat(rec);
+    Splat<T> s = fwd_splat(rec);
+    s.prepare();
     for (int64_t py = ys; py < ye; ++py) {
       const Row<T> r(s, py);
       for (int64_t g = g0; g < g1; ++g)
-        active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+        if (group_may_hit(s, r, x0 + g * kLanes))
+          active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
     }
   }
 }
@@ -153,12 +155,14 @@ __attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t c
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
-    const Splat<float> s = fwd_splat(rec);
+    Splat<float> s = fwd_splat(rec);
+    s.prepare();
     const Avx2Splat a = avx2_splat(s, 7);
     for (int64_t py = ys; py < ye; ++py) {
       const Row<float> r(s, py);
       for (int64_t g = g0; g < g1; ++g)
-        active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+        if (group_may_hit(s, r, x0 + g * kLanes))
+          active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
     }
   }
 }
@@ -179,7 +183,7 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        const T t = st[kPlT * kPix + p];
+        const T t = std::abs(st[kPlT * kPix + p]);  // stopped pixels hold −T
         for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[(kPlAcc + c) * kPix + p] + t * bg[c];
         alpha_out[o] = 1 - t;
         depth_out[o] = st[(kPlAcc + 3) * kPix + p];

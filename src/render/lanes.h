@@ -18,13 +18,12 @@ namespace isplat::splat {
 constexpr int kPix = kTile * kTile;  // pixels per tile
 constexpr int kLanes = 8;            // pixels per group
 
-// exp(x) for the splat weights, x ≤ 0. float: e^x = p(x/16)^16 with p the degree-7 Taylor polynomial
-// (relative error below 1e-6 on the [−4.5, 0] that is ever used); arithmetic only, so it vectorizes.
+// exp(x) for the splat weights, x ≤ 0. float: e^x = p(x/16)^16 with p the degree-6 Taylor polynomial
+// (relative error about 1e-6 on the [−4.5, 0] that is ever used); arithmetic only, so it vectorizes.
 // double (the tests' precision): std::exp. Forward and backward call the same one, so they agree.
 ISPLAT_INLINE float splat_exp(float x) {
   const float y = std::max(x, -16.0f) * 0.0625f;
-  float p = 1.0f / 5040;
-  p = p * y + 1.0f / 720;
+  float p = 1.0f / 720;
   p = p * y + 1.0f / 120;
   p = p * y + 1.0f / 24;
   p = p * y + 1.0f / 6;
@@ -44,6 +43,11 @@ template <class T>
 struct Splat {
   T u, v, A, B, C, opac, cut;
   T f[7];
+  T beta = 0, cut_wide = 0;  // −B/A (where a row's power is smallest), cut with the kSpanMargin slack
+  Splat& prepare() {
+    beta = -B / A, cut_wide = cut * T(1 + kSpanMargin) + T(kSpanMargin);
+    return *this;
+  }
 };
 
 // Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy).
@@ -53,11 +57,24 @@ struct Row {
   Row(const Splat<T>& s, int64_t py) : dy(T(py) + T(0.5) - s.v), cdy(s.C * dy), bdy(s.B * dy), cdy2(cdy * dy) {}
 };
 
-// Forward state planes of a tile (structure of arrays): T, 7 accumulated channels, done flag (0/1).
-enum FwdPlane { kPlT = 0, kPlAcc = 1, kPlDone = 8, kFwdPlanes = 9 };
-// Backward planes: T, dL/dC for r, g, b, depth, alpha, and B (what lies behind) for the same five.
+// Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
+// minimum over the group's span is at beta·dy clamped to the span. Conservative by kSpanMargin; the pixel
+// loops make the exact decision.
+template <class T>
+ISPLAT_INLINE bool group_may_hit(const Splat<T>& s, const Row<T>& r, int64_t xb) {
+  const T lo = (T(xb) + T(0.5)) - s.u, hi = lo + T(kLanes - 1);
+  const T dx = std::min(std::max(s.beta * r.dy, lo), hi);
+  return T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy <= s.cut_wide;
+}
+
+// Forward state planes of a tile (structure of arrays): T and 7 accumulated channels. A pixel that has
+// stopped keeps −T (T > 0 always), so one plane holds both.
+enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
+// Backward planes: T, S and dL/dC for r, g, b, depth, alpha. With B_c the colour of what lies behind the
+// current Gaussian (background included), S = Σ_c dL/dC_c·B_c; dL/dC is constant per pixel, so tracking S
+// replaces tracking every B_c: dL/dα = T·(Σ_c dL/dC_c·f_c − S), then S ← α·Σ_c dL/dC_c·f_c + (1 − α)·S.
 constexpr int kBwdCh = 5;
-enum BwdPlane { kPbT = 0, kPbDC = 1, kPbBehind = 1 + kBwdCh, kBwdPlanes = 1 + 2 * kBwdCh };
+enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
 
 // Lane sums of one Gaussian's backward: 10 quantities × 8 lanes, reduced in one fixed tree order.
 template <class T>
@@ -83,10 +100,10 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* s
     const T raw = s.opac * splat_exp(-power);
     const T alpha = std::min(T(kAlphaMax), raw);
     const T t = st[kPlT * kPix + p], next = t * (T(1) - alpha);
-    const bool hit = power <= s.cut && raw >= T(kAlphaMin) && st[kPlDone * kPix + p] == T(0);
+    const bool hit = power <= s.cut && raw >= T(kAlphaMin) && t > T(0);
     if (!hit) continue;
     if (next < T(kTransmittanceMin)) {  // this Gaussian would make the pixel opaque: stop before it
-      st[kPlDone * kPix + p] = T(1);
+      st[kPlT * kPix + p] = -t;
       ++stops;
       continue;
     }
@@ -112,13 +129,11 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* 
     if (!(power <= s.cut && raw >= T(kAlphaMin) && i < last[p])) continue;  // not a contributor in forward
     const T t_in = st[kPbT * kPix + p] / (T(1) - alpha);                    // transmittance in front of this Gaussian
     const T w = alpha * t_in;
-    T d = T(0);
-    for (int c = 0; c < kBwdCh; ++c) d += st[(kPbDC + c) * kPix + p] * (s.f[c] - st[(kPbBehind + c) * kPix + p]);
-    const T d_alpha = d * t_in;
-    for (int c = 0; c < kBwdCh; ++c) {
-      T& behind = st[(kPbBehind + c) * kPix + p];
-      behind = alpha * s.f[c] + (T(1) - alpha) * behind;
-    }
+    T q = st[kPbDC * kPix + p] * s.f[0];  // Σ_c dL/dC_c·f_c
+    for (int c = 1; c < kBwdCh; ++c) q = q + st[(kPbDC + c) * kPix + p] * s.f[c];
+    T& S = st[kPbS * kPix + p];
+    const T d_alpha = (q - S) * t_in;
+    S = alpha * q + (T(1) - alpha) * S;
     st[kPbT * kPix + p] = t_in;
     for (int c = 0; c < 4; ++c) g.s[kGr + c][l] += w * st[(kPbDC + c) * kPix + p];
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
@@ -151,8 +166,7 @@ ISPLAT_AVX2 __m256 avx2_neg(__m256 x) {
 
 ISPLAT_AVX2 __m256 avx2_exp(__m256 x) {
   const __m256 y = _mm256_mul_ps(_mm256_max_ps(x, _mm256_set1_ps(-16.0f)), _mm256_set1_ps(0.0625f));
-  __m256 p = _mm256_set1_ps(1.0f / 5040);
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 720));
+  __m256 p = _mm256_set1_ps(1.0f / 720);
   p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 120));
   p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 24));
   p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 6));
@@ -180,14 +194,11 @@ ISPLAT_AVX2 int fwd_group_avx2(const Avx2Splat& a, const Row<float>& r, int64_t 
   const __m256 raw = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power)));
   const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
   float* Tp = st + kPlT * kPix + p0;
-  float* Dp = st + kPlDone * kPix + p0;
-  const __m256 t = _mm256_loadu_ps(Tp), done = _mm256_loadu_ps(Dp);
+  const __m256 t = _mm256_loadu_ps(Tp);
   const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
   const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power, a.cut, _CMP_LE_OQ),
                                                  _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
-                                   _mm256_cmp_ps(done, _mm256_setzero_ps(), _CMP_EQ_OQ));
-  const int hit_bits = _mm256_movemask_ps(hit);
-  if (hit_bits == 0) return 0;
+                                   _mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ));
   const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
   const __m256 add = _mm256_andnot_ps(stop, hit);
   const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
@@ -195,8 +206,7 @@ ISPLAT_AVX2 int fwd_group_avx2(const Avx2Splat& a, const Row<float>& r, int64_t 
     float* acc = st + (kPlAcc + c) * kPix + p0;
     _mm256_storeu_ps(acc, _mm256_add_ps(_mm256_loadu_ps(acc), _mm256_mul_ps(w, a.f[c])));
   }
-  _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, next, add));
-  _mm256_storeu_ps(Dp, _mm256_blendv_ps(done, _mm256_set1_ps(1.0f), stop));
+  _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
   __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);
   const __m256 lst = _mm256_castsi256_ps(_mm256_loadu_si256(Lp));
   _mm256_storeu_si256(Lp, _mm256_castps_si256(_mm256_blendv_ps(lst, _mm256_castsi256_ps(_mm256_set1_epi32(id)), add)));
@@ -231,16 +241,15 @@ ISPLAT_AVX2 void bwd_group_avx2(const Avx2Splat& a, const Splat<float>& s, const
   const __m256 t = _mm256_loadu_ps(Tp);
   const __m256 t_in = _mm256_div_ps(t, one_minus);
   const __m256 w = _mm256_mul_ps(alpha, t_in);
-  __m256 dc[kBwdCh], d = _mm256_setzero_ps();
-  for (int c = 0; c < kBwdCh; ++c) {
-    float* Bp = st + (kPbBehind + c) * kPix + p0;
-    dc[c] = _mm256_loadu_ps(st + (kPbDC + c) * kPix + p0);
-    const __m256 behind = _mm256_loadu_ps(Bp);
-    d = _mm256_add_ps(d, _mm256_mul_ps(dc[c], _mm256_sub_ps(a.f[c], behind)));
-    const __m256 updated = _mm256_add_ps(_mm256_mul_ps(alpha, a.f[c]), _mm256_mul_ps(one_minus, behind));
-    _mm256_storeu_ps(Bp, _mm256_blendv_ps(behind, updated, hit));
-  }
-  const __m256 d_alpha = _mm256_mul_ps(d, t_in);
+  __m256 dc[kBwdCh];
+  for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + (kPbDC + c) * kPix + p0);
+  __m256 q = _mm256_mul_ps(dc[0], a.f[0]);
+  for (int c = 1; c < kBwdCh; ++c) q = _mm256_add_ps(q, _mm256_mul_ps(dc[c], a.f[c]));
+  float* Sp = st + kPbS * kPix + p0;
+  const __m256 S = _mm256_loadu_ps(Sp);
+  const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(q, S), t_in);
+  const __m256 S_new = _mm256_add_ps(_mm256_mul_ps(alpha, q), _mm256_mul_ps(one_minus, S));
+  _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
   _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
   const __m256 wh = _mm256_and_ps(hit, w);
   for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_add_ps(g.s[kGr + c], _mm256_mul_ps(wh, dc[c]));
