@@ -1,0 +1,113 @@
+// Raw CPU kernels of the splatting renderer (projection, tile binning, rasterization) and the constants and
+// per-pixel rule shared by their forward and backward passes.
+#pragma once
+#include <torch/types.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace isplat::splat {
+
+// One set of constants for both passes (DESIGN §3): changing one here changes forward and backward together.
+constexpr double kAlphaMax = 0.99;                               // α = min(0.99, o·G)
+constexpr double kAlphaMin = 1.0 / 255.0;                        // skip α < 1/255
+constexpr double kTransmittanceMin = 1e-4;                       // stop before T would drop below 1e-4
+constexpr double kSigmaExtent = 3.0;                             // screen footprint: at most 3σ
+constexpr double kMaxPower = 0.5 * kSigmaExtent * kSigmaExtent;  // ½dᵀΣ⁻¹d at 3σ
+constexpr int kTile = 16;                                        // 16×16 pixel tiles
+constexpr double kFrustumClamp = 1.3;                            // EWA Jacobian evaluated inside 1.3× the frustum
+constexpr double kSpanMargin = 1e-3;  // widens row spans / tile rects so rounding never drops a pixel
+
+// One pinhole camera in double precision: K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]], x_cam = R·x_world + t.
+struct CameraParams {
+  double fx = 1, fy = 1, cx = 0, cy = 0, skew = 0;
+  double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major
+  double t[3] = {0, 0, 0};
+  int64_t width = 0, height = 0;
+  int64_t tiles_x() const { return (width + kTile - 1) / kTile; }
+  int64_t tiles_y() const { return (height + kTile - 1) / kTile; }
+};
+
+struct ProjectSettings {
+  double near = 0.01;        // cull camera-space z < near
+  double dilation = 0.3;     // px² added to the 2D covariance diagonal
+  bool antialiased = false;  // scale opacity by sqrt(det Σ / det(Σ + dilation·I))
+};
+
+// Per-Gaussian screen-space record written by project_fwd, one row of `packed` [N, kRec].
+// clang-format off
+enum Rec : int {
+  kU = 0, kV,           // mean in continuous pixel coordinates
+  kConA, kConB, kConC,  // conic Σ'⁻¹ = [[A, B], [B, C]]
+  kOpac,                // effective opacity o' (compensated in antialiased mode)
+  kCut,                 // max power: min(4.5, ln(255·o')); beyond it the pixel is skipped
+  kDepth,               // camera-space z of the mean
+  kR, kG, kB,           // colour
+  kNx, kNy, kNz,        // shortest axis in camera space, facing the camera
+  kRx, kRy,             // half extents (px) of the cut ellipse's bounding box, slightly enlarged
+  kRec = 16             // one 64-byte line in float
+};
+// clang-format on
+constexpr int kGrad2d = 10;  // per-Gaussian 2D gradient: u, v, A, B, C, o', r, g, b, z
+
+// ---- Projection (kernels_project.cpp) ----
+
+struct Projection {
+  torch::Tensor packed;  // [N, kRec] records (zeros when culled)
+  torch::Tensor rects;   // [N, 4] int32 tile rectangle (x0, y0, x1, y1), half-open; empty when culled
+};
+
+// EWA projection of N Gaussians (all tensors contiguous, one floating dtype) into one camera.
+Projection project_fwd(const torch::Tensor& means,      // [N, 3] world
+                       const torch::Tensor& scales,     // [N, 3]
+                       const torch::Tensor& quats,      // [N, 4] w, x, y, z (unnormalized)
+                       const torch::Tensor& colors,     // [N, 3]
+                       const torch::Tensor& opacities,  // [N]
+                       const CameraParams& cam, const ProjectSettings& settings);
+
+struct ProjectGrads {
+  torch::Tensor means, scales, quats, opacities;  // shaped like the inputs
+};
+
+// Back-propagates the per-Gaussian 2D gradients through the projection (colours need no pass: they are
+// grad2d[:, 6:9]). Recomputes the forward quantities from the inputs.
+ProjectGrads project_bwd(const torch::Tensor& means, const torch::Tensor& scales, const torch::Tensor& quats,
+                         const torch::Tensor& opacities, const CameraParams& cam, const ProjectSettings& settings,
+                         const torch::Tensor& grad2d);  // [N, kGrad2d]
+
+// ---- Tile binning and forward rasterization (kernels_fwd.cpp) ----
+
+struct TileBins {
+  torch::Tensor tile_offsets;  // [tiles + 1] int64: tile t owns isect_ids[offsets[t] : offsets[t+1]]
+  torch::Tensor isect_ids;     // [I] int32 Gaussian ids, each tile's list sorted by (depth, id)
+  int64_t intersections() const { return isect_ids.numel(); }
+};
+
+TileBins bin_tiles(const Projection& proj, const CameraParams& cam);
+
+struct RasterOutput {
+  torch::Tensor rgb, alpha, depth, normal;  // [3,H,W], [1,H,W], [1,H,W], [3,H,W]
+  torch::Tensor final_T;                    // [H, W] transmittance after the last contributor
+  torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
+};
+
+RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                           const double background[3]);
+
+// ---- Backward rasterization (kernels_bwd.cpp) ----
+
+// Per-Gaussian 2D gradients [N, kGrad2d] from the image gradients (undefined tensors count as zero).
+torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                            const double background[3], const torch::Tensor& final_T, const torch::Tensor& n_contrib,
+                            const torch::Tensor& grad_rgb,     // [3, H, W]
+                            const torch::Tensor& grad_alpha,   // [1, H, W]
+                            const torch::Tensor& grad_depth);  // [1, H, W]
+
+// The rasterizers run an AVX2 build of their pixel loops when the CPU has it (same arithmetic, no FMA,
+// so results match the generic build up to the order of the per-Gaussian lane sums in backward).
+// Tests can force the generic build; returns the previous setting.
+bool set_simd_enabled(bool enabled);
+bool simd_enabled();
+
+}  // namespace isplat::splat

@@ -1,0 +1,152 @@
+// Backward rasterization: per tile, back to front from each pixel's last contributor, then a deterministic
+// reduction of the per-intersection gradients to per-Gaussian 2D gradients.
+#include <ATen/Dispatch.h>
+#include <ATen/Parallel.h>
+
+#include <vector>
+
+#include "render/kernels.h"
+#include "render/tile_loop.h"
+
+namespace isplat::splat {
+namespace {
+
+template <class T>
+ISPLAT_INLINE Splat<T> bwd_splat(const T* rec) {
+  return {rec[kU],    rec[kV],    rec[kConA], rec[kConB],
+          rec[kConC], rec[kOpac], rec[kCut],  {rec[kR], rec[kG], rec[kB], rec[kDepth], T(1)}};
+}
+
+// One tile back to front. Each pixel starts at its last contributor with T = T_final and reconstructs the
+// transmittance in front of every Gaussian by division; the skip rules are evaluated exactly as in forward.
+// Writes the tile's per-intersection gradients (kGrad2d each) to `out`. The AVX2 twin has the same loops.
+template <class T>
+void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                      const int32_t* last, int32_t max_last, T* out) {
+  std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
+  for (int64_t i = max_last - 1; i >= 0; --i) {
+    const T* rec = local + i * kRec;
+    LaneSums<T> sums{};
+    int64_t ys, ye, g0, g1;
+    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      Splat<T> s = bwd_splat(rec);
+      s.prepare();
+      for (int64_t py = ys; py < ye; ++py) {
+        const Row<T> r(s, py);
+        for (int64_t k = g0; k < g1; ++k)
+          if (group_may_hit(s, r, x0 + k * kLanes))
+            bwd_group(s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), sums);
+      }
+    }
+    sums.reduce(out + i * kGrad2d);
+  }
+}
+
+__attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
+                                                   int64_t x1, int64_t y1, float* st, const int32_t* last,
+                                                   int32_t max_last, float* out) {
+  std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
+  for (int64_t i = max_last - 1; i >= 0; --i) {
+    const float* rec = local + i * kRec;
+    LaneSums<float> sums{};
+    int64_t ys, ye, g0, g1;
+    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      Splat<float> s = bwd_splat(rec);
+      s.prepare();
+      const Avx2Splat a = avx2_splat(s, kBwdCh);
+      Avx2Sums g;
+      g.zero();
+      for (int64_t py = ys; py < ye; ++py) {
+        const Row<float> r(s, py);
+        for (int64_t k = g0; k < g1; ++k)
+          if (group_may_hit(s, r, x0 + k * kLanes))
+            bwd_group_avx2(a, s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), g);
+      }
+      g.store(sums);
+    }
+    sums.reduce(out + i * kGrad2d);
+  }
+}
+
+template <class T>
+void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
+                        const double* background, const T* final_T, const int32_t* n_contrib, const T* g_rgb,
+                        const T* g_alpha, const T* g_depth, T* slots) {
+  const int64_t W = cam.width, HW = W * cam.height;
+  auto tile_fn = bwd_tile_generic<T>;
+  if constexpr (std::is_same_v<T, float>)
+    if (simd_enabled()) tile_fn = bwd_tile_avx2;
+  for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
+    const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
+    if (count == 0) return;
+    T* st = scratch.pixel_planes(kBwdPlanes);
+    int32_t* last = scratch.last.data();
+    std::fill(st, st + kBwdPlanes * kPix, T(0));
+    std::fill(last, last + kPix, 0);
+    int32_t max_last = 0;
+    for (int64_t py = y0; py < y1; ++py)
+      for (int64_t px = x0; px < x1; ++px) {
+        const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
+        st[kPbT * kPix + p] = final_T[o];
+        const T dc[kBwdCh] = {g_rgb[o], g_rgb[HW + o], g_rgb[2 * HW + o], g_depth[o], g_alpha[o]};
+        for (int c = 0; c < kBwdCh; ++c) st[(kPbDC + c) * kPix + p] = dc[c];
+        // Behind the last contributor lies the background (zero for depth and alpha).
+        st[kPbS * kPix + p] = dc[0] * T(background[0]) + dc[1] * T(background[1]) + dc[2] * T(background[2]);
+        last[p] = n_contrib[o];
+        max_last = std::max(max_last, last[p]);
+      }
+    // Pixels outside the image keep T = 0 and last = 0: never a contributor, and no division by zero
+    // matters because their lanes are masked.
+    for (int p = 0; p < kPix; ++p)
+      if (st[kPbT * kPix + p] == 0) st[kPbT * kPix + p] = 1;
+    tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
+            slots + begin * kGrad2d);
+  });
+}
+
+// grad2d[id] = Σ of its intersection slots in tile order. Each worker owns a range of ids and scans all
+// intersections, so every sum has the same order whatever the thread count: bit-identical results.
+template <class T>
+void reduce_slots(const int32_t* ids, int64_t intersections, const T* slots, int64_t n, T* grad2d) {
+  std::fill(grad2d, grad2d + n * kGrad2d, T(0));
+  const int64_t workers = std::max<int64_t>(1, std::min<int64_t>(at::get_num_threads(), n));
+  at::parallel_for(0, workers, 1, [&](int64_t w0, int64_t w1) {
+    for (int64_t w = w0; w < w1; ++w) {
+      const int64_t lo = n * w / workers, hi = n * (w + 1) / workers;
+      for (int64_t k = 0; k < intersections; ++k) {
+        const int64_t id = ids[k];
+        if (id < lo || id >= hi) continue;
+        const T* s = slots + k * kGrad2d;
+        T* g = grad2d + id * kGrad2d;
+        for (int c = 0; c < kGrad2d; ++c) g[c] += s[c];
+      }
+    }
+  });
+}
+
+}  // namespace
+
+torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                            const double background[3], const torch::Tensor& final_T, const torch::Tensor& n_contrib,
+                            const torch::Tensor& grad_rgb, const torch::Tensor& grad_alpha,
+                            const torch::Tensor& grad_depth) {
+  const int64_t H = cam.height, W = cam.width, n = packed.size(0), isects = bins.intersections();
+  const auto opts = packed.options();
+  auto prepare = [&](const torch::Tensor& g, int64_t channels) {
+    return g.defined() ? g.to(opts).contiguous() : torch::zeros({channels, H, W}, opts);
+  };
+  const auto g_rgb = prepare(grad_rgb, 3), g_alpha = prepare(grad_alpha, 1), g_depth = prepare(grad_depth, 1);
+  auto slots = torch::empty({isects, kGrad2d}, opts);
+  auto grad2d = torch::empty({n, kGrad2d}, opts);
+  AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_bwd", [&] {
+    rasterize_bwd_impl<scalar_t>(
+        packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
+        background, final_T.data_ptr<scalar_t>(), n_contrib.data_ptr<int32_t>(), g_rgb.data_ptr<scalar_t>(),
+        g_alpha.data_ptr<scalar_t>(), g_depth.data_ptr<scalar_t>(), slots.data_ptr<scalar_t>());
+    reduce_slots<scalar_t>(bins.isect_ids.data_ptr<int32_t>(), isects, slots.data_ptr<scalar_t>(), n,
+                           grad2d.data_ptr<scalar_t>());
+  });
+  return grad2d;
+}
+
+}  // namespace isplat::splat

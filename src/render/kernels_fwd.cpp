@@ -1,0 +1,238 @@
+// Tile binning (depth sort, counting pass, prefix sum, fill) and front-to-back rasterization, parallel over tiles.
+#include <ATen/Dispatch.h>
+#include <ATen/Parallel.h>
+
+#include <atomic>
+#include <cstring>
+#include <vector>
+
+#include "render/kernels.h"
+#include "render/tile_loop.h"
+
+namespace isplat::splat {
+namespace {
+
+// Stable LSD radix sort of (key, value) pairs by key, 8 bits per pass; passes where all keys agree are skipped.
+template <class K>
+void radix_sort(std::vector<K>& keys, std::vector<int32_t>& vals) {
+  const size_t n = keys.size();
+  std::vector<K> k2(n);
+  std::vector<int32_t> v2(n);
+  for (int shift = 0; shift < int(8 * sizeof(K)); shift += 8) {
+    size_t count[256] = {0};
+    for (size_t i = 0; i < n; ++i) ++count[(keys[i] >> shift) & 0xff];
+    if (n == 0 || count[(keys[0] >> shift) & 0xff] == n) continue;
+    size_t sum = 0;
+    for (auto& c : count) {
+      const size_t tmp = c;
+      c = sum;
+      sum += tmp;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const size_t d = count[(keys[i] >> shift) & 0xff]++;
+      k2[d] = keys[i];
+      v2[d] = vals[i];
+    }
+    keys.swap(k2);
+    vals.swap(v2);
+  }
+}
+
+// Depth keys whose unsigned order is the order of positive depths.
+inline uint32_t depth_key(float z) {
+  uint32_t k;
+  std::memcpy(&k, &z, 4);
+  return k;
+}
+inline uint64_t depth_key(double z) {
+  uint64_t k;
+  std::memcpy(&k, &z, 8);
+  return k;
+}
+
+template <class T>
+TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const CameraParams& cam) {
+  using Key = decltype(depth_key(T(0)));
+  const int64_t tiles_x = cam.tiles_x(), tiles = tiles_x * cam.tiles_y();
+
+  // Visible Gaussians sorted by (depth, id): filling tiles in this order leaves every tile list sorted.
+  std::vector<Key> keys;
+  std::vector<int32_t> order;
+  for (int64_t i = 0; i < n; ++i) {
+    const int32_t* r = rects + 4 * i;
+    if (r[0] < r[2] && r[1] < r[3]) {
+      keys.push_back(depth_key(packed[i * kRec + kDepth]));
+      order.push_back(int32_t(i));
+    }
+  }
+  radix_sort(keys, order);
+  const int64_t visible = int64_t(order.size());
+
+  // Fixed chunks of the sorted list (independent of the thread count), each with its own tile histogram.
+  const int64_t chunk = 16384;
+  const int64_t chunks = std::max<int64_t>(1, (visible + chunk - 1) / chunk);
+  std::vector<int64_t> hist(size_t(chunks * tiles), 0);
+  at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
+    for (int64_t c = c0; c < c1; ++c) {
+      int64_t* h = hist.data() + c * tiles;
+      for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
+        const int32_t* r = rects + 4 * int64_t(order[k]);
+        for (int32_t ty = r[1]; ty < r[3]; ++ty)
+          for (int32_t tx = r[0]; tx < r[2]; ++tx) ++h[ty * tiles_x + tx];
+      }
+    }
+  });
+  TileBins bins;
+  bins.tile_offsets = torch::empty({tiles + 1}, torch::kInt64);
+  int64_t* offs = bins.tile_offsets.data_ptr<int64_t>();
+  int64_t total = 0;
+  for (int64_t t = 0; t < tiles; ++t) {  // prefix sum; hist becomes each chunk's write cursor
+    offs[t] = total;
+    for (int64_t c = 0; c < chunks; ++c) {
+      const int64_t cnt = hist[c * tiles + t];
+      hist[c * tiles + t] = total;
+      total += cnt;
+    }
+  }
+  offs[tiles] = total;
+  bins.isect_ids = torch::empty({total}, torch::kInt32);
+  int32_t* ids = bins.isect_ids.data_ptr<int32_t>();
+  at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
+    for (int64_t c = c0; c < c1; ++c) {
+      int64_t* cursor = hist.data() + c * tiles;
+      for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
+        const int32_t id = order[k];
+        const int32_t* r = rects + 4 * int64_t(id);
+        for (int32_t ty = r[1]; ty < r[3]; ++ty)
+          for (int32_t tx = r[0]; tx < r[2]; ++tx) ids[cursor[ty * tiles_x + tx]++] = id;
+      }
+    }
+  });
+  return bins;
+}
+
+template <class T>
+ISPLAT_INLINE Splat<T> fwd_splat(const T* rec) {
+  return {rec[kU],    rec[kV],    rec[kConA], rec[kConB],
+          rec[kConC], rec[kOpac], rec[kCut],  {rec[kR], rec[kG], rec[kB], rec[kDepth], rec[kNx], rec[kNy], rec[kNz]}};
+}
+
+template <class T>
+ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
+  for (int p = 0; p < kPix; ++p) {
+    const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
+    st[kPlT * kPix + p] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
+    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] = 0;
+  }
+}
+
+// Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
+// 8-pixel groups of its box; per pixel the order, skip rules and stop rule are those of the forward model.
+// The AVX2 twin below has the same loops around fwd_group_avx2.
+template <class T>
+void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                      int32_t* last) {
+  fwd_init(x0, y0, x1, y1, st, last);
+  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && active > 0; ++i) {
+    const T* rec = local + i * kRec;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    Splat<T> s = fwd_splat(rec);
+    s.prepare();
+    for (int64_t py = ys; py < ye; ++py) {
+      const Row<T> r(s, py);
+      for (int64_t g = g0; g < g1; ++g)
+        if (group_may_hit(s, r, x0 + g * kLanes))
+          active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
+                                                   int64_t x1, int64_t y1, float* st, int32_t* last) {
+  fwd_init(x0, y0, x1, y1, st, last);
+  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && active > 0; ++i) {
+    const float* rec = local + i * kRec;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    Splat<float> s = fwd_splat(rec);
+    s.prepare();
+    const Avx2Splat a = avx2_splat(s, 7);
+    for (int64_t py = ys; py < ye; ++py) {
+      const Row<float> r(s, py);
+      for (int64_t g = g0; g < g1; ++g)
+        if (group_may_hit(s, r, x0 + g * kLanes))
+          active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
+    }
+  }
+}
+
+template <class T>
+void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
+                        const double* background, T* rgb, T* alpha_out, T* depth_out, T* normal_out, T* final_T,
+                        int32_t* n_contrib) {
+  const int64_t W = cam.width, HW = W * cam.height;
+  const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
+  auto tile_fn = fwd_tile_generic<T>;
+  if constexpr (std::is_same_v<T, float>)
+    if (simd_enabled()) tile_fn = fwd_tile_avx2;
+  for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
+    T* st = scratch.pixel_planes(kFwdPlanes);
+    const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
+    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data());
+    for (int64_t py = y0; py < y1; ++py)
+      for (int64_t px = x0; px < x1; ++px) {
+        const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
+        const T t = std::abs(st[kPlT * kPix + p]);  // stopped pixels hold −T
+        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[(kPlAcc + c) * kPix + p] + t * bg[c];
+        alpha_out[o] = 1 - t;
+        depth_out[o] = st[(kPlAcc + 3) * kPix + p];
+        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[(kPlAcc + 4 + c) * kPix + p];
+        final_T[o] = t;
+        n_contrib[o] = scratch.last[p];
+      }
+  });
+}
+
+}  // namespace
+
+namespace {
+bool cpu_has_avx2() {
+  __builtin_cpu_init();  // may run before main (static initialization)
+  return __builtin_cpu_supports("avx2");
+}
+std::atomic<bool> g_simd{cpu_has_avx2()};
+}  // namespace
+bool set_simd_enabled(bool enabled) {
+  return g_simd.exchange(enabled && cpu_has_avx2());
+}
+bool simd_enabled() {
+  return g_simd.load();
+}
+
+TileBins bin_tiles(const Projection& proj, const CameraParams& cam) {
+  TileBins bins;
+  AT_DISPATCH_FLOATING_TYPES(proj.packed.scalar_type(), "bin_tiles", [&] {
+    bins = bin_tiles_impl<scalar_t>(proj.packed.data_ptr<scalar_t>(), proj.rects.data_ptr<int32_t>(),
+                                    proj.packed.size(0), cam);
+  });
+  return bins;
+}
+
+RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                           const double background[3]) {
+  const int64_t H = cam.height, W = cam.width;
+  const auto opts = packed.options();
+  RasterOutput out{torch::empty({3, H, W}, opts), torch::empty({1, H, W}, opts),
+                   torch::empty({1, H, W}, opts), torch::empty({3, H, W}, opts),
+                   torch::empty({H, W}, opts),    torch::empty({H, W}, opts.dtype(torch::kInt32))};
+  AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {
+    rasterize_fwd_impl<scalar_t>(
+        packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
+        background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(), out.depth.data_ptr<scalar_t>(),
+        out.normal.data_ptr<scalar_t>(), out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>());
+  });
+  return out;
+}
+
+}  // namespace isplat::splat

@@ -1,0 +1,267 @@
+// Internal to the render kernels: the per-pixel forward and backward rules on a group of 8 pixels of one tile
+// row, as portable scalar code (float or double) and as AVX2 intrinsics (float). Both do the same IEEE
+// operations in the same order, so they give bit-identical results; the tile loops pick one at run time.
+#pragma once
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "render/kernels.h"
+
+#define ISPLAT_INLINE inline __attribute__((always_inline))
+#define ISPLAT_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+namespace isplat::splat {
+
+constexpr int kPix = kTile * kTile;  // pixels per tile
+constexpr int kLanes = 8;            // pixels per group
+
+// exp(x) for the splat weights, x ≤ 0. float: e^x = p(x/16)^16 with p the degree-6 Taylor polynomial
+// (relative error about 1e-6 on the [−4.5, 0] that is ever used); arithmetic only, so it vectorizes.
+// double (the tests' precision): std::exp. Forward and backward call the same one, so they agree.
+ISPLAT_INLINE float splat_exp(float x) {
+  const float y = std::max(x, -16.0f) * 0.0625f;
+  float p = 1.0f / 720;
+  p = p * y + 1.0f / 120;
+  p = p * y + 1.0f / 24;
+  p = p * y + 1.0f / 6;
+  p = p * y + 0.5f;
+  p = p * y + 1.0f;
+  p = p * y + 1.0f;
+  p = p * p, p = p * p, p = p * p;
+  return p * p;
+}
+ISPLAT_INLINE double splat_exp(double x) {
+  return std::exp(x);
+}
+
+// One Gaussian's constants for the pixel loops. f: the composited channels (forward: r, g, b, z, nx, ny, nz;
+// backward: r, g, b, z, 1).
+template <class T>
+struct Splat {
+  T u, v, A, B, C, opac, cut;
+  T f[7];
+  T beta = 0, cut_wide = 0;  // −B/A (where a row's power is smallest), cut with the kSpanMargin slack
+  Splat& prepare() {
+    beta = -B / A, cut_wide = cut * T(1 + kSpanMargin) + T(kSpanMargin);
+    return *this;
+  }
+};
+
+// Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy).
+template <class T>
+struct Row {
+  T dy, cdy, bdy, cdy2;
+  Row(const Splat<T>& s, int64_t py) : dy(T(py) + T(0.5) - s.v), cdy(s.C * dy), bdy(s.B * dy), cdy2(cdy * dy) {}
+};
+
+// Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
+// minimum over the group's span is at beta·dy clamped to the span. Conservative by kSpanMargin; the pixel
+// loops make the exact decision.
+template <class T>
+ISPLAT_INLINE bool group_may_hit(const Splat<T>& s, const Row<T>& r, int64_t xb) {
+  const T lo = (T(xb) + T(0.5)) - s.u, hi = lo + T(kLanes - 1);
+  const T dx = std::min(std::max(s.beta * r.dy, lo), hi);
+  return T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy <= s.cut_wide;
+}
+
+// Forward state planes of a tile (structure of arrays): T and 7 accumulated channels. A pixel that has
+// stopped keeps −T (T > 0 always), so one plane holds both.
+enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
+// Backward planes: T, S and dL/dC for r, g, b, depth, alpha. With B_c the colour of what lies behind the
+// current Gaussian (background included), S = Σ_c dL/dC_c·B_c; dL/dC is constant per pixel, so tracking S
+// replaces tracking every B_c: dL/dα = T·(Σ_c dL/dC_c·f_c − S), then S ← α·Σ_c dL/dC_c·f_c + (1 − α)·S.
+constexpr int kBwdCh = 5;
+enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
+
+// Lane sums of one Gaussian's backward: 10 quantities × 8 lanes, reduced in one fixed tree order.
+template <class T>
+struct LaneSums {
+  T s[kGrad2d][kLanes];
+  void reduce(T* out) const {
+    for (int k = 0; k < kGrad2d; ++k)
+      out[k] = ((s[k][0] + s[k][1]) + (s[k][2] + s[k][3])) + ((s[k][4] + s[k][5]) + (s[k][6] + s[k][7]));
+  }
+};
+enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
+
+// ---- Portable scalar lanes ----
+
+// Front to back over pixels p0..p0+7 (x of lane 0 is xb). Returns how many pixels stopped here.
+template <class T>
+ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* st, int32_t* last, int p0, int32_t id) {
+  int stops = 0;
+  for (int l = 0; l < kLanes; ++l) {
+    const int p = p0 + l;
+    const T dx = (T(xb + l) + T(0.5)) - s.u;
+    const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    const T raw = s.opac * splat_exp(-power);
+    const T alpha = std::min(T(kAlphaMax), raw);
+    const T t = st[kPlT * kPix + p], next = t * (T(1) - alpha);
+    const bool hit = power <= s.cut && raw >= T(kAlphaMin) && t > T(0);
+    if (!hit) continue;
+    if (next < T(kTransmittanceMin)) {  // this Gaussian would make the pixel opaque: stop before it
+      st[kPlT * kPix + p] = -t;
+      ++stops;
+      continue;
+    }
+    const T w = alpha * t;
+    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] += w * s.f[c];
+    st[kPlT * kPix + p] = next;
+    last[p] = id;
+  }
+  return stops;
+}
+
+// Back to front over pixels p0..p0+7 for Gaussian `i` (tile-local), adding to the lane sums.
+template <class T>
+ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* st, const int32_t* last, int p0,
+                             int32_t i, LaneSums<T>& g) {
+  for (int l = 0; l < kLanes; ++l) {
+    const int p = p0 + l;
+    const T dx = (T(xb + l) + T(0.5)) - s.u;
+    const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    const T G = splat_exp(-power);
+    const T raw = s.opac * G;
+    const T alpha = std::min(T(kAlphaMax), raw);
+    if (!(power <= s.cut && raw >= T(kAlphaMin) && i < last[p])) continue;  // not a contributor in forward
+    const T t_in = st[kPbT * kPix + p] / (T(1) - alpha);                    // transmittance in front of this Gaussian
+    const T w = alpha * t_in;
+    T q = st[kPbDC * kPix + p] * s.f[0];  // Σ_c dL/dC_c·f_c
+    for (int c = 1; c < kBwdCh; ++c) q = q + st[(kPbDC + c) * kPix + p] * s.f[c];
+    T& S = st[kPbS * kPix + p];
+    const T d_alpha = (q - S) * t_in;
+    S = alpha * q + (T(1) - alpha) * S;
+    st[kPbT * kPix + p] = t_in;
+    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] += w * st[(kPbDC + c) * kPix + p];
+    if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
+    g.s[kGo][l] += G * d_alpha;
+    const T dp = -(alpha * d_alpha);  // dL/dpower
+    g.s[kGu][l] -= dp * (s.A * dx + r.bdy);
+    g.s[kGv][l] -= dp * (s.B * dx + r.cdy);
+    g.s[kGA][l] += dp * T(0.5) * dx * dx;
+    g.s[kGB][l] += dp * dx * r.dy;
+    g.s[kGC][l] += dp * T(0.5) * r.dy * r.dy;
+  }
+}
+
+// ---- AVX2 lanes (float), the same operations in the same order ----
+
+struct Avx2Splat {
+  __m256 u, A, B, opac, cut, f[7];
+};
+ISPLAT_AVX2 Avx2Splat avx2_splat(const Splat<float>& s, int channels) {
+  Avx2Splat a;
+  a.u = _mm256_set1_ps(s.u), a.A = _mm256_set1_ps(s.A), a.B = _mm256_set1_ps(s.B);
+  a.opac = _mm256_set1_ps(s.opac), a.cut = _mm256_set1_ps(s.cut);
+  for (int c = 0; c < channels; ++c) a.f[c] = _mm256_set1_ps(s.f[c]);
+  return a;
+}
+
+ISPLAT_AVX2 __m256 avx2_neg(__m256 x) {
+  return _mm256_xor_ps(x, _mm256_set1_ps(-0.0f));
+}
+
+ISPLAT_AVX2 __m256 avx2_exp(__m256 x) {
+  const __m256 y = _mm256_mul_ps(_mm256_max_ps(x, _mm256_set1_ps(-16.0f)), _mm256_set1_ps(0.0625f));
+  __m256 p = _mm256_set1_ps(1.0f / 720);
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 120));
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 24));
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 6));
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(0.5f));
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f));
+  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f));
+  p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p);
+  return _mm256_mul_ps(p, p);
+}
+
+// dx and power for the 8 lanes starting at pixel column xb.
+ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Row<float>& r, int64_t xb, __m256& dx, __m256& power) {
+  const __m256 x =
+      _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(int32_t(xb)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+  const __m256 half = _mm256_set1_ps(0.5f);
+  dx = _mm256_sub_ps(_mm256_add_ps(x, half), a.u);
+  const __m256 quad = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(a.A, dx), dx), _mm256_set1_ps(r.cdy2));
+  power = _mm256_add_ps(_mm256_mul_ps(half, quad), _mm256_mul_ps(dx, _mm256_set1_ps(r.bdy)));
+}
+
+ISPLAT_AVX2 int fwd_group_avx2(const Avx2Splat& a, const Row<float>& r, int64_t xb, float* st, int32_t* last, int p0,
+                               int32_t id) {
+  __m256 dx, power;
+  avx2_power(a, r, xb, dx, power);
+  const __m256 raw = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power)));
+  const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
+  float* Tp = st + kPlT * kPix + p0;
+  const __m256 t = _mm256_loadu_ps(Tp);
+  const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
+  const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power, a.cut, _CMP_LE_OQ),
+                                                 _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
+                                   _mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ));
+  const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
+  const __m256 add = _mm256_andnot_ps(stop, hit);
+  const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
+  for (int c = 0; c < 7; ++c) {
+    float* acc = st + (kPlAcc + c) * kPix + p0;
+    _mm256_storeu_ps(acc, _mm256_add_ps(_mm256_loadu_ps(acc), _mm256_mul_ps(w, a.f[c])));
+  }
+  _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
+  __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);
+  const __m256 lst = _mm256_castsi256_ps(_mm256_loadu_si256(Lp));
+  _mm256_storeu_si256(Lp, _mm256_castps_si256(_mm256_blendv_ps(lst, _mm256_castsi256_ps(_mm256_set1_epi32(id)), add)));
+  return __builtin_popcount(unsigned(_mm256_movemask_ps(stop)));
+}
+
+// Lane sums as registers; stored to LaneSums for the fixed-order reduction.
+struct Avx2Sums {
+  __m256 s[kGrad2d];
+  ISPLAT_AVX2 void zero() {
+    for (auto& v : s) v = _mm256_setzero_ps();
+  }
+  ISPLAT_AVX2 void store(LaneSums<float>& out) const {
+    for (int k = 0; k < kGrad2d; ++k) _mm256_storeu_ps(out.s[k], s[k]);
+  }
+};
+
+ISPLAT_AVX2 void bwd_group_avx2(const Avx2Splat& a, const Splat<float>& s, const Row<float>& r, int64_t xb, float* st,
+                                const int32_t* last, int p0, int32_t i, Avx2Sums& g) {
+  __m256 dx, power;
+  avx2_power(a, r, xb, dx, power);
+  const __m256 G = avx2_exp(avx2_neg(power));
+  const __m256 raw = _mm256_mul_ps(a.opac, G);
+  const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
+  const __m256i lst = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + p0));
+  const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power, a.cut, _CMP_LE_OQ),
+                                                 _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
+                                   _mm256_castsi256_ps(_mm256_cmpgt_epi32(lst, _mm256_set1_epi32(i))));  // i < last[p]
+  if (_mm256_movemask_ps(hit) == 0) return;
+  const __m256 one = _mm256_set1_ps(1.0f), one_minus = _mm256_sub_ps(one, alpha);
+  float* Tp = st + kPbT * kPix + p0;
+  const __m256 t = _mm256_loadu_ps(Tp);
+  const __m256 t_in = _mm256_div_ps(t, one_minus);
+  const __m256 w = _mm256_mul_ps(alpha, t_in);
+  __m256 dc[kBwdCh];
+  for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + (kPbDC + c) * kPix + p0);
+  __m256 q = _mm256_mul_ps(dc[0], a.f[0]);
+  for (int c = 1; c < kBwdCh; ++c) q = _mm256_add_ps(q, _mm256_mul_ps(dc[c], a.f[c]));
+  float* Sp = st + kPbS * kPix + p0;
+  const __m256 S = _mm256_loadu_ps(Sp);
+  const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(q, S), t_in);
+  const __m256 S_new = _mm256_add_ps(_mm256_mul_ps(alpha, q), _mm256_mul_ps(one_minus, S));
+  _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
+  _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
+  const __m256 wh = _mm256_and_ps(hit, w);
+  for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_add_ps(g.s[kGr + c], _mm256_mul_ps(wh, dc[c]));
+  const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
+  g.s[kGo] = _mm256_add_ps(g.s[kGo], _mm256_and_ps(free, _mm256_mul_ps(G, d_alpha)));
+  const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
+  const __m256 half = _mm256_set1_ps(0.5f), dy = _mm256_set1_ps(r.dy);
+  g.s[kGu] = _mm256_sub_ps(g.s[kGu], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.A, dx), _mm256_set1_ps(r.bdy))));
+  g.s[kGv] = _mm256_sub_ps(g.s[kGv], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.B, dx), _mm256_set1_ps(r.cdy))));
+  g.s[kGA] = _mm256_add_ps(g.s[kGA], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx));
+  g.s[kGB] = _mm256_add_ps(g.s[kGB], _mm256_mul_ps(_mm256_mul_ps(dp, dx), dy));
+  g.s[kGC] = _mm256_add_ps(g.s[kGC], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy));
+}
+
+}  // namespace isplat::splat

@@ -1,0 +1,41 @@
+// Public API of the differentiable CPU Gaussian-splatting renderer: options, outputs and render().
+#pragma once
+#include <torch/types.h>
+
+#include <vector>
+
+#include "core/gaussians.h"
+#include "geometry/camera_torch.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct RenderOptions {
+  std::vector<double> background = {0.0, 0.0, 0.0};  // linear RGB behind the splats: rgb += T_final·bg
+  bool antialiased = false;  // opacity compensation (Mip-Splatting / gsplat "antialiased") on top of the dilation
+  double near = 0.01;        // metres: Gaussians with camera-space z < near are culled
+  double dilation = 0.3;     // px², added to the diagonal of every 2D covariance (low-pass filter)
+  void visit(ConfigVisitor& v);
+};
+
+// Unbatched: rgb [3,H,W], alpha [1,H,W], depth [1,H,W], normal [3,H,W]; batched: a leading [B] on each.
+// rgb = Σ wᵢcᵢ + T_final·bg, alpha = Σ wᵢ = 1 − T_final, depth = Σ wᵢzᵢ (expected camera-space z of the
+// means, not normalized by alpha), normal = Σ wᵢnᵢ with nᵢ the shortest axis in camera space facing the
+// camera. rgb, alpha and depth are differentiable; normal is not (it has no gradient).
+struct RenderOutput {
+  torch::Tensor rgb, alpha, depth, normal;
+};
+
+// Renders Gaussians (float32 or float64, CPU) through a pinhole camera. Gradients flow to means, scales,
+// quats (unnormalized), colors and opacities; none to the camera. Batching:
+//   unbatched set + unbatched camera      -> [3,H,W] ...
+//   unbatched set + cameras [B]           -> [B,3,H,W] ... (one set seen by B cameras)
+//   sets [B,N,...] + cameras [B]          -> [B,...] (set b through camera b)
+//   sets [B,N,...] + one unbatched camera -> [B,...]
+// Non-finite inputs throw isplat::Error naming the tensor. Gaussians behind the near plane, with a zero
+// or negative scale or opacity, a zero quaternion, a degenerate 2D covariance, too little opacity to reach
+// α = 1/255, or no footprint in the image are culled (they contribute nothing and get zero gradients).
+RenderOutput render(const Gaussians& gaussians, const Camera& camera, const RenderOptions& options = {});
+
+}  // namespace isplat

@@ -1,0 +1,444 @@
+// Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
+// culling and input errors, batching, options and thread-count determinism.
+#include <catch2/catch.hpp>
+
+#include <ATen/Parallel.h>
+#include <torch/torch.h>
+
+#include <cmath>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "geometry/camera_torch.h"
+#include "render/kernels.h"
+#include "render/render.h"
+#include "support/finite_diff.h"
+#include "support/reference_render.h"
+
+using namespace isplat;
+using torch::Tensor;
+
+namespace {
+
+const auto kF64 = torch::kFloat64;
+
+// K with skew and a non-trivial pose, so projection and Jacobian exercise every term.
+Camera make_camera(int64_t W, int64_t H, double fx, double fy, double skew, bool posed, torch::Dtype dt = kF64) {
+  auto K = torch::tensor({fx, skew, 0.5 * W + 0.3, 0.0, fy, 0.5 * H - 0.2, 0.0, 0.0, 1.0}, kF64).reshape({3, 3});
+  auto T = torch::eye(4, kF64);
+  if (posed) {
+    // Rotation of 0.2 rad about (1, 2, 3), translation (0.1, -0.2, 0.3).
+    const double ang = 0.2;
+    auto ax = torch::tensor({1.0, 2.0, 3.0}, kF64);
+    ax = ax / ax.norm();
+    auto Kx = torch::zeros({3, 3}, kF64);
+    Kx[0][1] = -ax[2], Kx[0][2] = ax[1], Kx[1][0] = ax[2], Kx[1][2] = -ax[0], Kx[2][0] = -ax[1], Kx[2][1] = ax[0];
+    auto R = torch::eye(3, kF64) + std::sin(ang) * Kx + (1 - std::cos(ang)) * torch::matmul(Kx, Kx);
+    T.slice(0, 0, 3).slice(1, 0, 3).copy_(R);
+    T.slice(0, 0, 3).select(1, 3).copy_(torch::tensor({0.1, -0.2, 0.3}, kF64));
+  }
+  return Camera{K, T, W, H}.to(dt);
+}
+
+// Camera-space points [N, 3] to world space for camera `cam`.
+Tensor to_world(const Tensor& p_cam, const Camera& cam) {
+  const Tensor T = cam.T_cw.to(kF64);
+  const Tensor R = T.slice(0, 0, 3).slice(1, 0, 3), t = T.slice(0, 0, 3).select(1, 3);
+  return torch::matmul(p_cam.to(kF64) - t, R).to(p_cam.scalar_type());
+}
+
+// n random Gaussians seen by `cam`: screen footprints of ~0.5–6 px σ, depths 1–6, some beyond the frustum.
+Gaussians random_scene(int64_t n, const Camera& cam, uint64_t seed, double spread = 1.4) {
+  torch::manual_seed(seed);
+  const double W = double(cam.width), H = double(cam.height), f = cam.K[0][0].item<double>();
+  const Tensor z = 1.0 + 5.0 * torch::rand({n}, kF64);
+  const Tensor u = W * (0.5 + spread * (torch::rand({n}, kF64) - 0.5));
+  const Tensor v = H * (0.5 + spread * (torch::rand({n}, kF64) - 0.5));
+  const Tensor uv = torch::stack({u, v}, 1);
+  const Tensor p_cam = backproject_points(uv, z, cam.K.to(kF64));
+  const Tensor sigma_px = torch::exp(std::log(0.5) + std::log(12.0) * torch::rand({n, 1}, kF64));
+  const Tensor aniso = torch::exp(0.6 * torch::randn({n, 3}, kF64));
+  Gaussians g;
+  g.means = to_world(p_cam, cam);
+  g.scales = sigma_px * z.unsqueeze(1) / f * aniso;
+  g.quats = torch::randn({n, 4}, kF64) * 1.7;
+  g.colors = torch::rand({n, 3}, kF64);
+  g.opacities = 0.05 + 0.97 * torch::rand({n}, kF64);  // a few above 0.99 exercise the clamp
+  return g;
+}
+
+struct Weights {
+  Tensor rgb, depth, alpha;
+};
+Weights random_weights(int64_t H, int64_t W, uint64_t seed, torch::Dtype dt = kF64) {
+  torch::manual_seed(seed);
+  return {torch::randn({3, H, W}, dt), torch::randn({1, H, W}, dt) * 0.3, torch::randn({1, H, W}, dt)};
+}
+
+Tensor weighted_loss(const RenderOutput& o, const Weights& w) {
+  return (o.rgb * w.rgb).sum() + (o.depth * w.depth).sum() + (o.alpha * w.alpha).sum();
+}
+
+Gaussians with_grad(const Gaussians& g) {
+  Gaussians c = g.detach();
+  for (Tensor* t : {&c.means, &c.scales, &c.quats, &c.colors, &c.opacities}) *t = t->clone().requires_grad_(true);
+  return c;
+}
+
+std::vector<Tensor> grads_of(const Gaussians& g) {
+  return {g.means.grad(), g.scales.grad(), g.quats.grad(), g.colors.grad(), g.opacities.grad()};
+}
+const char* kNames[] = {"means", "scales", "quats", "colors", "opacities"};
+
+double max_abs(const Tensor& t) {
+  return t.numel() ? t.abs().max().item<double>() : 0.0;
+}
+
+// One Gaussian per row of `rows`: camera-space mean (3), scales (3), opacity, colour (3); identity rotation.
+Gaussians head_on(const std::vector<std::array<double, 10>>& rows) {
+  std::vector<double> m, s, o, c, q;
+  for (const auto& r : rows) {
+    m.insert(m.end(), {r[0], r[1], r[2]});
+    s.insert(s.end(), {r[3], r[4], r[5]});
+    o.push_back(r[6]);
+    c.insert(c.end(), {r[7], r[8], r[9]});
+    q.insert(q.end(), {1.0, 0.0, 0.0, 0.0});
+  }
+  const int64_t n = int64_t(rows.size());
+  return {torch::tensor(m, kF64).reshape({n, 3}), torch::tensor(s, kF64).reshape({n, 3}),
+          torch::tensor(q, kF64).reshape({n, 4}), torch::tensor(c, kF64).reshape({n, 3}), torch::tensor(o, kF64)};
+}
+
+// Identity pose, square pixels, principal point on the centre of pixel (cx − 0.5, cy − 0.5).
+Camera centred_camera(int64_t W, int64_t H, double f) {
+  return Camera{make_K(f, f, 0.5 * W + 0.5, 0.5 * H + 0.5, kF64), torch::eye(4, kF64), W, H};
+}
+
+}  // namespace
+
+TEST_CASE("render: one isotropic Gaussian seen head-on has the closed-form peak and width", "[render]") {
+  // σ = f·s/z = 100·0.04/2 = 2 px, so the screen variance is 4 + 0.3 (dilation).
+  const Camera cam = centred_camera(48, 32, 100.0);
+  const Gaussians g = head_on({{0.0, 0.0, 2.0, 0.04, 0.04, 0.01, 0.6, 0.2, 0.5, 0.8}});
+  RenderOptions opt;
+  opt.background = {0.1, 0.2, 0.3};
+  const double var = 4.0 + 0.3, c[3] = {0.2, 0.5, 0.8};
+  for (bool aa : {false, true}) {
+    opt.antialiased = aa;
+    const RenderOutput out = render(g, cam, opt);
+    REQUIRE(out.rgb.sizes() == torch::IntArrayRef({3, 32, 48}));
+    const double o = aa ? 0.6 * 4.0 / var : 0.6;  // antialiased: o·sqrt(det Σ / det(Σ + 0.3 I)) = o·4/4.3
+    const int64_t i0 = 16, j0 = 24;               // the pixel whose centre is the projected mean
+    for (auto [di, dj] :
+         std::vector<std::pair<int, int>>{{0, 0}, {0, 3}, {1, 2}, {-2, -3}, {4, 0}, {0, 6}, {0, 7}, {5, 5}}) {
+      const double r2 = double(di * di + dj * dj);
+      // Beyond 3σ (r² > 9·var) the pixel is cut; otherwise α = o·exp(−r²/(2σ²)).
+      const double a = r2 > 9 * var ? 0.0 : o * std::exp(-0.5 * r2 / var);
+      const int64_t i = i0 + di, j = j0 + dj;
+      CAPTURE(aa, di, dj);
+      CHECK(out.alpha[0][i][j].item<double>() == Approx(a).margin(1e-12));
+      CHECK(out.depth[0][i][j].item<double>() == Approx(2.0 * a).margin(1e-12));
+      for (int k = 0; k < 3; ++k)
+        CHECK(out.rgb[k][i][j].item<double>() == Approx(a * c[k] + (1 - a) * opt.background[k]).margin(1e-12));
+      // The thin axis is z; it faces the camera as −z.
+      CHECK(out.normal[2][i][j].item<double>() == Approx(-a).margin(1e-12));
+      CHECK(out.normal[0][i][j].item<double>() == Approx(0.0).margin(1e-12));
+    }
+    // The image total of alpha is the Gaussian's integral 2π·o·σ² within 3σ (1 − e^{−4.5} of it).
+    CHECK(out.alpha.sum().item<double>() == Approx(2 * M_PI * o * var * (1 - std::exp(-4.5))).epsilon(0.02));
+  }
+}
+
+TEST_CASE("render: opaque Gaussians are composited in depth order and occlude", "[render]") {
+  const Camera cam = centred_camera(48, 32, 100.0);
+  RenderOptions opt;
+  opt.background = {0.0, 0.0, 1.0};
+  // Green (big, z = 4, opacity 1 -> α clamped at 0.99) is listed before red (small, z = 2, opacity 0.9).
+  const Gaussians g = head_on({{0.0, 0.0, 4.0, 0.2, 0.2, 0.2, 1.0, 0.0, 1.0, 0.0},       // σ = 5 px
+                               {0.0, 0.0, 2.0, 0.04, 0.04, 0.04, 0.9, 1.0, 0.0, 0.0}});  // σ = 2 px
+  const RenderOutput out = render(g, cam, opt);
+  // Centre: red in front of green in front of blue background.
+  CHECK(out.rgb[0][16][24].item<double>() == Approx(0.9).margin(1e-12));
+  CHECK(out.rgb[1][16][24].item<double>() == Approx(0.1 * 0.99).margin(1e-12));
+  CHECK(out.rgb[2][16][24].item<double>() == Approx(0.1 * 0.01).margin(1e-12));
+  CHECK(out.alpha[0][16][24].item<double>() == Approx(1 - 0.1 * 0.01).margin(1e-12));
+  CHECK(out.depth[0][16][24].item<double>() == Approx(0.9 * 2 + 0.1 * 0.99 * 4).margin(1e-12));
+  // 8 px off centre red is beyond its 3σ: green alone, α = exp(−64 / (2·25.3)).
+  const double a = std::exp(-64.0 / (2 * 25.3));
+  CHECK(out.rgb[0][16][32].item<double>() == Approx(0.0).margin(1e-12));
+  CHECK(out.rgb[1][16][32].item<double>() == Approx(a).margin(1e-12));
+  CHECK(out.rgb[2][16][32].item<double>() == Approx(1 - a).margin(1e-12));
+  // Moving red behind green: green now covers it (α 0.99 in front).
+  Gaussians swapped = g;
+  swapped.means = g.means.clone();
+  swapped.means[1][2] = 6.0;
+  swapped.scales = g.scales.clone();
+  swapped.scales[1].fill_(0.12);  // still σ = 2 px at z = 6
+  const RenderOutput back = render(swapped, cam, opt);
+  CHECK(back.rgb[1][16][24].item<double>() == Approx(0.99).margin(1e-12));
+  CHECK(back.rgb[0][16][24].item<double>() == Approx(0.01 * 0.9).margin(1e-12));
+
+  // Early stop: after α = 0.98 and 0.99, T = 2e-4; a third Gaussian would take T below 1e-4, so it and
+  // everything behind it are left out (T_final stays 2e-4).
+  const Gaussians three = head_on({{0.0, 0.0, 2.0, 0.1, 0.1, 0.1, 0.98, 1.0, 0.0, 0.0},
+                                   {0.0, 0.0, 3.0, 0.15, 0.15, 0.15, 0.996, 0.0, 1.0, 0.0},
+                                   {0.0, 0.0, 4.0, 0.2, 0.2, 0.2, 0.7, 1.0, 1.0, 1.0}});
+  const RenderOutput st = render(three, cam, opt);
+  CHECK(st.alpha[0][16][24].item<double>() == Approx(1 - 0.02 * 0.01).margin(1e-14));
+  CHECK(st.rgb[0][16][24].item<double>() == Approx(0.98).margin(1e-14));
+  CHECK(st.rgb[2][16][24].item<double>() == Approx(0.02 * 0.01).margin(1e-14));  // background only
+}
+
+TEST_CASE("render: forward and gradients match the dense per-pixel reference", "[render]") {
+  const Camera cam = make_camera(64, 48, 55.0, 58.0, 0.8, true);
+  const Gaussians scene = random_scene(300, cam, 7);
+  const Weights w = random_weights(48, 64, 8);
+  for (bool aa : {false, true}) {
+    RenderOptions opt;
+    opt.background = {0.3, 0.6, 0.9};
+    opt.antialiased = aa;
+    const Gaussians a = with_grad(scene), b = with_grad(scene);
+    const RenderOutput out = render(a, cam, opt);
+    const RenderOutput ref = test::reference_render(b, cam, opt);
+    CAPTURE(aa);
+    CHECK(max_abs(out.rgb - ref.rgb) < 1e-10);
+    CHECK(max_abs(out.alpha - ref.alpha) < 1e-10);
+    CHECK(max_abs(out.depth - ref.depth) < 1e-9);
+    CHECK(max_abs(out.normal - ref.normal) < 1e-10);
+    CHECK(out.alpha.max().item<double>() > 0.9);  // the scene is not trivially empty
+    weighted_loss(out, w).backward();
+    weighted_loss(ref, w).backward();
+    const auto ga = grads_of(a), gb = grads_of(b);
+    for (int k = 0; k < 5; ++k) {
+      CAPTURE(kNames[k]);
+      const double scale = max_abs(gb[k]);
+      CHECK(scale > 0);
+      CHECK(max_abs(ga[k] - gb[k]) <= 1e-7 * scale);
+    }
+  }
+}
+
+TEST_CASE("render: float32 agrees with float64", "[render]") {
+  const Camera cam = make_camera(64, 48, 55.0, 58.0, 0.8, true);
+  const Gaussians scene = random_scene(300, cam, 11);
+  const RenderOutput d = render(scene, cam);
+  const RenderOutput f = render(scene.to(torch::kFloat32), cam.to(torch::kFloat32));
+  CHECK(f.rgb.scalar_type() == torch::kFloat32);
+  // A pixel exactly on a cut boundary may flip; on average the two must agree to float precision.
+  CHECK((f.rgb.to(kF64) - d.rgb).abs().mean().item<double>() < 1e-5);
+  CHECK((f.depth.to(kF64) - d.depth).abs().mean().item<double>() < 1e-4);
+  CHECK((f.alpha.to(kF64) - d.alpha).abs().mean().item<double>() < 1e-5);
+}
+
+TEST_CASE("render: gradients of rgb depth and alpha match central finite differences", "[render]") {
+  // Six overlapping, tilted Gaussians at depths 1.5–4.5 in a 32×24 image; one is opaque enough to be
+  // clamped at its centre, one lies beyond 1.15× the image width (Jacobian clamped) but reaches inside.
+  const Camera cam = make_camera(32, 24, 30.0, 32.0, 0.7, true);
+  const Tensor p_cam = torch::tensor({0.10, 0.05, 2.0, -0.20, 0.10, 2.5, 0.30, -0.20, 3.5, 0.0, 0.0, 1.5, 1.20, 0.10,
+                                      1.6, -0.30, -0.25, 4.5},
+                                     kF64)
+                           .reshape({6, 3});
+  Gaussians g;
+  g.means = to_world(p_cam, cam);
+  g.scales = torch::tensor({0.25, 0.12, 0.05, 0.15, 0.30, 0.10, 0.90, 0.60, 0.70, 0.08, 0.10, 0.06, 0.50, 0.30, 0.20,
+                            0.20, 0.25, 0.15},
+                           kF64)
+                 .reshape({6, 3});
+  torch::manual_seed(3);
+  g.quats = torch::randn({6, 4}, kF64) * 1.5;
+  g.colors = torch::rand({6, 3}, kF64);
+  g.opacities = torch::tensor({0.7, 0.6, 1.0, 0.5, 0.8, 0.4}, kF64);
+  const Weights w = random_weights(24, 32, 4);
+  for (bool aa : {false, true}) {
+    RenderOptions opt;
+    opt.background = {0.2, 0.4, 0.6};
+    opt.antialiased = aa;
+    auto f = [&](const std::vector<Tensor>& x) {
+      const RenderOutput o = render(Gaussians{x[0], x[1], x[2], x[3], x[4]}, cam, opt);
+      return torch::stack({(o.rgb * w.rgb).sum(), (o.depth * w.depth).sum(), (o.alpha * w.alpha).sum()});
+    };
+    const auto r = test::check_gradients(f, {g.means, g.scales, g.quats, g.colors, g.opacities},
+                                         {"means", "scales", "quats", "colors", "opacities"}, 1e-6, 1e-6, 1e-5);
+    CAPTURE(aa, r.report, r.max_abs_error);
+    CHECK(r.checked == 6 * 14 * 3);
+    CHECK(r.ok);
+  }
+}
+
+TEST_CASE("render: culled Gaussians contribute nothing and never give NaN", "[render]") {
+  const Camera cam = make_camera(40, 30, 40.0, 40.0, 0.0, false);
+  // Row 0 is an ordinary Gaussian; the others must all be culled.
+  Gaussians g = head_on({{0.0, 0.0, 2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 0.5, 0.2},    // visible
+                         {0.0, 0.0, -2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 1.0, 1.0},   // behind the camera
+                         {0.0, 0.0, 0.005, 0.1, 0.1, 0.1, 0.8, 1.0, 1.0, 1.0},  // in front of the near plane
+                         {0.1, 0.0, 2.0, 0.1, 0.1, 0.1, 0.0, 1.0, 1.0, 1.0},    // zero opacity
+                         {0.1, 0.0, 2.0, 0.1, 0.0, 0.1, 0.8, 1.0, 1.0, 1.0},    // zero scale
+                         {0.1, 0.0, 2.0, 0.1, 0.1, 0.1, 0.003, 1.0, 1.0, 1.0},  // can never reach 1/255
+                         {-90.0, 0.0, 2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 1.0, 1.0},  // far off screen
+                         {0.0, 0.1, 2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 1.0, 1.0}});  // zero quaternion (below)
+  g.quats[7].zero_();
+  for (torch::Dtype dt : {torch::kFloat32, kF64}) {
+    const Gaussians a = with_grad(g.to(dt));
+    const RenderOutput out = render(a, cam.to(dt));
+    weighted_loss(out, random_weights(30, 40, 1, dt)).backward();
+    const RenderOutput alone = render(g.to(dt).index(torch::tensor({0}, torch::kInt64)), cam.to(dt));
+    CAPTURE(dt);
+    CHECK(torch::equal(out.rgb, alone.rgb));
+    CHECK(torch::equal(out.depth, alone.depth));
+    for (const Tensor& t : grads_of(a)) {
+      CHECK(torch::isfinite(t).all().item<bool>());
+      CHECK(max_abs(t.slice(0, 1)) == 0.0);
+    }
+    CHECK(max_abs(a.means.grad()[0]) > 0);
+  }
+  // Extreme but finite values: a huge scale overflows the float covariance, a Gaussian just past the near
+  // plane at the frustum edge has a huge footprint. Neither may turn into NaN.
+  Gaussians x = head_on({{0.0, 0.0, 2.0, 1e20, 1e20, 1e20, 0.8, 1.0, 1.0, 1.0},
+                         {5.0, 3.0, 0.0100001, 0.01, 0.02, 0.01, 0.8, 0.0, 1.0, 0.0},
+                         {0.0, 0.0, 3.0, 0.1, 0.1, 0.1, 0.8, 1.0, 0.0, 0.0}});
+  for (torch::Dtype dt : {torch::kFloat32, kF64}) {
+    const Gaussians a = with_grad(x.to(dt));
+    const RenderOutput out = render(a, cam.to(dt));
+    weighted_loss(out, random_weights(30, 40, 2, dt)).backward();
+    CAPTURE(dt);
+    for (const Tensor& t : {out.rgb, out.alpha, out.depth, out.normal}) CHECK(torch::isfinite(t).all().item<bool>());
+    for (const Tensor& t : grads_of(a)) CHECK(torch::isfinite(t).all().item<bool>());
+  }
+}
+
+TEST_CASE("render: invalid inputs are rejected with a clear error", "[render]") {
+  const Camera cam = make_camera(16, 16, 20.0, 20.0, 0.0, false);
+  const Gaussians g =
+      head_on({{0.0, 0.0, 2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 0.5, 0.2}, {0.1, 0.0, 2.0, 0.1, 0.1, 0.1, 0.8, 1.0, 0.5, 0.2}});
+  Gaussians bad = g;
+  bad.means = g.means.clone();
+  bad.means[1][0] = std::nan("");
+  CHECK_THROWS_WITH(render(bad, cam), Catch::Contains("render: means has 1 non-finite value"));
+  bad = g;
+  bad.opacities = g.opacities.clone();
+  bad.opacities.fill_(INFINITY);
+  CHECK_THROWS_WITH(render(bad, cam), Catch::Contains("render: opacities has 2 non-finite values"));
+  bad = g;
+  bad.quats = g.quats.slice(1, 0, 3);
+  CHECK_THROWS_WITH(render(bad, cam), Catch::Contains("quats must be [2, 4]"));
+  bad = g;
+  bad.colors = g.colors.to(torch::kFloat32);
+  CHECK_THROWS_AS(render(bad, cam), Error);
+  RenderOptions opt;
+  opt.background = {1.0, 1.0};
+  CHECK_THROWS_WITH(render(g, cam, opt), Catch::Contains("background must have 3 values"));
+  const Camera two = stack_cameras({cam, cam});
+  Gaussians three{g.means.unsqueeze(0).expand({3, 2, 3}), g.scales.unsqueeze(0).expand({3, 2, 3}),
+                  g.quats.unsqueeze(0).expand({3, 2, 4}), g.colors.unsqueeze(0).expand({3, 2, 3}),
+                  g.opacities.unsqueeze(0).expand({3, 2})};
+  CHECK_THROWS_WITH(render(three, two), Catch::Contains("3 Gaussian sets but 2 cameras"));
+}
+
+TEST_CASE("render: batches of cameras and of Gaussian sets", "[render]") {
+  const Camera c0 = make_camera(32, 24, 30.0, 30.0, 0.0, false), c1 = make_camera(32, 24, 30.0, 30.0, 0.5, true);
+  const Camera cams = stack_cameras({c0, c1});
+  const Gaussians s0 = random_scene(40, c0, 21, 1.0), s1 = random_scene(40, c0, 22, 1.0);
+
+  // One set, two cameras: equal to two single renders, gradients summed.
+  const Gaussians a = with_grad(s0), b = with_grad(s0);
+  const RenderOutput batch = render(a, cams);
+  REQUIRE(batch.rgb.sizes() == torch::IntArrayRef({2, 3, 24, 32}));
+  REQUIRE(batch.alpha.sizes() == torch::IntArrayRef({2, 1, 24, 32}));
+  const RenderOutput o0 = render(b, c0), o1 = render(b, c1);
+  CHECK(torch::equal(batch.rgb[0], o0.rgb));
+  CHECK(torch::equal(batch.depth[1], o1.depth));
+  CHECK(!torch::equal(o0.rgb, o1.rgb));
+  (batch.rgb.sum() + batch.depth.sum()).backward();
+  (o0.rgb.sum() + o0.depth.sum() + o1.rgb.sum() + o1.depth.sum()).backward();
+  CHECK(torch::allclose(a.means.grad(), b.means.grad(), 1e-12, 1e-12));
+  CHECK(torch::allclose(a.quats.grad(), b.quats.grad(), 1e-12, 1e-12));
+
+  // Two sets, two cameras: set b through camera b.
+  Gaussians sets{torch::stack({s0.means, s1.means}), torch::stack({s0.scales, s1.scales}),
+                 torch::stack({s0.quats, s1.quats}), torch::stack({s0.colors, s1.colors}),
+                 torch::stack({s0.opacities, s1.opacities})};
+  sets = with_grad(sets);
+  const RenderOutput pairs = render(sets, cams);
+  CHECK(torch::equal(pairs.rgb[1], render(s1, c1).rgb));
+  CHECK(torch::equal(pairs.normal[0], render(s0, c0).normal));
+  pairs.alpha.sum().backward();
+  CHECK(sets.opacities.grad().sizes() == torch::IntArrayRef({2, 40}));
+  CHECK(max_abs(sets.opacities.grad()[1]) > 0);
+  // Two sets, one camera.
+  CHECK(torch::equal(render(sets, c0).rgb[1].detach(), render(s1, c0).rgb));
+}
+
+TEST_CASE("render: an empty set renders the background", "[render]") {
+  const Camera cam = make_camera(20, 10, 20.0, 20.0, 0.0, false);
+  Gaussians g = with_grad(Gaussians{torch::zeros({0, 3}, kF64), torch::zeros({0, 3}, kF64), torch::zeros({0, 4}, kF64),
+                                    torch::zeros({0, 3}, kF64), torch::zeros({0}, kF64)});
+  RenderOptions opt;
+  opt.background = {0.25, 0.5, 1.0};
+  const RenderOutput out = render(g, cam, opt);
+  CHECK(torch::allclose(out.rgb[2], torch::ones({10, 20}, kF64)));
+  CHECK(out.alpha.abs().sum().item<double>() == 0.0);
+  out.rgb.sum().backward();
+  CHECK(g.means.grad().sizes() == torch::IntArrayRef({0, 3}));
+}
+
+TEST_CASE("render: bit-identical results with 1 and 2 threads", "[render]") {
+  const Camera cam = make_camera(160, 120, 130.0, 130.0, 0.3, true, torch::kFloat32);
+  const Gaussians scene = random_scene(3000, cam, 5).to(torch::kFloat32);
+  const Weights w = random_weights(120, 160, 6, torch::kFloat32);
+  const int before = at::get_num_threads();
+  std::vector<std::vector<Tensor>> results;
+  for (int threads : {1, 2}) {
+    at::set_num_threads(threads);
+    const Gaussians a = with_grad(scene);
+    const RenderOutput out = render(a, cam);
+    weighted_loss(out, w).backward();
+    std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
+    for (const Tensor& g : grads_of(a)) r.push_back(g);
+    results.push_back(r);
+  }
+  at::set_num_threads(before);
+  REQUIRE(results[0].size() == results[1].size());
+  for (size_t k = 0; k < results[0].size(); ++k) {
+    CAPTURE(k);
+    CHECK(torch::equal(results[0][k], results[1][k]));
+  }
+  CHECK(results[0][1].max().item<float>() > 0.5f);
+}
+
+TEST_CASE("render: options read and write through the config schema", "[render]") {
+  const auto json = config_to_json(RenderOptions{});
+  CHECK(json["background"].get<std::vector<double>>() == std::vector<double>{0.0, 0.0, 0.0});
+  CHECK(json["antialiased"] == false);
+  CHECK(json["near"] == 0.01);
+  CHECK(json["dilation"] == 0.3);
+  const auto o = config_from_json<RenderOptions>({{"background", {1, 1, 1}}, {"antialiased", true}}, "test");
+  CHECK(o.antialiased);
+  CHECK(o.background == std::vector<double>{1, 1, 1});
+  CHECK_THROWS_AS(config_from_json<RenderOptions>({{"near", 0}}, "test"), Error);
+}
+
+TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]") {
+  // Double precision (the finite-difference and reference tests) always takes the portable loops; this ties
+  // the float AVX2 loops to them. Without AVX2 both runs are portable and the check is trivially true.
+  const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, torch::kFloat32);
+  const Gaussians scene = random_scene(1500, cam, 15).to(torch::kFloat32);
+  const Weights w = random_weights(80, 96, 16, torch::kFloat32);
+  std::vector<std::vector<Tensor>> results;
+  for (bool simd : {true, false}) {
+    const bool before = splat::set_simd_enabled(simd);
+    RenderOptions opt;
+    opt.background = {0.2f, 0.3f, 0.4f};
+    const Gaussians a = with_grad(scene);
+    const RenderOutput out = render(a, cam, opt);
+    weighted_loss(out, w).backward();
+    std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
+    for (const Tensor& g : grads_of(a)) r.push_back(g);
+    results.push_back(r);
+    splat::set_simd_enabled(before);
+  }
+  for (size_t k = 0; k < results[0].size(); ++k) {
+    CAPTURE(k);
+    CHECK(torch::equal(results[0][k], results[1][k]));
+  }
+  CHECK(max_abs(results[1][4]) > 0);
+}
