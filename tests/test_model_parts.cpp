@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "decoder/composer.h"
+#include "decoder/feature_sampler.h"
 #include "decoder/implicit_decoder.h"
 #include "encoder/dual_encoder.h"
 #include "geometry/camera_torch.h"
@@ -106,6 +107,16 @@ TEST_CASE("decoder: zero-initialized head and gated fusion shapes", "[decoder]")
   auto delta = d->forward(uv, 64, 48, f);
   CHECK(delta.sizes() == torch::IntArrayRef({20, 14}));
   CHECK(delta.abs().max().item<float>() == 0.0f);  // step 0 renders the base Gaussians
+  // The texel-level fast path equals decoding features sampled at each support.
+  {
+    torch::NoGradGuard g;
+    d->head->weight.normal_(0, 0.1);
+    d->head->bias.normal_(0, 0.1);
+    auto fast = d->forward(uv, 64, 48, f);
+    auto direct = d->decode_features(query_features(f.dino, uv, 64, 48), query_features(f.cnn, uv, 64, 48));
+    CHECK(torch::allclose(fast, direct, 1e-4, 1e-5));
+    CHECK(fast.abs().max().item<float>() > 0.0f);
+  }
   CHECK(d->mlp->size() == 3);
   ImplicitDecoder cnn_only(o, 0, 128);
   CHECK(cnn_only->forward(uv, 64, 48, EncoderFeatures{torch::Tensor(), f.cnn}).sizes() == torch::IntArrayRef({20, 14}));
@@ -158,4 +169,20 @@ TEST_CASE("composer: world transform moves means and rotates quaternions", "[com
   auto back = transform_points(T_cw, w.means);
   CHECK(torch::allclose(back, g.means.to(torch::kFloat64), 1e-9, 1e-12));
   CHECK(std::abs(w.quats[0][0].item<double>()) == Approx(std::sqrt(0.5)));
+}
+
+TEST_CASE("decoder: the fast feature sampler equals grid_sample, with exact gradients", "[decoder]") {
+  torch::manual_seed(2);
+  auto f = torch::randn({1, 5, 6, 7}, torch::kFloat64).requires_grad_(true);
+  auto uv = torch::rand({300, 2}, torch::kFloat64) * torch::tensor({70.0, 60.0}, torch::kFloat64) - 2.0;  // some outside
+  uv[0][0] = 0.0;
+  uv[1][1] = 60.0;
+  auto ours = sample_features(f, uv, 70, 60), ref = query_features(f, uv, 70, 60);
+  CHECK(torch::allclose(ours, ref, 1e-12, 1e-12));
+  auto w = torch::randn_like(ours);
+  auto g1 = torch::autograd::grad({(ours * w).sum()}, {f})[0];
+  auto g2 = torch::autograd::grad({(ref * w).sum()}, {f})[0];
+  CHECK(torch::allclose(g1, g2, 1e-12, 1e-12));
+  CHECK(torch::equal(sample_features(f.detach().to(torch::kFloat32), uv, 70, 60),
+                     sample_features(f.detach().to(torch::kFloat32), uv, 70, 60)));
 }

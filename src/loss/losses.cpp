@@ -63,12 +63,16 @@ torch::Tensor PerceptualLoss::operator()(const torch::Tensor& x, const torch::Te
     torch::NoGradGuard g;  // the target side needs no graph
     fy = net_->forward(imagenet_normalize(y));
   }
+  // Features are unit-normalized over channels (as LPIPS does), so every layer contributes on the same
+  // scale and the term is commensurate with L1 on [0,1] images.
+  auto unit = [](const torch::Tensor& f) { return f / (torch::sqrt((f * f).sum(1, true)) + 1e-10); };
   torch::Tensor total = torch::zeros({}, x.options());
   for (size_t l = 0; l < fx.size(); ++l) {
-    total = total + torch::mse_loss(fx[l], fy[l]);
-    if (gamma_ > 0) total = total + gamma_ * (gram_matrix(fx[l]) - gram_matrix(fy[l])).pow(2).sum({1, 2}).mean();
+    const auto a = unit(fx[l]), b = unit(fy[l]);
+    total = total + torch::mse_loss(a, b) * static_cast<double>(a.size(1));  // per-pixel squared distance
+    if (gamma_ > 0) total = total + gamma_ * torch::mse_loss(gram_matrix(a), gram_matrix(b)) * static_cast<double>(a.size(1));
   }
-  return total;
+  return total / static_cast<double>(fx.size());
 }
 
 torch::Tensor scale_range_loss(const torch::Tensor& scales, const torch::Tensor& depth, double lo, double hi) {

@@ -30,7 +30,8 @@ struct LossOptions {
   void visit(ConfigVisitor& v);
 };
 
-// The perceptual term: sum over taps of MSE(phi(x), phi(y)) + gamma * ||G(x) - G(y)||_F^2, G = F F^T / (C H W).
+// The perceptual term, averaged over taps: the squared distance of channel-normalized features
+// phi per pixel, plus gamma * the mean squared Gram difference (x C), G = F F^T / (C H W).
 class PerceptualLoss {
  public:
   // Logs loudly (naming the config key) and switches itself off when no weights are available.

@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "decoder/feature_sampler.h"
 
 namespace isplat {
 
@@ -58,7 +59,7 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
     if (options.decoder.mode == "implicit") {
       p.delta = decoder->forward(p.supports.uv, W, H, f);
     } else {
-      p.delta = query_features(dense->forward(f, W, H), p.supports.uv, W, H);
+      p.delta = sample_features(dense->forward(f, W, H), p.supports.uv, W, H);
     }
     p.timings_ms["decoder"] = ms_since(t0);
   }
@@ -78,7 +79,8 @@ Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Ten
   return p;
 }
 
-Pipeline::Pipeline(const ModelOptions& options) : prior_(make_depth_prior(options.prior)), model_(options) {}
+Pipeline::Pipeline(const ModelOptions& options, const std::map<std::string, torch::Tensor>* embedded_prior)
+    : prior_(make_depth_prior(options.prior, embedded_prior)), model_(options) {}
 
 Prediction Pipeline::run(const PriorInput& input, const torch::Tensor& T_cw, bool train) {
   auto t0 = std::chrono::steady_clock::now();

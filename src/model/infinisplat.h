@@ -59,7 +59,7 @@ TORCH_MODULE(InfiniSplat);
 // Prior + model: the whole path from one photograph (and optional depth/prompts) to Gaussians.
 class Pipeline {
  public:
-  explicit Pipeline(const ModelOptions& options);
+  explicit Pipeline(const ModelOptions& options, const std::map<std::string, torch::Tensor>* embedded_prior = nullptr);
   Prediction run(const PriorInput& input, const torch::Tensor& T_cw, bool train);
   PriorOutput prior_only(const PriorInput& input) { return prior_->predict(input); }
   InfiniSplat& model() { return model_; }

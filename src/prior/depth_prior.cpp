@@ -79,8 +79,18 @@ class DatasetPrior final : public DepthPrior {
 
 class LearnedPrior final : public DepthPrior {
  public:
-  explicit LearnedPrior(const PriorOptions& o) : o_(o), net_(o.learned_width) {
-    if (o.learned_weights.empty()) {
+  explicit LearnedPrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded = nullptr)
+      : o_(o), net_(o.learned_width) {
+    if (embedded && embedded->count("prior/stem.weight")) {
+      torch::NoGradGuard g;
+      for (auto& p : net_->named_parameters(true)) {
+        auto it = embedded->find("prior/" + p.key());
+        if (it == embedded->end() || it->second.sizes() != p.value().sizes())
+          fail("checkpoint: embedded depth-net tensor 'prior/", p.key(), "' is missing or has the wrong shape");
+        p.value().copy_(it->second);
+      }
+      source_ = "weights embedded in the checkpoint";
+    } else if (o.learned_weights.empty()) {
       log_warn("depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
                "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
     } else {
@@ -94,6 +104,7 @@ class LearnedPrior final : public DepthPrior {
                " (prior.learned_width must match the trained net)");
         p.value().copy_(t);
       }
+      source_ = o.learned_weights;
     }
     net_->eval();
   }
@@ -104,12 +115,13 @@ class LearnedPrior final : public DepthPrior {
     return finish(d, intrinsics_for(in, o_.hfov_deg));
   }
   std::string describe() const override {
-    return o_.learned_weights.empty() ? "learned depth net (untrained)" : "learned depth net (" + o_.learned_weights + ")";
+    return source_.empty() ? "learned depth net (untrained)" : "learned depth net (" + source_ + ")";
   }
 
  private:
   PriorOptions o_;
   LearnedDepthNet net_;
+  std::string source_;
 };
 
 class TorchScriptPrior final : public DepthPrior {
@@ -153,9 +165,9 @@ class TorchScriptPrior final : public DepthPrior {
 
 class SparsePrior final : public DepthPrior {
  public:
-  explicit SparsePrior(const PriorOptions& o) : o_(o) {
+  explicit SparsePrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded) : o_(o) {
     if (o.sparse.mono == "learned") {
-      mono_ = std::make_unique<LearnedPrior>(o);
+      mono_ = std::make_unique<LearnedPrior>(o, embedded);
     } else if (o.sparse.mono == "torchscript") {
       mono_ = std::make_unique<TorchScriptPrior>(o);
     }
@@ -285,11 +297,11 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   return aligned * torch::exp(up);
 }
 
-std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o) {
+std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded) {
   if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);
-  if (o.type == "learned") return std::make_unique<LearnedPrior>(o);
+  if (o.type == "learned") return std::make_unique<LearnedPrior>(o, embedded);
   if (o.type == "torchscript") return std::make_unique<TorchScriptPrior>(o);
-  if (o.type == "sparse") return std::make_unique<SparsePrior>(o);
+  if (o.type == "sparse") return std::make_unique<SparsePrior>(o, embedded);
   fail("prior.type: unknown '", o.type, "'");
 }
 

@@ -1,6 +1,7 @@
 // Frozen depth priors behind one interface (DESIGN §3): the tuple's own depth, the sparse-prompt "LiDAR"
 // variant, a user's TorchScript model, and the project's own small learned network.
 #pragma once
+#include <map>
 #include <memory>
 #include <string>
 
@@ -50,7 +51,10 @@ class DepthPrior {
   virtual std::string describe() const = 0;
 };
 
-std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& options);
+// `embedded`: tensors "prior/<name>" carried by a checkpoint; when present they replace learned_weights,
+// so a checkpoint is self-contained.
+std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& options,
+                                             const std::map<std::string, torch::Tensor>* embedded = nullptr);
 
 // Pinhole K for a W x H image with the given horizontal field of view.
 torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);

@@ -1,0 +1,120 @@
+// Forward: gather 4 texels per point from a channel-last copy. Backward: points bucketed per texel
+// (counting sort), then each texel sums its contributions in point order: parallel and deterministic.
+#include "decoder/feature_sampler.h"
+
+#include <ATen/Parallel.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace isplat {
+namespace {
+
+// Four texel indices and weights for one point, exactly as grid_sample computes them.
+template <class T>
+void corners(T u, T v, int64_t width, int64_t height, int64_t h, int64_t w, int64_t (&idx)[4], T (&wt)[4]) {
+  const T lim = T(1) - T(1e-6);
+  const T xn = std::clamp(u * (T(2) / width) - T(1), -lim, lim), yn = std::clamp(v * (T(2) / height) - T(1), -lim, lim);
+  // align_corners = false: source coordinate = ((x + 1) * size - 1) / 2, then border padding clamps it.
+  const T x = std::clamp(((xn + 1) * w - 1) / 2, T(0), T(w - 1)), y = std::clamp(((yn + 1) * h - 1) / 2, T(0), T(h - 1));
+  const int64_t x0 = static_cast<int64_t>(std::floor(x)), y0 = static_cast<int64_t>(std::floor(y));
+  const int64_t x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+  const T fx = x - x0, fy = y - y0;
+  idx[0] = y0 * w + x0, idx[1] = y0 * w + x1, idx[2] = y1 * w + x0, idx[3] = y1 * w + x1;
+  wt[0] = (1 - fx) * (1 - fy), wt[1] = fx * (1 - fy), wt[2] = (1 - fx) * fy, wt[3] = fx * fy;
+}
+
+template <class T>
+void forward_kernel(const T* fmap, const T* uv, T* out, int64_t N, int64_t C, int64_t h, int64_t w, int64_t W, int64_t H) {
+  at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
+    for (int64_t n = b; n < e; ++n) {
+      int64_t idx[4];
+      T wt[4];
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, h, w, idx, wt);
+      T* o = out + n * C;
+      const T *f0 = fmap + idx[0] * C, *f1 = fmap + idx[1] * C, *f2 = fmap + idx[2] * C, *f3 = fmap + idx[3] * C;
+      for (int64_t c = 0; c < C; ++c) o[c] = wt[0] * f0[c] + wt[1] * f1[c] + wt[2] * f2[c] + wt[3] * f3[c];
+    }
+  });
+}
+
+template <class T>
+void backward_kernel(const T* grad_out, const T* uv, T* grad_map, int64_t N, int64_t C, int64_t h, int64_t w, int64_t W,
+                     int64_t H) {
+  const int64_t texels = h * w;
+  std::vector<int64_t> index(static_cast<size_t>(4 * N));
+  std::vector<T> weight(static_cast<size_t>(4 * N));
+  at::parallel_for(0, N, 1024, [&](int64_t b, int64_t e) {
+    for (int64_t n = b; n < e; ++n) {
+      int64_t idx[4];
+      T wt[4];
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, h, w, idx, wt);
+      for (int k = 0; k < 4; ++k) index[4 * n + k] = idx[k], weight[4 * n + k] = wt[k];
+    }
+  });
+  // Counting sort of the 4N (point, corner) entries by texel, keeping point order.
+  std::vector<int64_t> start(static_cast<size_t>(texels) + 1, 0), entries(static_cast<size_t>(4 * N));
+  for (int64_t q = 0; q < 4 * N; ++q) ++start[index[q] + 1];
+  for (int64_t t = 0; t < texels; ++t) start[t + 1] += start[t];
+  std::vector<int64_t> fill(start.begin(), start.end() - 1);
+  for (int64_t q = 0; q < 4 * N; ++q) entries[fill[index[q]]++] = q;
+  at::parallel_for(0, texels, 16, [&](int64_t b, int64_t e) {
+    for (int64_t t = b; t < e; ++t) {
+      T* g = grad_map + t * C;
+      std::fill(g, g + C, T(0));
+      for (int64_t s = start[t]; s < start[t + 1]; ++s) {
+        const int64_t q = entries[s];
+        const T wq = weight[q];
+        const T* go = grad_out + (q / 4) * C;
+        for (int64_t c = 0; c < C; ++c) g[c] += wq * go[c];
+      }
+    }
+  });
+}
+
+class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
+ public:
+  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& features, const torch::Tensor& uv,
+                               int64_t width, int64_t height) {
+    const int64_t C = features.size(1), h = features.size(2), w = features.size(3), N = uv.size(0);
+    auto fmap = features[0].permute({1, 2, 0}).contiguous();  // [h,w,C]
+    auto points = uv.to(features.scalar_type()).contiguous();
+    auto out = torch::empty({N, C}, features.options());
+    AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "sample_features", [&] {
+      forward_kernel<scalar_t>(fmap.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C, h, w,
+                               width, height);
+    });
+    ctx->save_for_backward({points});
+    ctx->saved_data["shape"] = std::vector<int64_t>{C, h, w, width, height};
+    return out;
+  }
+
+  static torch::autograd::variable_list backward(torch::autograd::AutogradContext* ctx,
+                                                 torch::autograd::variable_list grads) {
+    const auto points = ctx->get_saved_variables()[0];
+    const auto shape = ctx->saved_data["shape"].toIntVector();
+    const int64_t C = shape[0], h = shape[1], w = shape[2];
+    auto go = grads[0].contiguous();
+    auto gmap = torch::empty({h, w, C}, go.options());
+    AT_DISPATCH_FLOATING_TYPES(go.scalar_type(), "sample_features_backward", [&] {
+      backward_kernel<scalar_t>(go.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), gmap.data_ptr<scalar_t>(),
+                                points.size(0), C, h, w, shape[3], shape[4]);
+    });
+    return {gmap.permute({2, 0, 1}).unsqueeze(0), torch::Tensor(), torch::Tensor(), torch::Tensor()};
+  }
+};
+
+}  // namespace
+
+torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor& uv, int64_t width, int64_t height) {
+  ISPLAT_CHECK(features.dim() == 4 && features.size(0) == 1, "sample_features: features must be [1,C,h,w], got ",
+               features.sizes());
+  ISPLAT_CHECK(uv.dim() == 2 && uv.size(1) == 2, "sample_features: uv must be [N,2], got ", uv.sizes());
+  ISPLAT_CHECK(width > 0 && height > 0, "sample_features: image size must be positive");
+  return SampleFeatures::apply(features, uv.detach(), width, height);
+}
+
+}  // namespace isplat

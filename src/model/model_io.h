@@ -1,0 +1,20 @@
+// Rebuilding a model from a checkpoint: its stored config gives the architecture, then the weights load.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/checkpoint.h"
+#include "model/infinisplat.h"
+
+namespace isplat {
+
+// The "model" section of the training config stored in a checkpoint, with optional overrides
+// ("prior.type=sparse"); unknown keys and bad values fail as for any config.
+ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::string& source,
+                                           const std::vector<std::string>& overrides = {});
+
+// A pipeline (prior + model) with the checkpoint's weights, in eval mode.
+std::unique_ptr<Pipeline> load_pipeline(const std::string& checkpoint_path, const std::vector<std::string>& overrides = {});
+
+}  // namespace isplat
