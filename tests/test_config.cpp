@@ -166,3 +166,14 @@ TEST_CASE("config: lists of sections read, write, validate and document", "[conf
   CHECK_THAT(error_of([&] { load_config<WithList>("", {"items=3"}); }), Catch::Contains("must be a list of sections"));
   CHECK_THAT(config_reference(WithList{}), Catch::Contains("items[].count  (int >= 0, default 1)"));
 }
+
+TEST_CASE("config: --set reaches into list elements by index", "[config]") {
+  const auto dir = test::temp_dir("config_list_set");
+  const auto path = write_json(dir, "l.json", R"({"items": [{"name": "a"}, {"name": "b"}]})");
+  auto o = load_config<WithList>(path, {"items[1].count=7"});
+  CHECK(o.items[1].count == 7);
+  CHECK(o.items[0].count == 1);
+  CHECK_THAT(error_of([&] { load_config<WithList>(path, {"items[5].count=7"}); }), Catch::Contains("has no element 5"));
+  CHECK_THAT(error_of([&] { load_config<WithList>(path, {"items[1].cnt=7"}); }),
+             Catch::Contains("--set items[1].cnt=7: unknown key 'items[1].cnt'"));
+}

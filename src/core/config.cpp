@@ -133,13 +133,33 @@ ConfigDocument merge_config(const std::string& path, const std::vector<std::stri
       if (part.empty()) fail(source, ": empty component in key '", key, "'");
       names.push_back(part);
     }
+    // A component may index a list of sections: datasets[0].root=...
+    auto step = [&](const std::string& name, bool last) -> json* {
+      const auto br = name.find('[');
+      const std::string field = name.substr(0, br);
+      prefix += (prefix.empty() ? "" : ".") + field;
+      json* child = &(*node)[field];
+      if (br == std::string::npos) return child;
+      if (name.back() != ']') fail(source, ": bad index in '", name, "'");
+      size_t index = 0;
+      try {
+        index = std::stoul(name.substr(br + 1, name.size() - br - 2));
+      } catch (const std::exception&) {
+        fail(source, ": bad index in '", name, "'");
+      }
+      if (!child->is_array() || index >= child->size())
+        fail(source, ": '", prefix, "' has no element ", index, " (lists are extended in the config file, not by --set)");
+      prefix += cat("[", index, "]");
+      (void)last;
+      return &(*child)[index];
+    };
     for (size_t i = 0; i + 1 < names.size(); ++i) {
-      prefix += (prefix.empty() ? "" : ".") + names[i];
-      json& child = (*node)[names[i]];
+      json& child = *step(names[i], false);
       if (child.is_null()) child = json::object();
       if (!child.is_object()) fail(source, ": '", prefix, "' is a value, not a section");
       node = &child;
     }
+    if (names.back().find('[') != std::string::npos) fail(source, ": the last component of '", key, "' cannot be an index");
     (*node)[names.back()] = value;
     record_origins(value, key, source, doc.origin);
   }

@@ -1,0 +1,101 @@
+// Checkpoint, lift and identity methods.
+#include "eval/methods.h"
+
+#include <torch/torch.h>
+
+#include <chrono>
+
+#include "core/error.h"
+#include "decoder/composer.h"
+#include "model/model_io.h"
+#include "render/render.h"
+#include "sampler/base_gaussians.h"
+
+namespace isplat {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+torch::Tensor to_srgb(const torch::Tensor& rgb, bool linear) {
+  auto c = torch::clamp(rgb, 0.0, 1.0);
+  return linear ? torch::clamp(linear_to_srgb(c), 0.0, 1.0) : c;
+}
+
+class ModelMethod final : public Method {
+ public:
+  ModelMethod(const MethodOptions& o, const RenderOptions& r) : options_(o), render_(r) {
+    ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
+    pipeline_ = load_pipeline(o.checkpoint, o.overrides);
+  }
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed) override {
+    torch::NoGradGuard g;
+    PriorInput in{src.image, src.camera.K, src.depth, src.valid, torch::Tensor(), seed};
+    auto t0 = Clock::now();
+    const Prediction p = pipeline_->run(in, src.camera.T_cw, false);
+    MethodOutput out;
+    out.infer_ms = ms_since(t0);
+    t0 = Clock::now();
+    const RenderOutput r = render(p.gaussians, target, render_);
+    out.render_ms = ms_since(t0);
+    out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
+    out.gaussians = p.gaussians.count();
+    return out;
+  }
+  std::string describe() const override { return "checkpoint " + options_.checkpoint; }
+
+ private:
+  MethodOptions options_;
+  RenderOptions render_;
+  std::unique_ptr<Pipeline> pipeline_;
+};
+
+// The source image lifted on its (dataset) depth: one base Gaussian per pixel, no learning.
+class LiftMethod final : public Method {
+ public:
+  explicit LiftMethod(const RenderOptions& r) : render_(r) {}
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t) override {
+    torch::NoGradGuard g;
+    auto t0 = Clock::now();
+    SamplerOptions px;
+    px.mode = "pixel";
+    const Supports s = sample_supports(src.depth, src.valid, src.camera.K, src.image, px);
+    const BaseGaussians base = make_base_gaussians(s);
+    const Gaussians gs = compose(base, torch::zeros({s.count(), kDeltaDim}), src.camera.K, src.camera.T_cw, ComposerOptions{});
+    MethodOutput out;
+    out.infer_ms = ms_since(t0);
+    t0 = Clock::now();
+    const RenderOutput r = render(gs, target, render_);
+    out.render_ms = ms_since(t0);
+    out.image = to_srgb(r.rgb, true);
+    out.gaussians = gs.count();
+    return out;
+  }
+  std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }
+
+ private:
+  RenderOptions render_;
+};
+
+class IdentityMethod final : public Method {
+ public:
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t) override {
+    ISPLAT_CHECK(src.image.size(1) == target.height && src.image.size(2) == target.width,
+                 "identity: source and target sizes differ");
+    MethodOutput out;
+    out.image = src.image.clone();
+    return out;
+  }
+  std::string describe() const override { return "identity: the source image as the target view"; }
+};
+
+}  // namespace
+
+std::unique_ptr<Method> make_method(const MethodOptions& o, const RenderOptions& r) {
+  if (o.type == "model") return std::make_unique<ModelMethod>(o, r);
+  if (o.type == "lift") return std::make_unique<LiftMethod>(r);
+  if (o.type == "identity") return std::make_unique<IdentityMethod>();
+  fail("method '", o.name, "': unknown type '", o.type, "'");
+}
+
+}  // namespace isplat

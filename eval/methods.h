@@ -1,0 +1,29 @@
+// Methods the evaluator scores: a trained checkpoint (RGB or LiDAR variant, or an ablation), and the
+// baselines any reviewer asks for ("lift" and "identity").
+#pragma once
+#include <memory>
+#include <string>
+
+#include "data/tuples.h"
+#include "eval/eval_config.h"
+
+namespace isplat {
+
+struct MethodOutput {
+  torch::Tensor image;     // [3,H,W] sRGB in [0,1], the target view
+  double infer_ms = 0;     // one image -> Gaussians (prior included)
+  double render_ms = 0;    // Gaussians -> target view
+  int64_t gaussians = 0;
+};
+
+class Method {
+ public:
+  virtual ~Method() = default;
+  // source: the source view (image, depth, valid, camera) at evaluation size; target: its camera.
+  virtual MethodOutput predict(const ViewTensors& source, const Camera& target, uint64_t seed) = 0;
+  virtual std::string describe() const = 0;
+};
+
+std::unique_ptr<Method> make_method(const MethodOptions& options, const RenderOptions& render);
+
+}  // namespace isplat
