@@ -90,7 +90,7 @@ TEST_CASE("colmap: a real-format fixture parses, including an empty POINTS2D lin
   CHECK(dist.empty());
 }
 
-TEST_CASE("colmap: every camera model id has its parameter count; distortion is handled or refused", "[data][colmap]") {
+TEST_CASE("colmap: every camera model id has its parameter count, distortion is handled or refused", "[data][colmap]") {
   const int counts[] = {3, 4, 4, 5, 8, 8, 12, 5, 4, 5, 12, 16};
   for (int id = 0; id < 12; ++id) {
     REQUIRE(colmap_model_by_id(id));

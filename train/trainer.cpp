@@ -120,6 +120,13 @@ std::map<std::string, torch::Tensor> Trainer::gaussian_losses(const Batch& batch
     Prediction p = pipeline_->run(in, batch.context_T[b], train);
     for (const auto& [k, v] : p.timings_ms) stats.timings_ms[k] += v;
     stats.supports += p.supports.count();
+    // Diverged weights give non-finite Gaussians, which the renderer rejects: report the step as
+    // non-finite so the loop skips it (and stops after train.max_bad_steps).
+    const auto& gs = p.gaussians;
+    if (!finite(gs.means) || !finite(gs.scales) || !finite(gs.quats) || !finite(gs.colors) || !finite(gs.opacities)) {
+      acc["total"] = torch::full({}, std::numeric_limits<float>::quiet_NaN());
+      return acc;
+    }
 
     auto t0 = Clock::now();
     const Camera cams{batch.target_K[b], batch.target_T[b], W, H};

@@ -187,8 +187,10 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
   }
   // A scene listed in the metadata but absent from disk, as for scenes without public images.
   for (int f = 0; f < 3; ++f) split_csv.rows.push_back({"ai_099_001", "cam_00", std::to_string(f), "True", "", "train"});
-  std::vector<std::string> absent = camera_csv.rows.back();
-  absent[0] = "ai_099_001";
+  std::vector<std::string> absent = {"ai_099_001", cat(H, ".0"), cat(W, ".0"), "0.0254", "False"};
+  const Eigen::Matrix3d M_std = camera_matrix(false, W, H, rng);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) absent.push_back(cat(std::setprecision(17), M_std(i, j)));
   camera_csv.rows.push_back(absent);
   write_csv((fs::path(root) / "metadata_images_split_scene_v1.csv").string(), split_csv);
   write_csv((fs::path(root) / "metadata_camera_parameters.csv").string(), camera_csv);
