@@ -15,5 +15,7 @@ std::map<std::string, Command> all_commands();
 
 int run_version(int argc, char** argv);
 int run_generate(int argc, char** argv);
+int run_predict(int argc, char** argv);
+int run_render(int argc, char** argv);
 
 }  // namespace isplat::cli

@@ -1,0 +1,142 @@
+// `infinisplat render`: novel views of a PLY along an orbit, a dolly or a camera-path file, as PNG
+// frames and an MP4, optionally with depth and normal visualizations.
+#include <filesystem>
+#include <iostream>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <torch/torch.h>
+
+#include "cli/commands.h"
+#include "cli/scene_camera.h"
+#include "core/args.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/runtime.h"
+#include "decoder/composer.h"
+#include "geometry/camera_torch.h"
+#include "geometry/trajectory.h"
+#include "io/image_io.h"
+#include "io/ply.h"
+#include "io/tensor_image.h"
+#include "render/render.h"
+
+namespace isplat::cli {
+namespace fs = std::filesystem;
+
+namespace {
+cv::Mat to_u8_bgr(const cv::Mat& rgb_float) {
+  cv::Mat u8, bgr;
+  rgb_float.convertTo(u8, CV_8UC3, 255.0);
+  cv::cvtColor(u8, bgr, cv::COLOR_RGB2BGR);
+  return bgr;
+}
+
+// Expected depth / alpha, colour-mapped over [near, far] (turbo), black where nothing was hit.
+cv::Mat depth_visual(const RenderOutput& r, double near, double far) {
+  auto d = (r.depth[0] / torch::clamp_min(r.alpha[0], 1e-4)).contiguous();
+  cv::Mat m = tensor_to_map(d), u8, color;
+  m = (m - near) / std::max(1e-6, far - near);
+  m.convertTo(u8, CV_8U, 255.0);
+  cv::applyColorMap(u8, color, cv::COLORMAP_TURBO);
+  cv::Mat alpha = tensor_to_map(r.alpha[0]);
+  for (int i = 0; i < color.rows; ++i)
+    for (int j = 0; j < color.cols; ++j)
+      if (alpha.at<float>(i, j) < 0.5f) color.at<cv::Vec3b>(i, j) = cv::Vec3b(0, 0, 0);
+  cv::Mat rgb;
+  cv::cvtColor(color, rgb, cv::COLOR_BGR2RGB);
+  return rgb;
+}
+}  // namespace
+
+int run_render(int argc, char** argv) {
+  std::string ply, trajectory = "orbit", out, camera_json;
+  int64_t frames = 60, fps = 30, width = 0, height = 0, threads = 0;
+  double hfov = 60, radius = 0.08;
+  bool depth = false, normal = false, no_video = false;
+  ArgParser args("infinisplat render", "Render novel views of a Gaussian PLY: an orbit around the source view, a dolly "
+                                       "along its axis, or a camera path (JSON). Writes PNG frames and an MP4.");
+  args.option("--ply", ply, "scene to render (3DGS PLY)", "FILE");
+  args.option("--trajectory", trajectory, "orbit | dolly | a camera-path JSON file", "PATH");
+  args.option("--out", out, "output folder", "DIR");
+  args.option("--camera", camera_json, "source camera JSON (default: <ply>.camera.json from predict)", "FILE");
+  args.option("--frames", frames, "frames for orbit/dolly");
+  args.option("--fps", fps, "video frame rate");
+  args.option("--width", width, "render width (default: the source camera's)");
+  args.option("--height", height, "render height");
+  args.option("--hfov", hfov, "horizontal field of view when there is no camera JSON, degrees");
+  args.option("--radius", radius, "orbit radius as a fraction of the scene depth");
+  args.flag("--depth", depth, "also write depth visualizations");
+  args.flag("--normal", normal, "also write normal visualizations");
+  args.flag("--no-video", no_video, "PNG frames only");
+  args.option("--threads", threads, "threads (0 = all cores)");
+  if (!args.parse(argc, argv, 2)) return 0;
+  ISPLAT_CHECK(!ply.empty() && !out.empty(), "render: --ply and --out are required (see --help)");
+  configure_threads(threads);
+  const Gaussians g = read_ply(ply, true);
+  ISPLAT_CHECK(g.count() > 0, ply, ": no Gaussians to render");
+  double typical_depth = 0;
+  View base;
+  const std::string cam_path = camera_json.empty() ? camera_sidecar_path(ply) : camera_json;
+  if (fs::exists(cam_path)) {
+    base = read_scene_camera(cam_path, typical_depth);
+  } else {
+    ISPLAT_CHECK(camera_json.empty(), camera_json, ": no such file");
+    base = {Intrinsics::from_hfov(hfov * M_PI / 180.0, width ? int(width) : 512, height ? int(height) : 384), Pose::Identity()};
+    auto z = transform_points(torch::eye(4), g.means).select(1, 2);
+    typical_depth = z.median().item<double>();
+    log_info("render: no camera JSON beside ", ply, "; using a ", hfov, " degree camera at the origin");
+  }
+  if (width > 0 && height > 0) base.intr = base.intr.resized(static_cast<int>(width), static_cast<int>(height));
+  ISPLAT_CHECK(typical_depth > 0, "render: cannot size the camera motion (typical depth ", typical_depth, ")");
+  CameraPath path;
+  if (trajectory == "orbit") path = orbit_path(base, typical_depth, static_cast<int>(frames), radius);
+  else if (trajectory == "dolly") path = dolly_path(base, typical_depth, static_cast<int>(frames));
+  else path = load_camera_path(trajectory, base);
+
+  fs::create_directories(out);
+  cv::VideoWriter video;
+  const std::string video_path = (fs::path(out) / "video.mp4").string();
+  const int W = path.views[0].intr.width, H = path.views[0].intr.height;
+  if (!no_video) {
+    video.open(video_path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), static_cast<double>(fps), cv::Size(W, H));
+    if (!video.isOpened()) {
+      log_warn("render: OpenCV cannot write MP4 here (", video_path, "); writing PNG frames only");
+      no_video = true;
+    }
+  }
+  ProgressBar bar("render", static_cast<int64_t>(path.views.size()), "frame");
+  double total_ms = 0;
+  for (size_t i = 0; i < path.views.size(); ++i) {
+    const View& v = path.views[i];
+    ISPLAT_CHECK(v.intr.width == W && v.intr.height == H, "render: all frames of a path must share one size");
+    const auto t0 = std::chrono::steady_clock::now();
+    torch::NoGradGuard ng;
+    const RenderOutput r = render(g, to_camera(v));
+    total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const cv::Mat rgb = tensor_to_image(torch::clamp(linear_to_srgb(torch::clamp(r.rgb, 0.0, 1.0)), 0.0, 1.0));
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%04zu.png", i);
+    write_image((fs::path(out) / name).string(), rgb);
+    if (!no_video) video.write(to_u8_bgr(rgb));
+    if (depth) {
+      std::snprintf(name, sizeof name, "depth_%04zu.png", i);
+      write_image((fs::path(out) / name).string(), depth_visual(r, 0.3 * typical_depth, 2.5 * typical_depth));
+    }
+    if (normal) {
+      std::snprintf(name, sizeof name, "normal_%04zu.png", i);
+      auto n = (r.normal / torch::clamp_min(r.alpha, 1e-4) * 0.5 + 0.5) * (r.alpha > 0.5);
+      write_image((fs::path(out) / name).string(), tensor_to_image(torch::clamp(n, 0.0, 1.0)));
+    }
+    bar.tick();
+  }
+  bar.finish();
+  if (!no_video) video.release();
+  std::cout << "rendered " << path.views.size() << " frames of " << g.count() << " Gaussians at " << W << "x" << H << " ("
+            << std::fixed << std::setprecision(1) << total_ms / path.views.size() << " ms per frame)\n";
+  std::cout << "wrote    " << fs::absolute(out).string() << (no_video ? "" : " (frames + video.mp4)") << "\n";
+  return 0;
+}
+
+}  // namespace isplat::cli

@@ -1,0 +1,157 @@
+// 3DGS PLY: header with typed properties, little-endian binary payload.
+#include "io/ply.h"
+
+#include <torch/torch.h>
+
+#include <cstring>
+#include <sstream>
+
+#include "core/error.h"
+#include "decoder/composer.h"
+#include "io/atomic_file.h"
+
+namespace isplat {
+namespace {
+
+const char* kProps[] = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+                        "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+
+size_t type_size(const std::string& t) {
+  if (t == "float" || t == "float32" || t == "int" || t == "int32" || t == "uint" || t == "uint32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  if (t == "uchar" || t == "uint8" || t == "char" || t == "int8") return 1;
+  if (t == "short" || t == "int16" || t == "ushort" || t == "uint16") return 2;
+  return 0;
+}
+
+double read_value(const char* p, const std::string& t) {
+  if (t == "float" || t == "float32") {
+    float v;
+    std::memcpy(&v, p, 4);
+    return v;
+  }
+  if (t == "double" || t == "float64") {
+    double v;
+    std::memcpy(&v, p, 8);
+    return v;
+  }
+  if (t == "uchar" || t == "uint8") return static_cast<unsigned char>(*p);
+  if (t == "char" || t == "int8") return static_cast<signed char>(*p);
+  if (t == "short" || t == "int16") {
+    int16_t v;
+    std::memcpy(&v, p, 2);
+    return v;
+  }
+  if (t == "ushort" || t == "uint16") {
+    uint16_t v;
+    std::memcpy(&v, p, 2);
+    return v;
+  }
+  if (t == "int" || t == "int32") {
+    int32_t v;
+    std::memcpy(&v, p, 4);
+    return v;
+  }
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+
+}  // namespace
+
+void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linear) {
+  ISPLAT_CHECK(!g_in.batched(), path, ": write_ply takes one (unbatched) Gaussian set");
+  const Gaussians g = g_in.detach().to(torch::kFloat32);
+  const int64_t N = g.count();
+  auto colors = colors_linear ? linear_to_srgb(g.colors) : g.colors;
+  auto quats = g.quats / torch::clamp_min(g.quats.norm(2, 1, true), 1e-12);
+  auto opac = torch::clamp(g.opacities, 1e-6, 1 - 1e-6);
+  auto cols = torch::cat({g.means, torch::zeros({N, 3}), (colors - 0.5) / kShC0, torch::log(opac / (1 - opac)).unsqueeze(1),
+                          torch::log(torch::clamp_min(g.scales, 1e-12)), quats},
+                         1)
+                  .contiguous();
+  ISPLAT_CHECK(torch::isfinite(cols).all().item<bool>(), path, ": Gaussians have non-finite values; not written");
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n"
+         << "element vertex " << N << "\n";
+  for (const char* p : kProps) header << "property float " << p << "\n";
+  header << "end_header\n";
+  write_file_atomic(path, [&](std::ostream& os) {
+    const std::string h = header.str();
+    os.write(h.data(), static_cast<std::streamsize>(h.size()));
+    os.write(static_cast<const char*>(cols.data_ptr()), static_cast<std::streamsize>(cols.numel() * sizeof(float)));
+  });
+}
+
+Gaussians read_ply(const std::string& path, bool want_linear) {
+  const std::string bytes = read_file_bytes(path);
+  const auto end = bytes.find("end_header\n");
+  if (bytes.compare(0, 4, "ply\n") != 0 || end == std::string::npos) fail(path, ": not a PLY file (no ply/end_header)");
+  std::istringstream hs(bytes.substr(0, end));
+  std::string line, format;
+  int64_t n = -1;
+  bool in_vertex = false;
+  std::vector<std::pair<std::string, std::string>> props;  // name, type
+  while (std::getline(hs, line)) {
+    std::istringstream ls(line);
+    std::string word;
+    ls >> word;
+    if (word == "format") {
+      ls >> format;
+    } else if (word == "element") {
+      std::string name;
+      int64_t count;
+      ls >> name >> count;
+      in_vertex = name == "vertex";
+      if (in_vertex) n = count;
+      else if (count > 0) fail(path, ": unsupported element '", name, "' before or after the vertices");
+    } else if (word == "property" && in_vertex) {
+      std::string type, name;
+      ls >> type;
+      if (type == "list") fail(path, ": list properties are not supported in the vertex element");
+      ls >> name;
+      if (type_size(type) == 0) fail(path, ": property '", name, "' has unknown type '", type, "'");
+      props.emplace_back(name, type);
+    }
+  }
+  if (format != "binary_little_endian") fail(path, ": format '", format, "' is not supported (binary_little_endian only)");
+  if (n < 0) fail(path, ": no vertex element");
+  std::vector<int> col(17, -1);
+  std::vector<size_t> offset(props.size());
+  size_t stride = 0;
+  for (size_t i = 0; i < props.size(); ++i) {
+    offset[i] = stride;
+    stride += type_size(props[i].second);
+    for (int k = 0; k < 17; ++k)
+      if (props[i].first == kProps[k]) col[k] = static_cast<int>(i);
+  }
+  for (int k = 0; k < 17; ++k)
+    if (col[k] < 0 && (k < 3 || k > 5)) fail(path, ": missing property '", kProps[k], "' (3DGS layout)");
+  const size_t data = end + std::strlen("end_header\n");
+  if (bytes.size() < data + static_cast<size_t>(n) * stride)
+    fail(path, ": truncated: ", n, " vertices need ", n * stride, " bytes, the file has ", bytes.size() - data);
+  auto out = torch::empty({n, 17});
+  float* o = out.data_ptr<float>();
+  for (int64_t v = 0; v < n; ++v) {
+    const char* rec = bytes.data() + data + v * stride;
+    for (int k = 0; k < 17; ++k)
+      o[v * 17 + k] = col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second));
+  }
+  Gaussians g;
+  g.means = out.narrow(1, 0, 3).contiguous();
+  auto srgb = torch::clamp(out.narrow(1, 6, 3) * kShC0 + 0.5, 0.0, 1.0);
+  g.colors = (want_linear ? srgb_to_linear(srgb) : srgb).contiguous();
+  g.opacities = torch::sigmoid(out.select(1, 9)).contiguous();
+  g.scales = torch::exp(out.narrow(1, 10, 3)).contiguous();
+  g.quats = out.narrow(1, 13, 4).contiguous();
+  return g;
+}
+
+int64_t prune_by_opacity(Gaussians& g, double min_opacity) {
+  auto keep = g.opacities >= min_opacity;
+  const int64_t removed = g.count() - keep.sum().item<int64_t>();
+  if (removed > 0) g = g.index(keep);
+  return removed;
+}
+
+}  // namespace isplat
