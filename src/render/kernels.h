@@ -56,6 +56,9 @@ constexpr int kGrad2d = 10;  // per-Gaussian 2D gradient: u, v, A, B, C, o', r, 
 struct Projection {
   torch::Tensor packed;  // [N, kRec] records (zeros when culled)
   torch::Tensor rects;   // [N, 4] int32 tile rectangle (x0, y0, x1, y1), half-open; empty when culled
+  // Non-finite input values found on the way, per input: means, scales, quats, colors, opacities. Such
+  // Gaussians are culled; the caller decides whether to fail (render() does).
+  int64_t nonfinite[5] = {0, 0, 0, 0, 0};
 };
 
 // EWA projection of N Gaussians (all tensors contiguous, one floating dtype) into one camera.

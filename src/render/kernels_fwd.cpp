@@ -121,49 +121,44 @@ template <class T>
 ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
   for (int p = 0; p < kPix; ++p) {
     const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
-    st[kPlT * kPix + p] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
-    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] = 0;
+    st[fwd_at(p, kPlT)] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
+    for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] = 0;
   }
 }
 
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
-// 8-pixel groups of its box; per pixel the order, skip rules and stop rule are those of the forward model.
-// The AVX2 twin below has the same loops around fwd_group_avx2.
+// 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
+// forward model. The AVX2 twin below has the same loops.
 template <class T>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
+  Group<T> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const T* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<T> s = fwd_splat(rec);
-    s.prepare();
-    for (int64_t py = ys; py < ye; ++py) {
-      const Row<T> r(s, py);
-      for (int64_t g = g0; g < g1; ++g)
-        if (group_may_hit(s, r, x0 + g * kLanes))
-          active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
-    }
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1));
   }
 }
 
 __attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
                                                    int64_t x1, int64_t y1, float* st, int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
+  Group<float> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
-    s.prepare();
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
     const Avx2Splat a = avx2_splat(s, 7);
-    for (int64_t py = ys; py < ye; ++py) {
-      const Row<float> r(s, py);
-      for (int64_t g = g0; g < g1; ++g)
-        if (group_may_hit(s, r, x0 + g * kLanes))
-          active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
-    }
+    int k = 0;
+    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i + 1));
+    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i + 1));
+    if (k < n) active -= fwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i + 1));
   }
 }
 
@@ -183,11 +178,11 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        const T t = std::abs(st[kPlT * kPix + p]);  // stopped pixels hold −T
-        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[(kPlAcc + c) * kPix + p] + t * bg[c];
+        const T t = std::abs(st[fwd_at(p, kPlT)]);  // stopped pixels hold −T
+        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[fwd_at(p, kPlAcc + c)] + t * bg[c];
         alpha_out[o] = 1 - t;
-        depth_out[o] = st[(kPlAcc + 3) * kPix + p];
-        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[(kPlAcc + 4 + c) * kPix + p];
+        depth_out[o] = st[fwd_at(p, kPlAcc + 3)];
+        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[fwd_at(p, kPlAcc + 4 + c)];
         final_T[o] = t;
         n_contrib[o] = scratch.last[p];
       }
