@@ -56,17 +56,34 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
   const int64_t tiles_x = cam.tiles_x(), tiles = tiles_x * cam.tiles_y();
 
   // Visible Gaussians sorted by (depth, id): filling tiles in this order leaves every tile list sorted.
-  std::vector<Key> keys;
-  std::vector<int32_t> order;
-  for (int64_t i = 0; i < n; ++i) {
+  // Compaction in fixed blocks (count, prefix sum, fill), so the order never depends on the thread count.
+  const int64_t block = 65536, blocks = (n + block - 1) / block;
+  auto visible_in = [&](int64_t i) {
     const int32_t* r = rects + 4 * i;
-    if (r[0] < r[2] && r[1] < r[3]) {
-      keys.push_back(depth_key(packed[i * kRec + kDepth]));
-      order.push_back(int32_t(i));
+    return r[0] < r[2] && r[1] < r[3];
+  };
+  std::vector<int64_t> block_start(size_t(blocks) + 1, 0);
+  at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t b = b0; b < b1; ++b)
+      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i) block_start[b + 1] += visible_in(i);
+  });
+  for (int64_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
+  const int64_t visible = block_start[blocks];
+  std::vector<Key> keys(static_cast<size_t>(visible));
+  std::vector<int32_t> order(static_cast<size_t>(visible));
+  at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t b = b0; b < b1; ++b) {
+      int64_t k = block_start[b];
+      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
+        if (visible_in(i)) keys[k] = depth_key(packed[i * kRec + kDepth]), order[k++] = int32_t(i);
     }
-  }
+  });
   radix_sort(keys, order);
-  const int64_t visible = int64_t(order.size());
+  // Tile rectangles in sorted order, so the passes below read them sequentially.
+  std::vector<int32_t> sorted_rects(size_t(visible) * 4);
+  at::parallel_for(0, visible, 16384, [&](int64_t k0, int64_t k1) {
+    for (int64_t k = k0; k < k1; ++k) std::memcpy(&sorted_rects[4 * k], rects + 4 * int64_t(order[k]), 16);
+  });
 
   // Fixed chunks of the sorted list (independent of the thread count), each with its own tile histogram.
   const int64_t chunk = 16384;
@@ -76,7 +93,7 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
     for (int64_t c = c0; c < c1; ++c) {
       int64_t* h = hist.data() + c * tiles;
       for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
-        const int32_t* r = rects + 4 * int64_t(order[k]);
+        const int32_t* r = &sorted_rects[4 * k];
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ++h[ty * tiles_x + tx];
       }
@@ -102,7 +119,7 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
       int64_t* cursor = hist.data() + c * tiles;
       for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
         const int32_t id = order[k];
-        const int32_t* r = rects + 4 * int64_t(id);
+        const int32_t* r = &sorted_rects[4 * k];
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ids[cursor[ty * tiles_x + tx]++] = id;
       }

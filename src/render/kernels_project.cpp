@@ -88,12 +88,19 @@ bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& 
   return T(255) * g.opac > 1;  // otherwise α can never reach 1/255
 }
 
+// floor(x) clamped to [lo, hi] (huge or NaN x included), without a libm call.
+inline int32_t tile_floor(double x, int32_t lo, int32_t hi) {
+  const double c = std::min(double(hi), std::max(double(lo), x));
+  const int32_t i = int32_t(c);
+  return i - (double(i) > c);
+}
+
 template <class T>
 void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* colors, const T* opac, int64_t n,
                       const CameraParams& cam, const ProjectSettings& st, T* packed, int32_t* rects,
                       int64_t* nonfinite) {
   const double fx = cam.fx, fy = cam.fy, cx = cam.cx, cy = cam.cy, sk = cam.skew;
-  const double tiles_x = double(cam.tiles_x()), tiles_y = double(cam.tiles_y());
+  const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
   std::atomic<int64_t> bad[5] = {0, 0, 0, 0, 0};  // integer counts: the sum is the same in any order
   at::parallel_for(0, n, 2048, [&](int64_t begin, int64_t end) {
     Geometry<T> g;
@@ -124,10 +131,10 @@ void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* 
       // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
       const double k2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
       const double rx = std::sqrt(k2 * double(ad)) + kSpanMargin, ry = std::sqrt(k2 * double(cd)) + kSpanMargin;
-      const double x0 = std::floor((double(u) - rx) / kTile), x1 = std::floor((double(u) + rx) / kTile) + 1;
-      const double y0 = std::floor((double(v) - ry) / kTile), y1 = std::floor((double(v) + ry) / kTile) + 1;
-      const int32_t tx0 = int32_t(std::clamp(x0, 0.0, tiles_x)), tx1 = int32_t(std::clamp(x1, 0.0, tiles_x));
-      const int32_t ty0 = int32_t(std::clamp(y0, 0.0, tiles_y)), ty1 = int32_t(std::clamp(y1, 0.0, tiles_y));
+      const int32_t tx0 = tile_floor((double(u) - rx) / kTile, 0, tiles_x);
+      const int32_t tx1 = tile_floor((double(u) + rx) / kTile, -1, tiles_x - 1) + 1;
+      const int32_t ty0 = tile_floor((double(v) - ry) / kTile, 0, tiles_y);
+      const int32_t ty1 = tile_floor((double(v) + ry) / kTile, -1, tiles_y - 1) + 1;
       if (tx0 >= tx1 || ty0 >= ty1) continue;  // footprint misses the image
       rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
 
