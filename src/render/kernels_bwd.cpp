@@ -38,9 +38,9 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
   }
 }
 
-__attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
-                                                   int64_t x1, int64_t y1, float* st, const int32_t* last,
-                                                   int32_t max_last, float* out) {
+#ifdef ISPLAT_HAVE_AVX2_LANES
+ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                  float* st, const int32_t* last, int32_t max_last, float* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   Group<float> groups[kMaxGroups];
   for (int64_t i = max_last - 1; i >= 0; --i) {
@@ -62,6 +62,7 @@ __attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t c
     sums.reduce(out + i * kGrad2d);
   }
 }
+#endif
 
 template <class T>
 void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
@@ -69,8 +70,10 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
                         const T* g_alpha, const T* g_depth, T* slots) {
   const int64_t W = cam.width, HW = W * cam.height;
   auto tile_fn = bwd_tile_generic<T>;
+#ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
     if (simd_enabled()) tile_fn = bwd_tile_avx2;
+#endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     if (count == 0) return;

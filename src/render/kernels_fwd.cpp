@@ -161,8 +161,9 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
   }
 }
 
-__attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
-                                                   int64_t x1, int64_t y1, float* st, int32_t* last) {
+#ifdef ISPLAT_HAVE_AVX2_LANES
+ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                  float* st, int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<float> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
@@ -178,6 +179,7 @@ __attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t c
     if (k < n) active -= fwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i + 1));
   }
 }
+#endif
 
 template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
@@ -186,8 +188,10 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
   const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
   auto tile_fn = fwd_tile_generic<T>;
+#ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
     if (simd_enabled()) tile_fn = fwd_tile_avx2;
+#endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
@@ -210,8 +214,12 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
 
 namespace {
 bool cpu_has_avx2() {
+#ifdef ISPLAT_HAVE_AVX2_LANES
   __builtin_cpu_init();  // may run before main (static initialization)
   return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
 }
 std::atomic<bool> g_simd{cpu_has_avx2()};
 }  // namespace

@@ -2,7 +2,10 @@
 // row, as portable scalar code (float or double) and as AVX2 intrinsics (float). Both do the same IEEE
 // operations in the same order, so they give bit-identical results; the tile loops pick one at run time.
 #pragma once
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define ISPLAT_HAVE_AVX2_LANES 1
 #include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +15,7 @@
 
 #define ISPLAT_INLINE inline __attribute__((always_inline))
 #define ISPLAT_AVX2 __attribute__((target("avx2"), always_inline)) inline
+#define ISPLAT_AVX2_FN __attribute__((target("avx2")))
 
 namespace isplat::splat {
 
@@ -101,8 +105,8 @@ ISPLAT_INLINE int collect_groups(const Splat<T>& s, int64_t x0, int64_t y0, int6
   return n;
 }
 
-// Forward state planes of a tile (structure of arrays): T and 7 accumulated channels. A pixel that has
-// stopped keeps −T (T > 0 always), so one plane holds both.
+// Forward state of a tile's pixels: T and 7 accumulated channels. A pixel that has stopped keeps −T
+// (T > 0 always), so one plane holds both.
 enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
 // Backward planes: T, S and dL/dC for r, g, b, depth, alpha. With B_c the colour of what lies behind the
 // current Gaussian (background included), S = Σ_c dL/dC_c·B_c; dL/dC is constant per pixel, so tracking S
@@ -195,6 +199,7 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
   }
 }
 
+#ifdef ISPLAT_HAVE_AVX2_LANES
 // ---- AVX2 lanes (float): the same operations in the same order, N groups at a time so that their
 // independent exp chains overlap ----
 
@@ -330,5 +335,7 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     g.s[kGC] = _mm256_add_ps(g.s[kGC], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy));
   }
 }
+
+#endif  // ISPLAT_HAVE_AVX2_LANES
 
 }  // namespace isplat::splat
