@@ -326,7 +326,7 @@ int main(int argc, char** argv) {
                                {"100k large splats", 100000, 512, 384, 3.0, 7 * k, 7 * k}};
     if (!quick || !only.empty()) {
       cases.push_back({"1.5M", 1500000, 1536, 1024, 1.0, 5 * k, 3 * k});
-      if (huge_large) cases.push_back({"1.5M large splats", 1500000, 1536, 1024, 3.0, 3 * k, 1 * k});
+      if (huge_large || !only.empty()) cases.push_back({"1.5M large splats", 1500000, 1536, 1024, 3.0, 3 * k, 1 * k});
     }
     for (const Case& c : cases)
       if (only.empty() || c.name == only) run(c);
