@@ -1,5 +1,5 @@
 // Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
-// culling and input errors, batching, options and thread-count determinism.
+// culling and input errors, batching, options, thread-count determinism and AVX2/portable agreement.
 #include <catch2/catch.hpp>
 
 #include <ATen/Parallel.h>
