@@ -148,12 +148,12 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
     const T power = T(0.5) * (s.A * dx * dx + q.r.cdy2) + dx * q.r.bdy;
+    if (!(power <= s.cut)) continue;  // outside 3σ, or α < 1/255 for sure: no exp
     const T raw = s.opac * splat_exp(-power);
     const T alpha = std::min(T(kAlphaMax), raw);
     const T t = st[fwd_at(p, kPlT)], next = t * (T(1) - alpha);
-    const bool hit = power <= s.cut && raw >= T(kAlphaMin) && t > T(0);
-    if (!hit) continue;
-    if (next < T(kTransmittanceMin)) {  // this Gaussian would make the pixel opaque: stop before it
+    if (!(raw >= T(kAlphaMin) && t > T(0))) continue;  // skipped, or the pixel has stopped
+    if (next < T(kTransmittanceMin)) {                 // this Gaussian would make the pixel opaque: stop before it
       st[fwd_at(p, kPlT)] = -t;
       ++stops;
       continue;
@@ -175,11 +175,12 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
     const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    if (!(power <= s.cut) || i >= last[p]) continue;  // not a contributor in forward
     const T G = splat_exp(-power);
     const T raw = s.opac * G;
     const T alpha = std::min(T(kAlphaMax), raw);
-    if (!(power <= s.cut && raw >= T(kAlphaMin) && i < last[p])) continue;  // not a contributor in forward
-    const T t_in = st[bwd_at(p, kPbT)] / (T(1) - alpha);                    // transmittance in front of this Gaussian
+    if (!(raw >= T(kAlphaMin))) continue;
+    const T t_in = st[bwd_at(p, kPbT)] / (T(1) - alpha);  // transmittance in front of this Gaussian
     const T w = alpha * t_in;
     T dq = st[bwd_at(p, kPbDC)] * s.f[0];  // Σ_c dL/dC_c·f_c
     for (int c = 1; c < kBwdCh; ++c) dq = dq + st[bwd_at(p, kPbDC + c)] * s.f[c];
@@ -201,7 +202,8 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // ---- AVX2 lanes (float): the same operations in the same order, N groups at a time so that their
-// independent exp chains overlap ----
+// independent exp chains overlap. exp runs on all 8 lanes (the cut test masks the result); group culling has
+// already dropped the groups that lie wholly beyond the cut ----
 
 struct Avx2Splat {
   __m256 u, A, B, opac, cut, f[7];
