@@ -85,9 +85,10 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
     for (int64_t k = k0; k < k1; ++k) std::memcpy(&sorted_rects[4 * k], rects + 4 * int64_t(order[k]), 16);
   });
 
-  // Fixed chunks of the sorted list (independent of the thread count), each with its own tile histogram.
-  const int64_t chunk = 16384;
-  const int64_t chunks = std::max<int64_t>(1, (visible + chunk - 1) / chunk);
+  // Chunks of the sorted list, each with its own tile histogram: at most 64, so the histograms stay
+  // O(tiles); the result is the same for any chunking (each tile list is in sorted order).
+  const int64_t chunks = std::clamp<int64_t>((visible + 4095) / 4096, 1, 64);
+  const int64_t chunk = (visible + chunks - 1) / chunks;
   std::vector<int64_t> hist(size_t(chunks * tiles), 0);
   at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
     for (int64_t c = c0; c < c1; ++c) {
