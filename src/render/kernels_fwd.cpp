@@ -57,16 +57,14 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
 
   // Visible Gaussians sorted by (depth, id): filling tiles in this order leaves every tile list sorted.
   // Compaction in fixed blocks (count, prefix sum, fill), so the order never depends on the thread count.
+  // Few parallel regions on purpose: on a busy machine each one can wait for a descheduled thread.
   const int64_t block = 65536, blocks = (n + block - 1) / block;
   auto visible_in = [&](int64_t i) {
     const int32_t* r = rects + 4 * i;
     return r[0] < r[2] && r[1] < r[3];
   };
   std::vector<int64_t> block_start(size_t(blocks) + 1, 0);
-  at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
-    for (int64_t b = b0; b < b1; ++b)
-      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i) block_start[b + 1] += visible_in(i);
-  });
+  for (int64_t i = 0; i < n; ++i) block_start[i / block + 1] += visible_in(i);  // one sequential scan
   for (int64_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
   const int64_t visible = block_start[blocks];
   std::vector<Key> keys(static_cast<size_t>(visible));
@@ -79,22 +77,20 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
     }
   });
   radix_sort(keys, order);
-  // Tile rectangles in sorted order, so the passes below read them sequentially.
-  std::vector<int32_t> sorted_rects(size_t(visible) * 4);
-  at::parallel_for(0, visible, 16384, [&](int64_t k0, int64_t k1) {
-    for (int64_t k = k0; k < k1; ++k) std::memcpy(&sorted_rects[4 * k], rects + 4 * int64_t(order[k]), 16);
-  });
 
   // Chunks of the sorted list, each with its own tile histogram: at most 64, so the histograms stay
-  // O(tiles); the result is the same for any chunking (each tile list is in sorted order).
+  // O(tiles); the result is the same for any chunking (each tile list is in sorted order). The counting
+  // pass also copies the rectangles into sorted order, so the fill pass reads them sequentially.
   const int64_t chunks = std::clamp<int64_t>((visible + 4095) / 4096, 1, 64);
   const int64_t chunk = (visible + chunks - 1) / chunks;
   std::vector<int64_t> hist(size_t(chunks * tiles), 0);
+  std::vector<int32_t> sorted_rects(size_t(visible) * 4);
   at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
     for (int64_t c = c0; c < c1; ++c) {
       int64_t* h = hist.data() + c * tiles;
       for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
-        const int32_t* r = &sorted_rects[4 * k];
+        int32_t* r = &sorted_rects[4 * k];
+        std::memcpy(r, rects + 4 * int64_t(order[k]), 16);
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ++h[ty * tiles_x + tx];
       }
