@@ -81,6 +81,8 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     int32_t* last = scratch.last.data();
     std::fill(st, st + kBwdPlanes * kPix, T(0));
     std::fill(last, last + kPix, 0);
+    // Pixels outside the image keep last = 0 (never a contributor) and T = 1 (their masked lanes divide by it).
+    for (int p = 0; p < kPix; ++p) st[bwd_at(p, kPbT)] = 1;
     int32_t max_last = 0;
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
@@ -93,10 +95,6 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
         last[p] = n_contrib[o];
         max_last = std::max(max_last, last[p]);
       }
-    // Pixels outside the image keep T = 0 and last = 0: never a contributor, and no division by zero
-    // matters because their lanes are masked.
-    for (int p = 0; p < kPix; ++p)
-      if (st[bwd_at(p, kPbT)] == 0) st[bwd_at(p, kPbT)] = 1;
     tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
             slots + begin * kGrad2d);
   });
