@@ -1,5 +1,5 @@
 // Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
-// culling and input errors, batching, options and thread-count determinism.
+// culling and input errors, batching, options, thread-count determinism and AVX2/portable agreement.
 #include <catch2/catch.hpp>
 
 #include <ATen/Parallel.h>
@@ -47,8 +47,10 @@ Tensor to_world(const Tensor& p_cam, const Camera& cam) {
   return torch::matmul(p_cam.to(kF64) - t, R).to(p_cam.scalar_type());
 }
 
-// n random Gaussians seen by `cam`: screen footprints of ~0.5–6 px σ, depths 1–6, some beyond the frustum.
-Gaussians random_scene(int64_t n, const Camera& cam, uint64_t seed, double spread = 1.4) {
+// n random Gaussians seen by `cam`: screen footprints of sigma_lo–sigma_hi px σ, depths 1–6, some beyond the
+// frustum (spread > 1), opacities in [opac_lo, opac_hi].
+Gaussians random_scene(int64_t n, const Camera& cam, uint64_t seed, double spread = 1.4, double sigma_lo = 0.5,
+                       double sigma_hi = 6.0, double opac_lo = 0.05, double opac_hi = 1.02) {
   torch::manual_seed(seed);
   const double W = double(cam.width), H = double(cam.height), f = cam.K[0][0].item<double>();
   const Tensor z = 1.0 + 5.0 * torch::rand({n}, kF64);
@@ -56,14 +58,14 @@ Gaussians random_scene(int64_t n, const Camera& cam, uint64_t seed, double sprea
   const Tensor v = H * (0.5 + spread * (torch::rand({n}, kF64) - 0.5));
   const Tensor uv = torch::stack({u, v}, 1);
   const Tensor p_cam = backproject_points(uv, z, cam.K.to(kF64));
-  const Tensor sigma_px = torch::exp(std::log(0.5) + std::log(12.0) * torch::rand({n, 1}, kF64));
+  const Tensor sigma_px = torch::exp(std::log(sigma_lo) + std::log(sigma_hi / sigma_lo) * torch::rand({n, 1}, kF64));
   const Tensor aniso = torch::exp(0.6 * torch::randn({n, 3}, kF64));
   Gaussians g;
   g.means = to_world(p_cam, cam);
   g.scales = sigma_px * z.unsqueeze(1) / f * aniso;
   g.quats = torch::randn({n, 4}, kF64) * 1.7;
   g.colors = torch::rand({n, 3}, kF64);
-  g.opacities = 0.05 + 0.97 * torch::rand({n}, kF64);  // a few above 0.99 exercise the clamp
+  g.opacities = opac_lo + (opac_hi - opac_lo) * torch::rand({n}, kF64);  // some above 0.99 exercise the clamp
   return g;
 }
 
@@ -189,10 +191,22 @@ TEST_CASE("render: opaque Gaussians are composited in depth order and occlude", 
   CHECK(st.rgb[2][16][24].item<double>() == Approx(0.02 * 0.01).margin(1e-14));  // background only
 }
 
+// Concatenation of Gaussian sets.
+Gaussians concat(const std::vector<Gaussians>& sets) {
+  std::vector<Tensor> m, s, q, c, o;
+  for (const auto& g : sets)
+    m.push_back(g.means), s.push_back(g.scales), q.push_back(g.quats), c.push_back(g.colors), o.push_back(g.opacities);
+  return {torch::cat(m), torch::cat(s), torch::cat(q), torch::cat(c), torch::cat(o)};
+}
+
 TEST_CASE("render: forward and gradients match the dense per-pixel reference", "[render]") {
-  const Camera cam = make_camera(64, 48, 55.0, 58.0, 0.8, true);
-  const Gaussians scene = random_scene(300, cam, 7);
-  const Weights w = random_weights(48, 64, 8);
+  // 70×45 leaves partial tiles on two sides. Three populations: a few hundred small Gaussians (some beyond
+  // the frustum), large ones spanning many tiles, and a dense opaque cluster where pixels reach the
+  // T < 1e-4 stop.
+  const Camera cam = make_camera(70, 45, 55.0, 58.0, 0.8, true);
+  const Gaussians scene = concat({random_scene(300, cam, 7), random_scene(12, cam, 8, 1.2, 10.0, 25.0, 0.05, 0.6),
+                                  random_scene(60, cam, 9, 0.3, 3.0, 8.0, 0.9, 1.0)});
+  const Weights w = random_weights(45, 70, 10);
   for (bool aa : {false, true}) {
     RenderOptions opt;
     opt.background = {0.3, 0.6, 0.9};
@@ -205,7 +219,7 @@ TEST_CASE("render: forward and gradients match the dense per-pixel reference", "
     CHECK(max_abs(out.alpha - ref.alpha) < 1e-10);
     CHECK(max_abs(out.depth - ref.depth) < 1e-9);
     CHECK(max_abs(out.normal - ref.normal) < 1e-10);
-    CHECK(out.alpha.max().item<double>() > 0.9);  // the scene is not trivially empty
+    CHECK(out.alpha.max().item<double>() > 0.999);  // the opaque cluster is opaque
     weighted_loss(out, w).backward();
     weighted_loss(ref, w).backward();
     const auto ga = grads_of(a), gb = grads_of(b);

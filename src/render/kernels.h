@@ -17,7 +17,7 @@ constexpr double kSigmaExtent = 3.0;                             // screen footp
 constexpr double kMaxPower = 0.5 * kSigmaExtent * kSigmaExtent;  // ½dᵀΣ⁻¹d at 3σ
 constexpr int kTile = 16;                                        // 16×16 pixel tiles
 constexpr double kFrustumClamp = 1.3;                            // EWA Jacobian evaluated inside 1.3× the frustum
-constexpr double kSpanMargin = 1e-3;  // widens row spans / tile rects so rounding never drops a pixel
+constexpr double kSpanMargin = 1e-3;  // widens boxes and group tests so rounding never drops a pixel
 
 // One pinhole camera in double precision: K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]], x_cam = R·x_world + t.
 struct CameraParams {
@@ -56,6 +56,9 @@ constexpr int kGrad2d = 10;  // per-Gaussian 2D gradient: u, v, A, B, C, o', r, 
 struct Projection {
   torch::Tensor packed;  // [N, kRec] records (zeros when culled)
   torch::Tensor rects;   // [N, 4] int32 tile rectangle (x0, y0, x1, y1), half-open; empty when culled
+  // Non-finite input values found on the way, per input: means, scales, quats, colors, opacities. Such
+  // Gaussians are culled; the caller decides whether to fail (render() does).
+  int64_t nonfinite[5] = {0, 0, 0, 0, 0};
 };
 
 // EWA projection of N Gaussians (all tensors contiguous, one floating dtype) into one camera.
@@ -104,9 +107,9 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_alpha,   // [1, H, W]
                             const torch::Tensor& grad_depth);  // [1, H, W]
 
-// The rasterizers run an AVX2 build of their pixel loops when the CPU has it (same arithmetic, no FMA,
-// so results match the generic build up to the order of the per-Gaussian lane sums in backward).
-// Tests can force the generic build; returns the previous setting.
+// The rasterizers run AVX2 pixel loops (float only) when the CPU has them. They do the same IEEE operations
+// in the same order as the portable loops (no FMA), so both give bit-identical images and gradients.
+// Tests can force the portable loops; returns the previous setting.
 bool set_simd_enabled(bool enabled);
 bool simd_enabled();
 

@@ -24,49 +24,45 @@ template <class T>
 void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       const int32_t* last, int32_t max_last, T* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
+  Group<T> groups[kMaxGroups];
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const T* rec = local + i * kRec;
     LaneSums<T> sums{};
     int64_t ys, ye, g0, g1;
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
       Splat<T> s = bwd_splat(rec);
-      s.prepare();
-      for (int64_t py = ys; py < ye; ++py) {
-        const Row<T> r(s, py);
-        for (int64_t k = g0; k < g1; ++k)
-          if (group_may_hit(s, r, x0 + k * kLanes))
-            bwd_group(s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), sums);
-      }
+      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+      for (int k = 0; k < n; ++k) bwd_group(s, groups[k], st, last, int32_t(i), sums);
     }
     sums.reduce(out + i * kGrad2d);
   }
 }
 
-__attribute__((target("avx2"))) void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
-                                                   int64_t x1, int64_t y1, float* st, const int32_t* last,
-                                                   int32_t max_last, float* out) {
+#ifdef ISPLAT_HAVE_AVX2_LANES
+ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                  float* st, const int32_t* last, int32_t max_last, float* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
+  Group<float> groups[kMaxGroups];
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const float* rec = local + i * kRec;
     LaneSums<float> sums{};
     int64_t ys, ye, g0, g1;
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
       Splat<float> s = bwd_splat(rec);
-      s.prepare();
+      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
       const Avx2Splat a = avx2_splat(s, kBwdCh);
       Avx2Sums g;
       g.zero();
-      for (int64_t py = ys; py < ye; ++py) {
-        const Row<float> r(s, py);
-        for (int64_t k = g0; k < g1; ++k)
-          if (group_may_hit(s, r, x0 + k * kLanes))
-            bwd_group_avx2(a, s, r, x0 + k * kLanes, st, last, int((py - y0) * kTile + k * kLanes), int32_t(i), g);
-      }
+      int k = 0;
+      for (; k + 4 <= n; k += 4) bwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i), g);
+      for (; k + 2 <= n; k += 2) bwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i), g);
+      if (k < n) bwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i), g);
       g.store(sums);
     }
     sums.reduce(out + i * kGrad2d);
   }
 }
+#endif
 
 template <class T>
 void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
@@ -74,8 +70,10 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
                         const T* g_alpha, const T* g_depth, T* slots) {
   const int64_t W = cam.width, HW = W * cam.height;
   auto tile_fn = bwd_tile_generic<T>;
+#ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
     if (simd_enabled()) tile_fn = bwd_tile_avx2;
+#endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     if (count == 0) return;
@@ -83,22 +81,20 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     int32_t* last = scratch.last.data();
     std::fill(st, st + kBwdPlanes * kPix, T(0));
     std::fill(last, last + kPix, 0);
+    // Pixels outside the image keep last = 0 (never a contributor) and T = 1 (their masked lanes divide by it).
+    for (int p = 0; p < kPix; ++p) st[bwd_at(p, kPbT)] = 1;
     int32_t max_last = 0;
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        st[kPbT * kPix + p] = final_T[o];
+        st[bwd_at(p, kPbT)] = final_T[o];
         const T dc[kBwdCh] = {g_rgb[o], g_rgb[HW + o], g_rgb[2 * HW + o], g_depth[o], g_alpha[o]};
-        for (int c = 0; c < kBwdCh; ++c) st[(kPbDC + c) * kPix + p] = dc[c];
+        for (int c = 0; c < kBwdCh; ++c) st[bwd_at(p, kPbDC + c)] = dc[c];
         // Behind the last contributor lies the background (zero for depth and alpha).
-        st[kPbS * kPix + p] = dc[0] * T(background[0]) + dc[1] * T(background[1]) + dc[2] * T(background[2]);
+        st[bwd_at(p, kPbS)] = dc[0] * T(background[0]) + dc[1] * T(background[1]) + dc[2] * T(background[2]);
         last[p] = n_contrib[o];
         max_last = std::max(max_last, last[p]);
       }
-    // Pixels outside the image keep T = 0 and last = 0: never a contributor, and no division by zero
-    // matters because their lanes are masked.
-    for (int p = 0; p < kPix; ++p)
-      if (st[kPbT * kPix + p] == 0) st[kPbT * kPix + p] = 1;
     tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
             slots + begin * kGrad2d);
   });

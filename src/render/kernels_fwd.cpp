@@ -56,27 +56,41 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
   const int64_t tiles_x = cam.tiles_x(), tiles = tiles_x * cam.tiles_y();
 
   // Visible Gaussians sorted by (depth, id): filling tiles in this order leaves every tile list sorted.
-  std::vector<Key> keys;
-  std::vector<int32_t> order;
-  for (int64_t i = 0; i < n; ++i) {
+  // Compaction in fixed blocks (count, prefix sum, fill), so the order never depends on the thread count.
+  // Few parallel regions on purpose: on a busy machine each one can wait for a descheduled thread.
+  const int64_t block = 65536, blocks = (n + block - 1) / block;
+  auto visible_in = [&](int64_t i) {
     const int32_t* r = rects + 4 * i;
-    if (r[0] < r[2] && r[1] < r[3]) {
-      keys.push_back(depth_key(packed[i * kRec + kDepth]));
-      order.push_back(int32_t(i));
+    return r[0] < r[2] && r[1] < r[3];
+  };
+  std::vector<int64_t> block_start(size_t(blocks) + 1, 0);
+  for (int64_t i = 0; i < n; ++i) block_start[i / block + 1] += visible_in(i);  // one sequential scan
+  for (int64_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
+  const int64_t visible = block_start[blocks];
+  std::vector<Key> keys(static_cast<size_t>(visible));
+  std::vector<int32_t> order(static_cast<size_t>(visible));
+  at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t b = b0; b < b1; ++b) {
+      int64_t k = block_start[b];
+      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
+        if (visible_in(i)) keys[k] = depth_key(packed[i * kRec + kDepth]), order[k++] = int32_t(i);
     }
-  }
+  });
   radix_sort(keys, order);
-  const int64_t visible = int64_t(order.size());
 
-  // Fixed chunks of the sorted list (independent of the thread count), each with its own tile histogram.
-  const int64_t chunk = 16384;
-  const int64_t chunks = std::max<int64_t>(1, (visible + chunk - 1) / chunk);
+  // Chunks of the sorted list, each with its own tile histogram: at most 64, so the histograms stay
+  // O(tiles); the result is the same for any chunking (each tile list is in sorted order). The counting
+  // pass also copies the rectangles into sorted order, so the fill pass reads them sequentially.
+  const int64_t chunks = std::clamp<int64_t>((visible + 4095) / 4096, 1, 64);
+  const int64_t chunk = (visible + chunks - 1) / chunks;
   std::vector<int64_t> hist(size_t(chunks * tiles), 0);
+  std::vector<int32_t> sorted_rects(size_t(visible) * 4);
   at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
     for (int64_t c = c0; c < c1; ++c) {
       int64_t* h = hist.data() + c * tiles;
       for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
-        const int32_t* r = rects + 4 * int64_t(order[k]);
+        int32_t* r = &sorted_rects[4 * k];
+        std::memcpy(r, rects + 4 * int64_t(order[k]), 16);
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ++h[ty * tiles_x + tx];
       }
@@ -102,7 +116,7 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
       int64_t* cursor = hist.data() + c * tiles;
       for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
         const int32_t id = order[k];
-        const int32_t* r = rects + 4 * int64_t(id);
+        const int32_t* r = &sorted_rects[4 * k];
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ids[cursor[ty * tiles_x + tx]++] = id;
       }
@@ -121,51 +135,48 @@ template <class T>
 ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
   for (int p = 0; p < kPix; ++p) {
     const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
-    st[kPlT * kPix + p] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
-    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] = 0;
+    st[fwd_at(p, kPlT)] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
+    for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] = 0;
   }
 }
 
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
-// 8-pixel groups of its box; per pixel the order, skip rules and stop rule are those of the forward model.
-// The AVX2 twin below has the same loops around fwd_group_avx2.
+// 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
+// forward model. The AVX2 twin below has the same loops.
 template <class T>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
+  Group<T> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const T* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<T> s = fwd_splat(rec);
-    s.prepare();
-    for (int64_t py = ys; py < ye; ++py) {
-      const Row<T> r(s, py);
-      for (int64_t g = g0; g < g1; ++g)
-        if (group_may_hit(s, r, x0 + g * kLanes))
-          active -= fwd_group(s, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
-    }
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1));
   }
 }
 
-__attribute__((target("avx2"))) void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0,
-                                                   int64_t x1, int64_t y1, float* st, int32_t* last) {
+#ifdef ISPLAT_HAVE_AVX2_LANES
+ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                  float* st, int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
+  Group<float> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
-    s.prepare();
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
     const Avx2Splat a = avx2_splat(s, 7);
-    for (int64_t py = ys; py < ye; ++py) {
-      const Row<float> r(s, py);
-      for (int64_t g = g0; g < g1; ++g)
-        if (group_may_hit(s, r, x0 + g * kLanes))
-          active -= fwd_group_avx2(a, r, x0 + g * kLanes, st, last, int((py - y0) * kTile + g * kLanes), int32_t(i + 1));
-    }
+    int k = 0;
+    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i + 1));
+    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i + 1));
+    if (k < n) active -= fwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i + 1));
   }
 }
+#endif
 
 template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
@@ -174,8 +185,10 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
   const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
   auto tile_fn = fwd_tile_generic<T>;
+#ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
     if (simd_enabled()) tile_fn = fwd_tile_avx2;
+#endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
@@ -183,11 +196,11 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        const T t = std::abs(st[kPlT * kPix + p]);  // stopped pixels hold −T
-        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[(kPlAcc + c) * kPix + p] + t * bg[c];
+        const T t = std::abs(st[fwd_at(p, kPlT)]);  // stopped pixels hold −T
+        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[fwd_at(p, kPlAcc + c)] + t * bg[c];
         alpha_out[o] = 1 - t;
-        depth_out[o] = st[(kPlAcc + 3) * kPix + p];
-        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[(kPlAcc + 4 + c) * kPix + p];
+        depth_out[o] = st[fwd_at(p, kPlAcc + 3)];
+        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[fwd_at(p, kPlAcc + 4 + c)];
         final_T[o] = t;
         n_contrib[o] = scratch.last[p];
       }
@@ -198,8 +211,12 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
 
 namespace {
 bool cpu_has_avx2() {
+#ifdef ISPLAT_HAVE_AVX2_LANES
   __builtin_cpu_init();  // may run before main (static initialization)
   return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
 }
 std::atomic<bool> g_simd{cpu_has_avx2()};
 }  // namespace

@@ -2,6 +2,8 @@
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
 
+#include <atomic>
+
 #include "render/kernels.h"
 
 namespace isplat::splat {
@@ -86,18 +88,39 @@ bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& 
   return T(255) * g.opac > 1;  // otherwise α can never reach 1/255
 }
 
+// floor(x) clamped to [lo, hi] (huge or NaN x included), without a libm call.
+inline int32_t tile_floor(double x, int32_t lo, int32_t hi) {
+  const double c = std::min(double(hi), std::max(double(lo), x));
+  const int32_t i = int32_t(c);
+  return i - (double(i) > c);
+}
+
 template <class T>
 void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* colors, const T* opac, int64_t n,
-                      const CameraParams& cam, const ProjectSettings& st, T* packed, int32_t* rects) {
+                      const CameraParams& cam, const ProjectSettings& st, T* packed, int32_t* rects,
+                      int64_t* nonfinite) {
   const double fx = cam.fx, fy = cam.fy, cx = cam.cx, cy = cam.cy, sk = cam.skew;
-  const double tiles_x = double(cam.tiles_x()), tiles_y = double(cam.tiles_y());
+  const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
+  std::atomic<int64_t> bad[5] = {0, 0, 0, 0, 0};  // integer counts: the sum is the same in any order
   at::parallel_for(0, n, 2048, [&](int64_t begin, int64_t end) {
     Geometry<T> g;
+    int64_t local_bad[5] = {0, 0, 0, 0, 0};
+    auto count_bad = [](const T* x, int k) {
+      int b = 0;
+      for (int j = 0; j < k; ++j) b += std::isfinite(x[j]) ? 0 : 1;
+      return b;
+    };
     for (int64_t i = begin; i < end; ++i) {
       T* rec = packed + i * kRec;
       int32_t* rect = rects + i * 4;
       std::fill(rec, rec + kRec, T(0));
       std::fill(rect, rect + 4, 0);
+      const int b[5] = {count_bad(means + 3 * i, 3), count_bad(scales + 3 * i, 3), count_bad(quats + 4 * i, 4),
+                        count_bad(colors + 3 * i, 3), count_bad(opac + i, 1)};
+      if (b[0] + b[1] + b[2] + b[3] + b[4] > 0) {
+        for (int k = 0; k < 5; ++k) local_bad[k] += b[k];
+        continue;
+      }
       if (!project_one(means + 3 * i, scales + 3 * i, quats + 4 * i, opac[i], cam, st, g)) continue;
       const T u = T(fx) * g.a + T(sk) * g.b + T(cx), v = T(fy) * g.b + T(cy);
       const T dil = T(st.dilation), ad = g.sa + dil, cd = g.sc + dil;
@@ -108,10 +131,10 @@ void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* 
       // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
       const double k2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
       const double rx = std::sqrt(k2 * double(ad)) + kSpanMargin, ry = std::sqrt(k2 * double(cd)) + kSpanMargin;
-      const double x0 = std::floor((double(u) - rx) / kTile), x1 = std::floor((double(u) + rx) / kTile) + 1;
-      const double y0 = std::floor((double(v) - ry) / kTile), y1 = std::floor((double(v) + ry) / kTile) + 1;
-      const int32_t tx0 = int32_t(std::clamp(x0, 0.0, tiles_x)), tx1 = int32_t(std::clamp(x1, 0.0, tiles_x));
-      const int32_t ty0 = int32_t(std::clamp(y0, 0.0, tiles_y)), ty1 = int32_t(std::clamp(y1, 0.0, tiles_y));
+      const int32_t tx0 = tile_floor((double(u) - rx) / kTile, 0, tiles_x);
+      const int32_t tx1 = tile_floor((double(u) + rx) / kTile, -1, tiles_x - 1) + 1;
+      const int32_t ty0 = tile_floor((double(v) - ry) / kTile, 0, tiles_y);
+      const int32_t ty1 = tile_floor((double(v) + ry) / kTile, -1, tiles_y - 1) + 1;
       if (tx0 >= tx1 || ty0 >= ty1) continue;  // footprint misses the image
       rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
 
@@ -130,7 +153,9 @@ void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* 
       rec[kNx] = nrm[0], rec[kNy] = nrm[1], rec[kNz] = nrm[2];
       rec[kRx] = T(rx), rec[kRy] = T(ry);
     }
+    for (int k = 0; k < 5; ++k) bad[k] += local_bad[k];
   });
+  for (int k = 0; k < 5; ++k) nonfinite[k] = bad[k];
 }
 
 template <class T>
@@ -242,7 +267,7 @@ Projection project_fwd(const torch::Tensor& means, const torch::Tensor& scales, 
   AT_DISPATCH_FLOATING_TYPES(means.scalar_type(), "project_fwd", [&] {
     project_fwd_impl<scalar_t>(means.data_ptr<scalar_t>(), scales.data_ptr<scalar_t>(), quats.data_ptr<scalar_t>(),
                                colors.data_ptr<scalar_t>(), opacities.data_ptr<scalar_t>(), n, cam, settings,
-                               out.packed.data_ptr<scalar_t>(), out.rects.data_ptr<int32_t>());
+                               out.packed.data_ptr<scalar_t>(), out.rects.data_ptr<int32_t>(), out.nonfinite);
   });
   return out;
 }

@@ -2,7 +2,10 @@
 // row, as portable scalar code (float or double) and as AVX2 intrinsics (float). Both do the same IEEE
 // operations in the same order, so they give bit-identical results; the tile loops pick one at run time.
 #pragma once
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define ISPLAT_HAVE_AVX2_LANES 1
 #include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +15,7 @@
 
 #define ISPLAT_INLINE inline __attribute__((always_inline))
 #define ISPLAT_AVX2 __attribute__((target("avx2"), always_inline)) inline
+#define ISPLAT_AVX2_FN __attribute__((target("avx2")))
 
 namespace isplat::splat {
 
@@ -54,8 +58,12 @@ struct Splat {
 template <class T>
 struct Row {
   T dy, cdy, bdy, cdy2;
-  Row(const Splat<T>& s, int64_t py) : dy(T(py) + T(0.5) - s.v), cdy(s.C * dy), bdy(s.B * dy), cdy2(cdy * dy) {}
 };
+template <class T>
+ISPLAT_INLINE Row<T> make_row(const Splat<T>& s, int64_t py) {
+  const T dy = T(py) + T(0.5) - s.v, cdy = s.C * dy;
+  return {dy, cdy, s.B * dy, cdy * dy};
+}
 
 // Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
 // minimum over the group's span is at beta·dy clamped to the span. Conservative by kSpanMargin; the pixel
@@ -67,14 +75,57 @@ ISPLAT_INLINE bool group_may_hit(const Splat<T>& s, const Row<T>& r, int64_t xb)
   return T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy <= s.cut_wide;
 }
 
-// Forward state planes of a tile (structure of arrays): T and 7 accumulated channels. A pixel that has
-// stopped keeps −T (T > 0 always), so one plane holds both.
+// One 8-pixel group of a tile row: its row terms, the image column of lane 0 and the tile pixel index of lane 0.
+template <class T>
+struct Group {
+  Row<T> r;
+  int32_t xb, p0;
+};
+constexpr int kMaxGroups = kTile * kTile / kLanes;
+
+// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit, in row-major order. Branch-free
+// compaction (each candidate is written, the count advances only if it passes), so no mispredictions.
+template <class T>
+ISPLAT_INLINE int collect_groups(const Splat<T>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
+                                 int64_t g1, Group<T>* out) {
+  int n = 0;
+  const int32_t xb0 = int32_t(x0 + g0 * kLanes), p00 = int32_t(g0 * kLanes - y0 * kTile);
+  if (g1 - g0 == 1) {  // one group per row: the box's rows are tight, so every row is kept
+    for (int64_t py = ys; py < ye; ++py) out[n++] = {make_row(s, py), xb0, p00 + int32_t(py * kTile)};
+    return n;
+  }
+  for (int64_t py = ys; py < ye; ++py) {
+    const Row<T> r = make_row(s, py);
+    const int32_t p0 = p00 + int32_t(py * kTile);
+    out[n] = {r, xb0, p0};
+    n += group_may_hit(s, r, xb0) ? 1 : 0;
+    out[n] = {r, xb0 + kLanes, p0 + kLanes};
+    n += group_may_hit(s, r, xb0 + kLanes) ? 1 : 0;
+  }
+  return n;
+}
+
+// Forward state of a tile's pixels: T and 7 accumulated channels. A pixel that has stopped keeps −T
+// (T > 0 always), so one plane holds both.
 enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
 // Backward planes: T, S and dL/dC for r, g, b, depth, alpha. With B_c the colour of what lies behind the
 // current Gaussian (background included), S = Σ_c dL/dC_c·B_c; dL/dC is constant per pixel, so tracking S
 // replaces tracking every B_c: dL/dα = T·(Σ_c dL/dC_c·f_c − S), then S ← α·Σ_c dL/dC_c·f_c + (1 − α)·S.
 constexpr int kBwdCh = 5;
 enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
+
+// Index of pixel p's value in `plane`. Layout [group][plane][lane]: a group's state is one contiguous block,
+// and no two planes lie a multiple of 4 KiB apart (which makes loads wait on unrelated stores).
+template <int kPlanes>
+ISPLAT_INLINE int plane_at(int p, int plane) {
+  return ((p / kLanes) * kPlanes + plane) * kLanes + p % kLanes;
+}
+ISPLAT_INLINE int fwd_at(int p, int plane) {
+  return plane_at<kFwdPlanes>(p, plane);
+}
+ISPLAT_INLINE int bwd_at(int p, int plane) {
+  return plane_at<kBwdPlanes>(p, plane);
+}
 
 // Lane sums of one Gaussian's backward: 10 quantities × 8 lanes, reduced in one fixed tree order.
 template <class T>
@@ -89,53 +140,55 @@ enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
 
 // ---- Portable scalar lanes ----
 
-// Front to back over pixels p0..p0+7 (x of lane 0 is xb). Returns how many pixels stopped here.
+// Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here.
 template <class T>
-ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* st, int32_t* last, int p0, int32_t id) {
+ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t* last, int32_t id) {
   int stops = 0;
   for (int l = 0; l < kLanes; ++l) {
-    const int p = p0 + l;
-    const T dx = (T(xb + l) + T(0.5)) - s.u;
-    const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    const int p = q.p0 + l;
+    const T dx = (T(q.xb + l) + T(0.5)) - s.u;
+    const T power = T(0.5) * (s.A * dx * dx + q.r.cdy2) + dx * q.r.bdy;
+    if (!(power <= s.cut)) continue;  // outside 3σ, or α < 1/255 for sure: no exp
     const T raw = s.opac * splat_exp(-power);
     const T alpha = std::min(T(kAlphaMax), raw);
-    const T t = st[kPlT * kPix + p], next = t * (T(1) - alpha);
-    const bool hit = power <= s.cut && raw >= T(kAlphaMin) && t > T(0);
-    if (!hit) continue;
-    if (next < T(kTransmittanceMin)) {  // this Gaussian would make the pixel opaque: stop before it
-      st[kPlT * kPix + p] = -t;
+    const T t = st[fwd_at(p, kPlT)], next = t * (T(1) - alpha);
+    if (!(raw >= T(kAlphaMin) && t > T(0))) continue;  // skipped, or the pixel has stopped
+    if (next < T(kTransmittanceMin)) {                 // this Gaussian would make the pixel opaque: stop before it
+      st[fwd_at(p, kPlT)] = -t;
       ++stops;
       continue;
     }
     const T w = alpha * t;
-    for (int c = 0; c < 7; ++c) st[(kPlAcc + c) * kPix + p] += w * s.f[c];
-    st[kPlT * kPix + p] = next;
+    for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] += w * s.f[c];
+    st[fwd_at(p, kPlT)] = next;
     last[p] = id;
   }
   return stops;
 }
 
-// Back to front over pixels p0..p0+7 for Gaussian `i` (tile-local), adding to the lane sums.
+// Back to front over the 8 pixels of group `q` for Gaussian `i` (tile-local), adding to the lane sums.
 template <class T>
-ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* st, const int32_t* last, int p0,
-                             int32_t i, LaneSums<T>& g) {
+ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const int32_t* last, int32_t i,
+                             LaneSums<T>& g) {
+  const Row<T>& r = q.r;
   for (int l = 0; l < kLanes; ++l) {
-    const int p = p0 + l;
-    const T dx = (T(xb + l) + T(0.5)) - s.u;
+    const int p = q.p0 + l;
+    const T dx = (T(q.xb + l) + T(0.5)) - s.u;
     const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    if (!(power <= s.cut) || i >= last[p]) continue;  // not a contributor in forward
     const T G = splat_exp(-power);
     const T raw = s.opac * G;
     const T alpha = std::min(T(kAlphaMax), raw);
-    if (!(power <= s.cut && raw >= T(kAlphaMin) && i < last[p])) continue;  // not a contributor in forward
-    const T t_in = st[kPbT * kPix + p] / (T(1) - alpha);                    // transmittance in front of this Gaussian
+    if (!(raw >= T(kAlphaMin))) continue;
+    const T t_in = st[bwd_at(p, kPbT)] / (T(1) - alpha);  // transmittance in front of this Gaussian
     const T w = alpha * t_in;
-    T q = st[kPbDC * kPix + p] * s.f[0];  // Σ_c dL/dC_c·f_c
-    for (int c = 1; c < kBwdCh; ++c) q = q + st[(kPbDC + c) * kPix + p] * s.f[c];
-    T& S = st[kPbS * kPix + p];
-    const T d_alpha = (q - S) * t_in;
-    S = alpha * q + (T(1) - alpha) * S;
-    st[kPbT * kPix + p] = t_in;
-    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] += w * st[(kPbDC + c) * kPix + p];
+    T dq = st[bwd_at(p, kPbDC)] * s.f[0];  // Σ_c dL/dC_c·f_c
+    for (int c = 1; c < kBwdCh; ++c) dq = dq + st[bwd_at(p, kPbDC + c)] * s.f[c];
+    T& S = st[bwd_at(p, kPbS)];
+    const T d_alpha = (dq - S) * t_in;
+    S = alpha * dq + (T(1) - alpha) * S;
+    st[bwd_at(p, kPbT)] = t_in;
+    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] += w * st[bwd_at(p, kPbDC + c)];
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
     g.s[kGo][l] += G * d_alpha;
     const T dp = -(alpha * d_alpha);  // dL/dpower
@@ -147,7 +200,10 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Row<T>& r, int64_t xb, T* 
   }
 }
 
-// ---- AVX2 lanes (float), the same operations in the same order ----
+#ifdef ISPLAT_HAVE_AVX2_LANES
+// ---- AVX2 lanes (float): the same operations in the same order, N groups at a time so that their
+// independent exp chains overlap. exp runs on all 8 lanes (the cut test masks the result); group culling has
+// already dropped the groups that lie wholly beyond the cut ----
 
 struct Avx2Splat {
   __m256 u, A, B, opac, cut, f[7];
@@ -177,40 +233,49 @@ ISPLAT_AVX2 __m256 avx2_exp(__m256 x) {
   return _mm256_mul_ps(p, p);
 }
 
-// dx and power for the 8 lanes starting at pixel column xb.
-ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Row<float>& r, int64_t xb, __m256& dx, __m256& power) {
+// dx and power for the 8 lanes of group q.
+ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Group<float>& q, __m256& dx, __m256& power) {
   const __m256 x =
-      _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(int32_t(xb)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+      _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(q.xb), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
   const __m256 half = _mm256_set1_ps(0.5f);
   dx = _mm256_sub_ps(_mm256_add_ps(x, half), a.u);
-  const __m256 quad = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(a.A, dx), dx), _mm256_set1_ps(r.cdy2));
-  power = _mm256_add_ps(_mm256_mul_ps(half, quad), _mm256_mul_ps(dx, _mm256_set1_ps(r.bdy)));
+  const __m256 quad = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(a.A, dx), dx), _mm256_set1_ps(q.r.cdy2));
+  power = _mm256_add_ps(_mm256_mul_ps(half, quad), _mm256_mul_ps(dx, _mm256_set1_ps(q.r.bdy)));
 }
 
-ISPLAT_AVX2 int fwd_group_avx2(const Avx2Splat& a, const Row<float>& r, int64_t xb, float* st, int32_t* last, int p0,
-                               int32_t id) {
-  __m256 dx, power;
-  avx2_power(a, r, xb, dx, power);
-  const __m256 raw = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power)));
-  const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
-  float* Tp = st + kPlT * kPix + p0;
-  const __m256 t = _mm256_loadu_ps(Tp);
-  const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
-  const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power, a.cut, _CMP_LE_OQ),
-                                                 _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
-                                   _mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ));
-  const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
-  const __m256 add = _mm256_andnot_ps(stop, hit);
-  const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
-  for (int c = 0; c < 7; ++c) {
-    float* acc = st + (kPlAcc + c) * kPix + p0;
-    _mm256_storeu_ps(acc, _mm256_add_ps(_mm256_loadu_ps(acc), _mm256_mul_ps(w, a.f[c])));
+template <int N>
+ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, int32_t* last, int32_t id) {
+  __m256 raw[N], power[N];
+  for (int k = 0; k < N; ++k) {
+    __m256 dx;
+    avx2_power(a, q[k], dx, power[k]);
+    raw[k] = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power[k])));
   }
-  _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
-  __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);
-  const __m256 lst = _mm256_castsi256_ps(_mm256_loadu_si256(Lp));
-  _mm256_storeu_si256(Lp, _mm256_castps_si256(_mm256_blendv_ps(lst, _mm256_castsi256_ps(_mm256_set1_epi32(id)), add)));
-  return __builtin_popcount(unsigned(_mm256_movemask_ps(stop)));
+  int stops = 0;
+  for (int k = 0; k < N; ++k) {
+    const int p0 = q[k].p0;
+    const __m256 alpha = _mm256_min_ps(raw[k], _mm256_set1_ps(float(kAlphaMax)));
+    float* Tp = st + fwd_at(p0, kPlT);
+    const __m256 t = _mm256_loadu_ps(Tp);
+    const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
+    const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power[k], a.cut, _CMP_LE_OQ),
+                                                   _mm256_cmp_ps(raw[k], _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
+                                     _mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ));
+    const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
+    const __m256 add = _mm256_andnot_ps(stop, hit);
+    const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
+    for (int c = 0; c < 7; ++c) {
+      float* acc = st + fwd_at(p0, kPlAcc + c);
+      _mm256_storeu_ps(acc, _mm256_add_ps(_mm256_loadu_ps(acc), _mm256_mul_ps(w, a.f[c])));
+    }
+    _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
+    __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);
+    const __m256 lst = _mm256_castsi256_ps(_mm256_loadu_si256(Lp));
+    _mm256_storeu_si256(Lp,
+                        _mm256_castps_si256(_mm256_blendv_ps(lst, _mm256_castsi256_ps(_mm256_set1_epi32(id)), add)));
+    stops += __builtin_popcount(unsigned(_mm256_movemask_ps(stop)));
+  }
+  return stops;
 }
 
 // Lane sums as registers; stored to LaneSums for the fixed-order reduction.
@@ -224,44 +289,55 @@ struct Avx2Sums {
   }
 };
 
-ISPLAT_AVX2 void bwd_group_avx2(const Avx2Splat& a, const Splat<float>& s, const Row<float>& r, int64_t xb, float* st,
-                                const int32_t* last, int p0, int32_t i, Avx2Sums& g) {
-  __m256 dx, power;
-  avx2_power(a, r, xb, dx, power);
-  const __m256 G = avx2_exp(avx2_neg(power));
-  const __m256 raw = _mm256_mul_ps(a.opac, G);
-  const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
-  const __m256i lst = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + p0));
-  const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power, a.cut, _CMP_LE_OQ),
-                                                 _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
-                                   _mm256_castsi256_ps(_mm256_cmpgt_epi32(lst, _mm256_set1_epi32(i))));  // i < last[p]
-  if (_mm256_movemask_ps(hit) == 0) return;
-  const __m256 one = _mm256_set1_ps(1.0f), one_minus = _mm256_sub_ps(one, alpha);
-  float* Tp = st + kPbT * kPix + p0;
-  const __m256 t = _mm256_loadu_ps(Tp);
-  const __m256 t_in = _mm256_div_ps(t, one_minus);
-  const __m256 w = _mm256_mul_ps(alpha, t_in);
-  __m256 dc[kBwdCh];
-  for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + (kPbDC + c) * kPix + p0);
-  __m256 q = _mm256_mul_ps(dc[0], a.f[0]);
-  for (int c = 1; c < kBwdCh; ++c) q = _mm256_add_ps(q, _mm256_mul_ps(dc[c], a.f[c]));
-  float* Sp = st + kPbS * kPix + p0;
-  const __m256 S = _mm256_loadu_ps(Sp);
-  const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(q, S), t_in);
-  const __m256 S_new = _mm256_add_ps(_mm256_mul_ps(alpha, q), _mm256_mul_ps(one_minus, S));
-  _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
-  _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
-  const __m256 wh = _mm256_and_ps(hit, w);
-  for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_add_ps(g.s[kGr + c], _mm256_mul_ps(wh, dc[c]));
-  const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
-  g.s[kGo] = _mm256_add_ps(g.s[kGo], _mm256_and_ps(free, _mm256_mul_ps(G, d_alpha)));
-  const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
-  const __m256 half = _mm256_set1_ps(0.5f), dy = _mm256_set1_ps(r.dy);
-  g.s[kGu] = _mm256_sub_ps(g.s[kGu], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.A, dx), _mm256_set1_ps(r.bdy))));
-  g.s[kGv] = _mm256_sub_ps(g.s[kGv], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.B, dx), _mm256_set1_ps(r.cdy))));
-  g.s[kGA] = _mm256_add_ps(g.s[kGA], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx));
-  g.s[kGB] = _mm256_add_ps(g.s[kGB], _mm256_mul_ps(_mm256_mul_ps(dp, dx), dy));
-  g.s[kGC] = _mm256_add_ps(g.s[kGC], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy));
+template <int N>
+ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, const int32_t* last, int32_t i,
+                                 Avx2Sums& g) {
+  __m256 dxs[N], power[N], G[N];
+  for (int k = 0; k < N; ++k) {
+    avx2_power(a, q[k], dxs[k], power[k]);
+    G[k] = avx2_exp(avx2_neg(power[k]));
+  }
+  for (int k = 0; k < N; ++k) {
+    const int p0 = q[k].p0;
+    const __m256 dx = dxs[k];
+    const __m256 raw = _mm256_mul_ps(a.opac, G[k]);
+    const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
+    const __m256i lst = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + p0));
+    const __m256 hit =
+        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power[k], a.cut, _CMP_LE_OQ),
+                                    _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
+                      _mm256_castsi256_ps(_mm256_cmpgt_epi32(lst, _mm256_set1_epi32(i))));  // i < last[p]
+    const __m256 one_minus = _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha);
+    float* Tp = st + bwd_at(p0, kPbT);
+    const __m256 t = _mm256_loadu_ps(Tp);
+    const __m256 t_in = _mm256_div_ps(t, one_minus);
+    const __m256 w = _mm256_mul_ps(alpha, t_in);
+    __m256 dc[kBwdCh];
+    for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + bwd_at(p0, kPbDC + c));
+    __m256 dq = _mm256_mul_ps(dc[0], a.f[0]);
+    for (int c = 1; c < kBwdCh; ++c) dq = _mm256_add_ps(dq, _mm256_mul_ps(dc[c], a.f[c]));
+    float* Sp = st + bwd_at(p0, kPbS);
+    const __m256 S = _mm256_loadu_ps(Sp);
+    const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(dq, S), t_in);
+    const __m256 S_new = _mm256_add_ps(_mm256_mul_ps(alpha, dq), _mm256_mul_ps(one_minus, S));
+    _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
+    _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
+    const __m256 wh = _mm256_and_ps(hit, w);
+    for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_add_ps(g.s[kGr + c], _mm256_mul_ps(wh, dc[c]));
+    const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
+    g.s[kGo] = _mm256_add_ps(g.s[kGo], _mm256_and_ps(free, _mm256_mul_ps(G[k], d_alpha)));
+    const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
+    const __m256 half = _mm256_set1_ps(0.5f), dy = _mm256_set1_ps(q[k].r.dy);
+    g.s[kGu] =
+        _mm256_sub_ps(g.s[kGu], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.A, dx), _mm256_set1_ps(q[k].r.bdy))));
+    g.s[kGv] =
+        _mm256_sub_ps(g.s[kGv], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.B, dx), _mm256_set1_ps(q[k].r.cdy))));
+    g.s[kGA] = _mm256_add_ps(g.s[kGA], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx));
+    g.s[kGB] = _mm256_add_ps(g.s[kGB], _mm256_mul_ps(_mm256_mul_ps(dp, dx), dy));
+    g.s[kGC] = _mm256_add_ps(g.s[kGC], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy));
+  }
 }
+
+#endif  // ISPLAT_HAVE_AVX2_LANES
 
 }  // namespace isplat::splat

@@ -60,6 +60,11 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const CameraParams cam = camera_params(K, T_cw, width, height);
     const ProjectSettings ps{options.near, options.dilation, options.antialiased};
     const Projection proj = project_fwd(means, scales, quats, colors, opacities, cam, ps);
+    static const char* names[5] = {"means", "scales", "quats", "colors", "opacities"};
+    for (int k = 0; k < 5; ++k) {  // checked in the projection pass rather than by extra passes over the inputs
+      const int64_t bad = proj.nonfinite[k];
+      ISPLAT_CHECK(bad == 0, "render: ", names[k], " has ", bad, " non-finite value", bad == 1 ? "" : "s");
+    }
     const TileBins bins = bin_tiles(proj, cam);
     RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data());
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
@@ -106,7 +111,6 @@ Tensor checked(const Tensor& t, const char* name, int64_t n, int64_t cols, torch
   const bool ok = cols == 0 ? (t.dim() == 1 && t.size(0) == n) || (t.dim() == 2 && t.size(0) == n && t.size(1) == 1)
                             : t.dim() == 2 && t.size(0) == n && t.size(1) == cols;
   ISPLAT_CHECK(ok, "render: ", name, " must be [", n, cols == 0 ? "" : cat(", ", cols), "], got ", t.sizes());
-  check_finite(t, name);
   return (cols == 0 ? t.reshape({n}) : t).contiguous();
 }
 

@@ -48,7 +48,7 @@ struct TileScratch {
       std::memcpy(records.data() + i * kRec, packed + int64_t(ids[i]) * kRec, sizeof(T) * kRec);
     return records.data();
   }
-  // `planes` arrays of kPix values (structure of arrays, so a lane group is contiguous).
+  // Per-pixel state: `planes` values per pixel, laid out as fwd_at / bwd_at say.
   T* pixel_planes(int planes) {
     state.resize(size_t(kPix * planes));
     return state.data();
