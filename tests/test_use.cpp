@@ -1,0 +1,145 @@
+// Using a checkpoint: EXIF focal lengths, camera paths, and the predict -> PLY -> render -> video path
+// through the `infinisplat` tool itself.
+#include <catch2/catch.hpp>
+
+#include <opencv2/videoio.hpp>
+
+#include <filesystem>
+
+#include "core/log.h"
+#include "geometry/trajectory.h"
+#include "io/exif.h"
+#include "io/ply.h"
+#include "support/test_util.h"
+#include "support/tiny_dataset.h"
+#include "train/trainer.h"
+
+using namespace isplat;
+namespace fs = std::filesystem;
+
+namespace {
+// A minimal JPEG header with an APP1 Exif segment holding FocalLengthIn35mmFilm and FocalLength.
+std::string exif_jpeg(bool little_endian, uint16_t f35, uint32_t num, uint32_t den) {
+  std::string t;
+  auto u16 = [&](uint16_t v) {
+    if (little_endian) t += char(v & 0xFF), t += char(v >> 8);
+    else t += char(v >> 8), t += char(v & 0xFF);
+  };
+  auto u32 = [&](uint32_t v) {
+    if (little_endian) for (int i = 0; i < 4; ++i) t += char((v >> (8 * i)) & 0xFF);
+    else for (int i = 3; i >= 0; --i) t += char((v >> (8 * i)) & 0xFF);
+  };
+  t += little_endian ? "II" : "MM";
+  u16(42);
+  u32(8);                                       // IFD0 at 8
+  u16(1);                                       // one entry: ExifIFD pointer
+  u16(0x8769), u16(4), u32(1), u32(26);         // Exif IFD at 26
+  u32(0);
+  u16(2);                                       // Exif IFD: two entries
+  u16(0xA405), u16(3), u32(1), u16(f35), u16(0);
+  u16(0x920A), u16(5), u32(1), u32(56);         // rational at 56
+  u32(0);
+  u32(num), u32(den);
+  std::string app1 = std::string("Exif\0\0", 6) + t;
+  std::string jpeg = "\xFF\xD8\xFF\xE1";
+  const size_t len = app1.size() + 2;
+  jpeg += char(len >> 8), jpeg += char(len & 0xFF);
+  return jpeg + app1 + "\xFF\xDA";
+}
+}  // namespace
+
+TEST_CASE("exif: 35 mm-equivalent and physical focal lengths, both byte orders", "[use]") {
+  for (bool le : {true, false}) {
+    const ExifFocal f = read_exif_focal(exif_jpeg(le, 28, 47, 10));
+    REQUIRE(f.focal_35mm);
+    CHECK(*f.focal_35mm == 28.0);
+    REQUIRE(f.focal_mm);
+    CHECK(*f.focal_mm == Approx(4.7));
+  }
+  CHECK(fx_from_35mm(36.0, 4000, 3000) == Approx(4000.0));
+  CHECK_FALSE(read_exif_focal("not a jpeg").focal_35mm);
+  CHECK_FALSE(read_exif_focal(std::string("\xFF\xD8\xFF\xE1\x00\x04xx", 8)).focal_35mm);  // truncated: no crash
+}
+
+TEST_CASE("trajectory: orbit, dolly and camera-path files", "[use]") {
+  const View base{Intrinsics::from_hfov(1.0, 64, 48), Pose::Identity()};
+  const auto orbit = orbit_path(base, 4.0, 8);
+  REQUIRE(orbit.views.size() == 8);
+  CHECK((orbit.views[0].T_cw - base.T_cw).norm() < 1e-9);  // starts at the source view
+  for (const auto& v : orbit.views) {
+    Eigen::Vector2d uv;
+    double z = 0;
+    REQUIRE(v.project(Eigen::Vector3d(0, 0, 4.0), uv, z));  // always looks at the point 4 m ahead
+    CHECK(uv.x() == Approx(32.0).margin(1e-6));
+    CHECK(uv.y() == Approx(24.0).margin(1e-6));
+  }
+  const auto dolly = dolly_path(base, 4.0, 4);
+  CHECK(camera_center(dolly.views[1].T_cw).z() == Approx(1.2));  // 0.3 x depth forward
+  const auto dir = test::temp_dir("traj");
+  test::write_bytes(dir + "/p.json", R"({"frames": [{"T_cw": [[1,0,0,0.5],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
+  const auto file = load_camera_path(dir + "/p.json", base);
+  CHECK(camera_center(file.views[0].T_cw).x() == Approx(-0.5));
+  test::write_bytes(dir + "/ns.json", R"({"render_width": 32, "render_height": 24, "camera_path": [
+      {"camera_to_world": [1,0,0,0, 0,1,0,0, 0,0,1,2, 0,0,0,1], "fov": 90}]})");
+  const auto ns = load_camera_path(dir + "/ns.json", base);
+  CHECK(ns.views[0].intr.width == 32);
+  CHECK(ns.views[0].intr.fy == Approx(12.0));
+  CHECK(camera_center(ns.views[0].T_cw).z() == Approx(2.0));
+  test::write_bytes(dir + "/bad.json", R"({"frames": [{"T_cw": [[1,0,0]]}]})");
+  CHECK_THROWS_WITH(load_camera_path(dir + "/bad.json", base), Catch::Contains("frames[0].T_cw must be a 4x4 matrix"));
+}
+
+TEST_CASE("use: predict writes a PLY that render turns into frames and a video", "[use]") {
+  const LogLevel before = log_level();
+  set_log_level(LogLevel::Warn);
+  const auto data = test::make_tiny_dataset("use_e2e", 8);
+  const std::string run = test::temp_dir("use_run");
+  TrainConfig c;
+  c.data.hypersim.root = generated_hypersim_root(data.out);
+  c.data.tuples = TupleOptions{};
+  c.data.tuples.width = 48;
+  c.data.tuples.height = 32;
+  c.data.tuples.targets = 1;
+  c.data.workers = 0;
+  c.model.prior.type = "dataset";
+  c.model.encoder.vit.size = "custom";
+  c.model.encoder.vit.embed_dim = 32;
+  c.model.encoder.vit.depth = 1;
+  c.model.encoder.vit.heads = 2;
+  c.model.encoder.cnn_options.width = 4;
+  c.model.sampler.budget = 2000;
+  c.model.decoder.hidden = {16};
+  c.loss.perceptual = 0;
+  c.train.out = run;
+  c.train.steps = 1;
+  Trainer t(c);
+  t.train_step();
+  t.save(run + "/ck.safetensors");
+  set_log_level(before);
+  const std::string scene = generated_eval_root(data.out, "courtyard_colmap") + "/scene_0";
+  const std::string tool = (fs::path(ISPLAT_BINARY_DIR) / "infinisplat").string();
+  const std::string out = test::temp_dir("use_out");
+  const std::string predict = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
+                              "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 --out " + out +
+                              "/scene.ply > " + out + "/predict.txt 2>&1";
+  REQUIRE(std::system(predict.c_str()) == 0);
+  const std::string report = test::read_bytes(out + "/predict.txt");
+  CHECK_THAT(report, Catch::Contains("supports     2000"));
+  CHECK_THAT(report, Catch::Contains("time (ms)"));
+  const Gaussians g = read_ply(out + "/scene.ply");
+  CHECK(g.count() > 1000);
+  CHECK(fs::exists(out + "/scene.camera.json"));
+  const std::string render = tool + " render --ply " + out + "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " +
+                             out + "/orbit > " + out + "/render.txt 2>&1";
+  REQUIRE(std::system(render.c_str()) == 0);
+  for (const char* f : {"frame_0000.png", "frame_0004.png", "depth_0002.png", "normal_0003.png"})
+    CHECK(fs::exists(fs::path(out) / "orbit" / f));
+  cv::VideoCapture video(out + "/orbit/video.mp4");
+  REQUIRE(video.isOpened());
+  CHECK(static_cast<int>(video.get(cv::CAP_PROP_FRAME_COUNT)) == 5);
+  // Bad input is named.
+  const std::string bad = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + out + "/none.jpg --out " + out +
+                          "/x.ply > " + out + "/bad.txt 2>&1";
+  CHECK(std::system(bad.c_str()) != 0);
+  CHECK_THAT(test::read_bytes(out + "/bad.txt"), Catch::Contains("none.jpg: no such file"));
+}
