@@ -1,0 +1,58 @@
+// Benchmark: one training step at the quickstart settings (configs/quickstart.json: ViT-S, 100k
+// supports, 256x192, 1 context + 3 targets), and where its time goes.
+// usage: bench_train_step [hypersim_root] [threads]; without a root a small scene is generated first.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include <torch/torch.h>
+
+#include "core/config.h"
+#include "core/log.h"
+#include "core/runtime.h"
+#include "data/synth/generate.h"
+#include "train/trainer.h"
+
+using namespace isplat;
+namespace fs = std::filesystem;
+
+int main(int argc, char** argv) {
+  configure_threads(argc > 2 ? std::atoll(argv[2]) : 0);
+  std::string root = argc > 1 ? argv[1] : "";
+  const fs::path tmp = fs::temp_directory_path() / "isplat_bench_train";
+  if (root.empty()) {
+    set_log_level(LogLevel::Warn);
+    GenerateOptions g;
+    g.out = (tmp / "data").string();
+    g.train_scenes = 1, g.val_scenes = 0, g.test_scenes = 0, g.frames = 16, g.supersample = 1, g.eval_scenes = 0;
+    generate_datasets(g);
+    root = generated_hypersim_root(g.out);
+  }
+  set_log_level(LogLevel::Warn);
+  const std::string weights = fs::exists("../shared/weights") ? "../shared/weights/squeezenet1_1_features.safetensors"
+                                                              : "/work/shared/weights/squeezenet1_1_features.safetensors";
+  auto config = load_config<TrainConfig>(std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json",
+                                         {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
+                                          "train.out=" + (tmp / "run").string(), "train.val_every=100000",
+                                          "loss.perceptual_weights=" + weights});
+  Trainer trainer(config);
+  std::map<std::string, std::vector<double>> t;
+  const int steps = 6;
+  for (int i = 0; i < steps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const StepStats s = trainer.train_step();
+    const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (i == 0) continue;  // warm-up
+    t["total"].push_back(total);
+    for (const auto& [k, v] : s.timings_ms) t[k].push_back(v);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::printf("training step at quickstart settings (%d threads, %d steps after warm-up), median ms:\n", at::get_num_threads(),
+              steps - 1);
+  for (const auto& [k, v] : t) std::printf("  %-12s %8.1f\n", k.c_str(), median(v));
+  std::printf("(backward includes render_bwd; the decoder and encoder backward make up the rest)\n");
+  return 0;
+}
