@@ -28,6 +28,9 @@ void EvalDatasetOptions::visit(ConfigVisitor& v) {
   v.field("depth_replace_to", depth_replace_to, "COLMAP: its replacement");
   v.field("transforms", transforms, "nerfstudio: transforms file name");
   v.field("split", split, "hypersim: split to evaluate", {"train", "val", "test", "all"});
+  v.field("prompts", prompts, "prompts for sparse (LiDAR) priors: drawn from the source depth, or the COLMAP "
+                              "points3D seen in the source view (real captures without a depth sensor)",
+          {"depth", "points3d"});
 }
 
 namespace {

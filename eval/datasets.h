@@ -27,6 +27,7 @@ struct EvalDatasetOptions {
   std::string depth_replace_from, depth_replace_to;
   std::string transforms = "transforms.json";  // nerfstudio
   std::string split = "test";                  // hypersim split
+  std::string prompts = "depth";               // sparse prompts for LiDAR variants: depth | points3d (COLMAP)
   void visit(ConfigVisitor& v);
 };
 

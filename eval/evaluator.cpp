@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
+#include "data/colmap.h"
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "io/tensor_image.h"
@@ -124,6 +125,19 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     return results;
   }
   auto method = make_method(mo, config_.scoring.render);
+  // COLMAP points3D as sparse prompts: one model per sequence, projected into each source view.
+  std::map<size_t, ColmapModel> points;
+  if (ds.prompts == "points3d") {
+    ISPLAT_CHECK(ds.format == "colmap", "eval dataset '", ds.name, "': prompts = points3d needs format colmap");
+    for (size_t s = 0; s < sequences.size(); ++s) {
+      for (const auto& dir : {fs::path(ds.root) / sequences[s].scene / ds.sparse_dir, fs::path(ds.root) / ds.sparse_dir})
+        if (fs::exists(dir)) {
+          points[s] = read_colmap(dir.string());
+          break;
+        }
+      if (!points.count(s)) fail("eval dataset '", ds.name, "': no COLMAP model for scene ", sequences[s].scene);
+    }
+  }
   log_info("eval: ", ds.name, " / ", mo.name, " (", method->describe(), "): ", todo, " pairs to score",
            done.empty() ? "" : cat(", ", done.size(), " resumed"));
   std::ofstream out(results_path, std::ios::app);
@@ -141,7 +155,24 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     const ViewTensors tgt = make_view_tensors(tf, p.target_name, W ? W : sf.image.cols, H ? H : sf.image.rows);
     const torch::Tensor mask = projected_mask(src.depth, src.valid, to_view(src.camera), to_view(tgt.camera),
                                               static_cast<int>(config_.scoring.mask_radius));
-    const MethodOutput o = method->predict(src, tgt.camera, static_cast<uint64_t>(i));
+    torch::Tensor prompts;
+    if (ds.prompts == "points3d") {
+      // Points are projected at native resolution, then scaled like the image.
+      const auto native = colmap_sparse_depth(points.at(p.sequence_index), sf.view);
+      const View ev = to_view(src.camera);
+      auto t = torch::empty({static_cast<int64_t>(native.size()), 3});
+      int64_t k = 0;
+      for (const auto& q : native) {
+        const Eigen::Vector3d X = sf.view.intr.backproject(q.x(), q.y(), q.z());
+        const Eigen::Vector2d uv = ev.intr.project(X);
+        if (uv.x() < 0 || uv.y() < 0 || uv.x() >= ev.intr.width || uv.y() >= ev.intr.height) continue;
+        t[k][0] = uv.x(), t[k][1] = uv.y(), t[k][2] = q.z();
+        ++k;
+      }
+      prompts = t.narrow(0, 0, k);
+      if (k < 3) prompts = torch::Tensor();  // too few points: fall back to the source depth
+    }
+    const MethodOutput o = method->predict(src, tgt.camera, static_cast<uint64_t>(i), prompts);
     PairResult r;
     r.index = i;
     r.bin = p.bin;

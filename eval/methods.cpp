@@ -28,9 +28,9 @@ class ModelMethod final : public Method {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
   }
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed, const torch::Tensor& prompts) override {
     torch::NoGradGuard g;
-    PriorInput in{src.image, src.camera.K, src.depth, src.valid, torch::Tensor(), seed};
+    PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
     auto t0 = Clock::now();
     const Prediction p = pipeline_->run(in, src.camera.T_cw, false);
     MethodOutput out;
@@ -54,7 +54,7 @@ class ModelMethod final : public Method {
 class LiftMethod final : public Method {
  public:
   explicit LiftMethod(const RenderOptions& r) : render_(r) {}
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
     torch::NoGradGuard g;
     auto t0 = Clock::now();
     SamplerOptions px;
@@ -79,7 +79,7 @@ class LiftMethod final : public Method {
 
 class IdentityMethod final : public Method {
  public:
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
     ISPLAT_CHECK(src.image.size(1) == target.height && src.image.size(2) == target.width,
                  "identity: source and target sizes differ");
     MethodOutput out;

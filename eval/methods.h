@@ -20,7 +20,10 @@ class Method {
  public:
   virtual ~Method() = default;
   // source: the source view (image, depth, valid, camera) at evaluation size; target: its camera.
-  virtual MethodOutput predict(const ViewTensors& source, const Camera& target, uint64_t seed) = 0;
+  // prompts: sparse depth prompts [P,3] (u, v, z) for LiDAR-variant checkpoints, or undefined (then a
+  // sparse prior draws them from the source depth).
+  virtual MethodOutput predict(const ViewTensors& source, const Camera& target, uint64_t seed,
+                               const torch::Tensor& prompts) = 0;
   virtual std::string describe() const = 0;
 };
 

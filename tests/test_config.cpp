@@ -8,6 +8,7 @@
 #include "support/test_util.h"
 
 using namespace isplat;
+using test::error_of;
 
 namespace {
 
@@ -45,14 +46,6 @@ std::string write_json(const std::string& dir, const std::string& name, const st
   return path;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
 
 }  // namespace
 

@@ -13,19 +13,12 @@
 #include "support/tiny_dataset.h"
 
 using namespace isplat;
+using test::error_of;
 namespace fs = std::filesystem;
 
 namespace {
 std::string colmap_scene(const GenerateOptions& g) { return generated_eval_root(g.out, "courtyard_colmap") + "/scene_0"; }
 std::string ns_scene(const GenerateOptions& g) { return generated_eval_root(g.out, "atrium_nerfstudio") + "/scene_0"; }
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
 }  // namespace
 
 TEST_CASE("colmap: text and binary models are identical", "[data][colmap]") {

@@ -10,6 +10,8 @@
 #include "eval/pairs.h"
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
+#include "support/tiny_model.h"
+#include "train/trainer.h"
 
 using namespace isplat;
 namespace fs = std::filesystem;
@@ -86,11 +88,30 @@ TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
   CHECK(back.bin_label(3) == "[2,inf)");
 }
 
+TEST_CASE("pairs: a generated trajectory of the default length populates all four bins", "[eval][pairs]") {
+  QuietLogs quiet;
+  auto g = test::tiny_dataset_options(test::temp_dir("pairs_bins"), 40);  // 40 frames: the default eval length
+  g.train_scenes = 0;
+  g.val_scenes = 0;
+  g.eval_datasets = {"courtyard_colmap"};
+  generate_datasets(g);
+  const Manifest m = select_pairs("courtyard", load_eval_dataset(colmap_set(g)), ProtocolOptions{});
+  for (size_t b = 0; b < 4; ++b) {
+    INFO("bin " << m.bin_label(static_cast<int>(b)));
+    CHECK(m.bin_candidates[b] > 0);
+  }
+}
+
 TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_e2e", 16);
+  // A LiDAR-variant checkpoint whose prompts come from the COLMAP points3D (an untrained tiny model).
+  const std::string ck = test::temp_dir("eval_e2e_ck") + "/tiny.safetensors";
+  Trainer(test::tiny_train_config(g, test::temp_dir("eval_e2e_run"), 1)).save(ck);
   EvalConfig c;
   c.datasets = {colmap_set(g)};
+  c.datasets[0].prompts = "points3d";
+  c.methods.push_back({"lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}});
   c.protocol.pairs_per_bin = 3;
   c.scoring.out = test::temp_dir("eval_e2e_out");
   c.scoring.weights_dir = test::shared_weights_dir();
@@ -98,14 +119,16 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   c.scoring.examples = 1;
   Evaluator ev(c);
   const auto rows = ev.run();
-  REQUIRE(rows.size() == 2 * 5);  // (4 bins + all) x (lift, identity)
+  REQUIRE(rows.size() == 3 * 5);  // (4 bins + all) x (lift, identity, lidar)
   const auto all = [&](const std::string& method) {
     for (const auto& r : rows)
       if (r.method == method && r.bin == "all") return r;
     FAIL("no row for " << method);
     return ReportRow{};
   };
-  const ReportRow lift = all("lift"), identity = all("identity");
+  const ReportRow lift = all("lift"), identity = all("identity"), lidar = all("lidar");
+  CHECK(std::isfinite(lidar.psnr));
+  CHECK(lidar.gaussians == 1500);
   CHECK(lift.pairs > 0);
   CHECK(lift.psnr > identity.psnr);  // lifting the source onto its depth beats copying it
   CHECK(lift.render_ms > 0);

@@ -10,21 +10,11 @@
 #include "export/onnx_export.h"
 #include "export/onnx_runtime_check.h"
 #include "support/test_util.h"
+#include "support/tiny_model.h"
 
 using namespace isplat;
 
 namespace {
-ModelOptions small_model() {
-  ModelOptions o;
-  o.encoder.vit.size = "custom";
-  o.encoder.vit.embed_dim = 32;
-  o.encoder.vit.depth = 2;
-  o.encoder.vit.heads = 2;
-  o.encoder.cnn_options.width = 4;
-  o.decoder.hidden = {32, 16};
-  return o;
-}
-
 void randomize_head(InfiniSplat& m) {
   torch::NoGradGuard g;
   if (m->decoder) {
@@ -59,7 +49,7 @@ TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Run
   };
   for (const auto& v : variants) {
     INFO(v.name);
-    ModelOptions o = small_model();
+    ModelOptions o = test::tiny_model_options(600, 2);
     v.set(o);
     InfiniSplat m(o);
     randomize_head(m);
@@ -89,12 +79,12 @@ TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Run
 }
 
 TEST_CASE("onnx: unsupported layers and sizes are named", "[export][onnx]") {
-  InfiniSplat m(small_model());
+  InfiniSplat m(test::tiny_model_options(600, 2));
   CHECK_THROWS_WITH(export_onnx(m, {60, 48, 17}), Catch::Contains("must be multiples of 16"));
   CHECK_THROWS_WITH(export_onnx(m, {64, 48, 13}), Catch::Contains("opset 13 is too old"));
   m->register_module("extra", torch::nn::Dropout(0.1));
   CHECK_THROWS_WITH(export_onnx(m, {64, 48, 17}), Catch::Contains("no export rule for layer 'torch::nn::DropoutImpl' (at model.extra)"));
-  ModelOptions none = small_model();
+  ModelOptions none = test::tiny_model_options(600, 2);
   none.decoder.mode = "none";
   InfiniSplat n(none);
   CHECK_THROWS_WITH(export_onnx(n, {64, 48, 17}), Catch::Contains("no learned part to export"));

@@ -19,18 +19,11 @@
 #include "support/test_util.h"
 
 using namespace isplat;
+using test::error_of;
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
 
 void truncate_file(const std::string& path, double keep_fraction) {
   const std::string bytes = test::read_bytes(path);

@@ -8,23 +8,12 @@
 #include "geometry/camera_torch.h"
 #include "model/infinisplat.h"
 #include "render/render.h"
+#include "support/tiny_model.h"
 
 using namespace isplat;
 
 namespace {
 constexpr int64_t H = 32, W = 48;
-
-ModelOptions tiny_model() {
-  ModelOptions o;
-  o.encoder.vit.size = "custom";
-  o.encoder.vit.embed_dim = 32;
-  o.encoder.vit.depth = 1;
-  o.encoder.vit.heads = 2;
-  o.encoder.cnn_options.width = 4;
-  o.sampler.budget = 600;
-  o.decoder.hidden = {32, 16};
-  return o;
-}
 
 torch::Tensor scene_depth() {
   auto d = torch::full({H, W}, 3.0f);
@@ -61,7 +50,7 @@ TEST_CASE("model: zero updates render exactly like the directly lifted base Gaus
 
 TEST_CASE("model: shapes, and gradients flow through the whole model into a rendered image", "[model]") {
   torch::manual_seed(1);
-  InfiniSplat model(tiny_model());
+  InfiniSplat model(test::tiny_model_options());
   {
     torch::NoGradGuard g;  // a trained head: the zero-initialized one passes no gradient upstream
     model->decoder->head->weight.normal_(0, 0.1);
@@ -108,7 +97,7 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
   };
   for (const auto& c : cases) {
     INFO(c.name);
-    ModelOptions o = tiny_model();
+    ModelOptions o = test::tiny_model_options();
     c.set(o);
     InfiniSplat m(o);
     const Prediction p = m->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}));
@@ -118,7 +107,7 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
 }
 
 TEST_CASE("model: NaN depth holes are masked, all-invalid depth and tiny images are errors", "[model]") {
-  InfiniSplat m(tiny_model());
+  InfiniSplat m(test::tiny_model_options());
   const Camera cam = camera(0.0);
   auto depth = scene_depth();
   depth.narrow(0, 0, 6).fill_(std::numeric_limits<float>::quiet_NaN());

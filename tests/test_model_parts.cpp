@@ -76,7 +76,7 @@ TEST_CASE("encoder: parameters carry the official DINOv3 names and a checkpoint 
     const std::string msg = e.what();
     CHECK_THAT(msg, Catch::Contains("missing keys: norm.bias"));
     CHECK_THAT(msg, Catch::Contains("unexpected keys: blocks.7.attn.qkv.weight"));
-    CHECK_THAT(msg, Catch::Contains("shape mismatches: blocks.0.ls1.gamma"));
+    CHECK_THAT(msg, Catch::Contains("shape mismatches: blocks.0.ls1.gamma (file [31], model [32])"));
   }
 }
 
@@ -185,4 +185,21 @@ TEST_CASE("decoder: the fast feature sampler equals grid_sample, with exact grad
   CHECK(torch::allclose(g1, g2, 1e-12, 1e-12));
   CHECK(torch::equal(sample_features(f.detach().to(torch::kFloat32), uv, 70, 60),
                      sample_features(f.detach().to(torch::kFloat32), uv, 70, 60)));
+}
+
+TEST_CASE("decoder: the fused gated query equals the unfused ops, values and gradients", "[decoder]") {
+  torch::manual_seed(5);
+  auto opts = torch::TensorOptions().dtype(torch::kFloat64).requires_grad(true);
+  auto d = torch::randn({1, 6, 3, 4}, opts), gd = torch::randn({1, 6, 3, 4}, opts);
+  auto cp = torch::randn({1, 6, 12, 16}, opts), gc = torch::randn({1, 6, 12, 16}, opts);
+  auto uv = torch::rand({200, 2}, torch::kFloat64) * torch::tensor({64.0, 48.0}, torch::kFloat64);
+  auto fused = gated_sample(d, gd, cp, gc, uv, 64, 48);
+  auto g = torch::sigmoid(query_features(gd, uv, 64, 48) + query_features(gc, uv, 64, 48));
+  auto ref = g * query_features(d, uv, 64, 48) + (1 - g) * query_features(cp, uv, 64, 48);
+  CHECK(torch::allclose(fused, ref, 1e-12, 1e-12));
+  auto w = torch::randn_like(ref);
+  auto ga = torch::autograd::grad({(fused * w).sum()}, {d, gd, cp, gc});
+  auto gb = torch::autograd::grad({(ref * w).sum()}, {d, gd, cp, gc});
+  for (int k = 0; k < 4; ++k) CHECK(torch::allclose(ga[k], gb[k], 1e-10, 1e-12));
+  CHECK_THROWS_WITH(gated_sample(d, gd, cp.narrow(1, 0, 5), gc.narrow(1, 0, 5), uv, 64, 48), Catch::Contains("dino's C"));
 }

@@ -11,41 +11,13 @@
 #include "io/checkpoint.h"
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
+#include "support/tiny_model.h"
 #include "train/trainer.h"
 
 using namespace isplat;
 namespace fs = std::filesystem;
 
 namespace {
-TrainConfig tiny_train(const GenerateOptions& data, const std::string& out, int64_t steps) {
-  TrainConfig c;
-  c.runtime.seed = 3;
-  c.data.hypersim.root = generated_hypersim_root(data.out);
-  c.data.tuples.width = 48;
-  c.data.tuples.height = 32;
-  c.data.tuples.targets = 2;
-  c.data.tuples.window = 4;
-  c.data.workers = 0;
-  c.data.val_tuples = 2;
-  c.model.prior.type = "dataset";
-  c.model.encoder.vit.size = "custom";
-  c.model.encoder.vit.embed_dim = 32;
-  c.model.encoder.vit.depth = 1;
-  c.model.encoder.vit.heads = 2;
-  c.model.encoder.cnn_options.width = 4;
-  c.model.sampler.budget = 1500;
-  c.model.decoder.hidden = {32, 16};
-  c.loss.perceptual = 0;  // keeps the test fast; the perceptual term has its own tests
-  c.optim.lr = 3e-3;
-  c.optim.warmup = 2;
-  c.train.out = out;
-  c.train.steps = steps;
-  c.train.val_every = 1000;
-  c.train.checkpoint_every = 1000;
-  c.train.val_images = 0;
-  return c;
-}
-
 std::map<std::string, torch::Tensor> weights(Trainer& t) {
   std::map<std::string, torch::Tensor> w;
   for (const auto& p : t.trainable().named_parameters(true)) w[p.key()] = p.value().detach().clone();
@@ -62,7 +34,7 @@ struct QuietLogs {
 TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
   QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_falls", 10);
-  Trainer trainer(tiny_train(data, test::temp_dir("train_falls_run"), 40));
+  Trainer trainer(test::tiny_train_config(data, test::temp_dir("train_falls_run"), 40));
   std::vector<double> losses;
   for (int i = 0; i < 40; ++i) losses.push_back(trainer.train_step().losses.at("total"));
   const double first = (losses[0] + losses[1] + losses[2] + losses[3] + losses[4]) / 5;
@@ -75,17 +47,17 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
   QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_resume", 10);
   const std::string a_dir = test::temp_dir("resume_a"), b_dir = test::temp_dir("resume_b");
-  Trainer straight(tiny_train(data, a_dir, 4));
+  Trainer straight(test::tiny_train_config(data, a_dir, 4));
   for (int i = 0; i < 4; ++i) straight.train_step();
   const std::string ck = b_dir + "/two.safetensors";
   {
-    Trainer first(tiny_train(data, b_dir, 4));
+    Trainer first(test::tiny_train_config(data, b_dir, 4));
     first.train_step();
     first.train_step();
     first.save(ck);
     CHECK(load_checkpoint(ck).step() == 2);
   }
-  Trainer resumed(tiny_train(data, b_dir, 4));
+  Trainer resumed(test::tiny_train_config(data, b_dir, 4));
   resumed.resume(ck);
   CHECK(resumed.step() == 2);
   resumed.train_step();
@@ -97,7 +69,7 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
     CHECK(torch::equal(t, wb.at(name)));  // bit-identical
   }
   // A checkpoint for the other task is refused with a message.
-  auto depth_cfg = tiny_train(data, b_dir, 4);
+  auto depth_cfg = test::tiny_train_config(data, b_dir, 4);
   depth_cfg.task = "depth";
   Trainer depth(depth_cfg);
   CHECK_THROWS_WITH(depth.resume(ck), Catch::Contains("checkpoint is for task 'gaussians'"));
@@ -106,7 +78,7 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
 TEST_CASE("train: repeated non-finite losses stop training with a clear message", "[train]") {
   QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_nan", 8);
-  auto cfg = tiny_train(data, test::temp_dir("train_nan_run"), 10);
+  auto cfg = test::tiny_train_config(data, test::temp_dir("train_nan_run"), 10);
   cfg.train.max_bad_steps = 2;
   Trainer trainer(cfg);
   {
@@ -121,7 +93,7 @@ TEST_CASE("train: repeated non-finite losses stop training with a clear message"
 TEST_CASE("train: the depth task trains the learned prior", "[train]") {
   QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_depth", 8);
-  auto cfg = tiny_train(data, test::temp_dir("train_depth_run"), 30);
+  auto cfg = test::tiny_train_config(data, test::temp_dir("train_depth_run"), 30);
   cfg.task = "depth";
   cfg.model.prior.learned_width = 8;
   cfg.data.batch_size = 2;

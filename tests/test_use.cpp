@@ -12,6 +12,7 @@
 #include "io/ply.h"
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
+#include "support/tiny_model.h"
 #include "train/trainer.h"
 
 using namespace isplat;
@@ -94,24 +95,9 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   set_log_level(LogLevel::Warn);
   const auto data = test::make_tiny_dataset("use_e2e", 8);
   const std::string run = test::temp_dir("use_run");
-  TrainConfig c;
-  c.data.hypersim.root = generated_hypersim_root(data.out);
-  c.data.tuples = TupleOptions{};
-  c.data.tuples.width = 48;
-  c.data.tuples.height = 32;
+  TrainConfig c = test::tiny_train_config(data, run, 1);
   c.data.tuples.targets = 1;
-  c.data.workers = 0;
-  c.model.prior.type = "dataset";
-  c.model.encoder.vit.size = "custom";
-  c.model.encoder.vit.embed_dim = 32;
-  c.model.encoder.vit.depth = 1;
-  c.model.encoder.vit.heads = 2;
-  c.model.encoder.cnn_options.width = 4;
   c.model.sampler.budget = 2000;
-  c.model.decoder.hidden = {16};
-  c.loss.perceptual = 0;
-  c.train.out = run;
-  c.train.steps = 1;
   Trainer t(c);
   t.train_step();
   t.save(run + "/ck.safetensors");

@@ -14,6 +14,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/parse.h"
 #include "core/log.h"
 #include "core/progress.h"
 #include "geometry/camera_torch.h"
@@ -103,6 +104,8 @@ torch::nn::Module& Trainer::trainable() {
   if (pipeline_) return *pipeline_->model();
   return *depth_net_;
 }
+
+const torch::nn::Module& Trainer::trainable() const { return const_cast<Trainer*>(this)->trainable(); }
 
 std::map<std::string, torch::Tensor> Trainer::gaussian_losses(const Batch& batch, StepStats& stats, bool train,
                                                               std::vector<torch::Tensor>* predictions) {
@@ -283,7 +286,7 @@ void Trainer::write_val_images(const Batch& batch, const std::vector<torch::Tens
 
 void Trainer::save(const std::string& path) const {
   Checkpoint ck;
-  put_module(ck, const_cast<Trainer*>(this)->trainable());
+  put_module(ck, trainable());
   torch::serialize::OutputArchive archive;
   optimizer_->save(archive);
   std::ostringstream bytes;
@@ -324,7 +327,7 @@ void Trainer::resume(const std::string& requested) {
   gen.set_state(ck.tensors.at("rng/torch"));
   step_ = ck.step();
   auto bv = ck.metadata.find("best_val");
-  if (bv != ck.metadata.end()) best_val_ = std::stod(bv->second);
+  if (bv != ck.metadata.end()) best_val_ = parse_double(bv->second).value_or(std::numeric_limits<double>::infinity());
   loader_.reset();  // restart the data stream at the resumed step
   log_info("train: resumed from ", path, " at step ", step_);
 }

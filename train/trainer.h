@@ -39,6 +39,7 @@ class Trainer {
   void save(const std::string& path) const;     // atomic
   int64_t step() const { return step_; }
   torch::nn::Module& trainable();
+  const torch::nn::Module& trainable() const;
 
   static void request_stop();  // async-signal-safe: the loop saves and exits at the next step boundary
 

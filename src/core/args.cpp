@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/parse.h"
 
 namespace isplat {
 
@@ -18,25 +19,17 @@ void ArgParser::option(const std::string& name, std::string& target, const std::
 
 void ArgParser::option(const std::string& name, int64_t& target, const std::string& help, const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target, name](const std::string& v) {
-                      size_t used = 0;
-                      try {
-                        target = std::stoll(v, &used);
-                      } catch (const std::exception&) {
-                        used = 0;
-                      }
-                      if (used == 0 || used != v.size()) fail(name, ": expected an integer, got '", v, "'");
+                      const auto parsed = parse_int(v);
+                      if (!parsed) fail(name, ": expected an integer, got '", v, "'");
+                      target = *parsed;
                     }});
 }
 
 void ArgParser::option(const std::string& name, double& target, const std::string& help, const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target, name](const std::string& v) {
-                      size_t used = 0;
-                      try {
-                        target = std::stod(v, &used);
-                      } catch (const std::exception&) {
-                        used = 0;
-                      }
-                      if (used == 0 || used != v.size()) fail(name, ": expected a number, got '", v, "'");
+                      const auto parsed = parse_double(v);
+                      if (!parsed) fail(name, ": expected a number, got '", v, "'");
+                      target = *parsed;
                     }});
 }
 

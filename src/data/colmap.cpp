@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/parse.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -33,27 +34,15 @@ std::vector<std::string> split_ws(const std::string& line) {
 }
 
 double to_double(const std::string& s, const std::string& where) {
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty()) fail(where, ": expected a number, got '", s, "'");
-  return v;
+  const auto v = parse_double(s);
+  if (!v) fail(where, ": expected a number, got '", s, "'");
+  return *v;
 }
 
 int64_t to_int(const std::string& s, const std::string& where) {
-  size_t used = 0;
-  long long v = 0;
-  try {
-    v = std::stoll(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty()) fail(where, ": expected an integer, got '", s, "'");
-  return v;
+  const auto v = parse_int(s);
+  if (!v) fail(where, ": expected an integer, got '", s, "'");
+  return *v;
 }
 
 std::vector<std::string> read_lines(const std::string& path) {

@@ -41,38 +41,54 @@ void forward_kernel(const T* fmap, const T* uv, T* out, int64_t N, int64_t C, in
   });
 }
 
+// Texel-major gradient accumulation: the 4N (point, corner) entries are bucketed by texel (counting
+// sort, point order kept), then each texel sums w * grad[point] over its entries. Parallel over texels,
+// no atomics, the same result for any thread count.
+template <class T>
+struct TexelScatter {
+  std::vector<int64_t> start, entries;
+  std::vector<T> weight;
+  TexelScatter(const T* uv, int64_t N, int64_t h, int64_t w, int64_t W, int64_t H) {
+    const int64_t texels = h * w;
+    std::vector<int64_t> index(static_cast<size_t>(4 * N));
+    weight.resize(static_cast<size_t>(4 * N));
+    at::parallel_for(0, N, 1024, [&](int64_t b, int64_t e) {
+      for (int64_t n = b; n < e; ++n) {
+        int64_t idx[4];
+        T wt[4];
+        corners<T>(uv[2 * n], uv[2 * n + 1], W, H, h, w, idx, wt);
+        for (int k = 0; k < 4; ++k) index[4 * n + k] = idx[k], weight[4 * n + k] = wt[k];
+      }
+    });
+    start.assign(static_cast<size_t>(texels) + 1, 0);
+    entries.resize(static_cast<size_t>(4 * N));
+    for (int64_t q = 0; q < 4 * N; ++q) ++start[index[q] + 1];
+    for (int64_t t = 0; t < texels; ++t) start[t + 1] += start[t];
+    std::vector<int64_t> fill(start.begin(), start.end() - 1);
+    for (int64_t q = 0; q < 4 * N; ++q) entries[fill[index[q]]++] = q;
+  }
+  // grad_map [texels, C] (channel-last) = sum over entries of weight * grad_rows[point] ([N, C]).
+  void apply(const T* grad_rows, T* grad_map, int64_t C) const {
+    const int64_t texels = static_cast<int64_t>(start.size()) - 1;
+    at::parallel_for(0, texels, 16, [&](int64_t b, int64_t e) {
+      for (int64_t t = b; t < e; ++t) {
+        T* g = grad_map + t * C;
+        std::fill(g, g + C, T(0));
+        for (int64_t s = start[t]; s < start[t + 1]; ++s) {
+          const int64_t q = entries[s];
+          const T wq = weight[q];
+          const T* go = grad_rows + (q / 4) * C;
+          for (int64_t c = 0; c < C; ++c) g[c] += wq * go[c];
+        }
+      }
+    });
+  }
+};
+
 template <class T>
 void backward_kernel(const T* grad_out, const T* uv, T* grad_map, int64_t N, int64_t C, int64_t h, int64_t w, int64_t W,
                      int64_t H) {
-  const int64_t texels = h * w;
-  std::vector<int64_t> index(static_cast<size_t>(4 * N));
-  std::vector<T> weight(static_cast<size_t>(4 * N));
-  at::parallel_for(0, N, 1024, [&](int64_t b, int64_t e) {
-    for (int64_t n = b; n < e; ++n) {
-      int64_t idx[4];
-      T wt[4];
-      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, h, w, idx, wt);
-      for (int k = 0; k < 4; ++k) index[4 * n + k] = idx[k], weight[4 * n + k] = wt[k];
-    }
-  });
-  // Counting sort of the 4N (point, corner) entries by texel, keeping point order.
-  std::vector<int64_t> start(static_cast<size_t>(texels) + 1, 0), entries(static_cast<size_t>(4 * N));
-  for (int64_t q = 0; q < 4 * N; ++q) ++start[index[q] + 1];
-  for (int64_t t = 0; t < texels; ++t) start[t + 1] += start[t];
-  std::vector<int64_t> fill(start.begin(), start.end() - 1);
-  for (int64_t q = 0; q < 4 * N; ++q) entries[fill[index[q]]++] = q;
-  at::parallel_for(0, texels, 16, [&](int64_t b, int64_t e) {
-    for (int64_t t = b; t < e; ++t) {
-      T* g = grad_map + t * C;
-      std::fill(g, g + C, T(0));
-      for (int64_t s = start[t]; s < start[t + 1]; ++s) {
-        const int64_t q = entries[s];
-        const T wq = weight[q];
-        const T* go = grad_out + (q / 4) * C;
-        for (int64_t c = 0; c < C; ++c) g[c] += wq * go[c];
-      }
-    }
-  });
+  TexelScatter<T>(uv, N, h, w, W, H).apply(grad_out, grad_map, C);
 }
 
 class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
@@ -107,6 +123,110 @@ class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
   }
 };
 
+
+// ---- gated fusion fused with its four queries
+template <class T>
+void gated_forward(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, T* out, int64_t N, int64_t C,
+                   int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H) {
+  at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
+    for (int64_t n = b; n < e; ++n) {
+      int64_t id[4], ic[4];
+      T wdt[4], wct[4];
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hd, wd, id, wdt);
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hc, wc, ic, wct);
+      T* o = out + n * C;
+      for (int64_t c = 0; c < C; ++c) {
+        T fd = 0, g1 = 0, fc = 0, g2 = 0;
+        for (int k = 0; k < 4; ++k) {
+          fd += wdt[k] * d[id[k] * C + c];
+          g1 += wdt[k] * gd[id[k] * C + c];
+          fc += wct[k] * cp[ic[k] * C + c];
+          g2 += wct[k] * gc[ic[k] * C + c];
+        }
+        const T g = T(1) / (T(1) + std::exp(-(g1 + g2)));
+        o[c] = g * fd + (T(1) - g) * fc;
+      }
+    }
+  });
+}
+
+// Per-support gradients of the four queried values (recomputed from the maps, nothing stored).
+template <class T>
+void gated_backward_rows(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, const T* go, T* r_d, T* r_c,
+                         T* r_g, int64_t N, int64_t C, int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W,
+                         int64_t H) {
+  at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
+    for (int64_t n = b; n < e; ++n) {
+      int64_t id[4], ic[4];
+      T wdt[4], wct[4];
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hd, wd, id, wdt);
+      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hc, wc, ic, wct);
+      for (int64_t c = 0; c < C; ++c) {
+        T fd = 0, g1 = 0, fc = 0, g2 = 0;
+        for (int k = 0; k < 4; ++k) {
+          fd += wdt[k] * d[id[k] * C + c];
+          g1 += wdt[k] * gd[id[k] * C + c];
+          fc += wct[k] * cp[ic[k] * C + c];
+          g2 += wct[k] * gc[ic[k] * C + c];
+        }
+        const T g = T(1) / (T(1) + std::exp(-(g1 + g2))), dh = go[n * C + c];
+        r_d[n * C + c] = g * dh;                                 // d h / d fd
+        r_c[n * C + c] = (T(1) - g) * dh;                        // d h / d fc
+        r_g[n * C + c] = (fd - fc) * dh * g * (T(1) - g);        // d h / d (g1 + g2)
+      }
+    }
+  });
+}
+
+class GatedSample : public torch::autograd::Function<GatedSample> {
+ public:
+  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& dino, const torch::Tensor& gate_dino,
+                               const torch::Tensor& cnn_proj, const torch::Tensor& gate_cnn, const torch::Tensor& uv,
+                               int64_t width, int64_t height) {
+    const int64_t C = dino.size(1), N = uv.size(0);
+    auto last = [](const torch::Tensor& m) { return m[0].permute({1, 2, 0}).contiguous(); };
+    auto d = last(dino), gd = last(gate_dino), cp = last(cnn_proj), gc = last(gate_cnn);
+    auto points = uv.to(dino.scalar_type()).contiguous();
+    auto out = torch::empty({N, C}, dino.options());
+    AT_DISPATCH_FLOATING_TYPES(dino.scalar_type(), "gated_sample", [&] {
+      gated_forward<scalar_t>(d.data_ptr<scalar_t>(), gd.data_ptr<scalar_t>(), cp.data_ptr<scalar_t>(), gc.data_ptr<scalar_t>(),
+                              points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C, dino.size(2), dino.size(3),
+                              cnn_proj.size(2), cnn_proj.size(3), width, height);
+    });
+    ctx->save_for_backward({d, gd, cp, gc, points});
+    ctx->saved_data["shape"] = std::vector<int64_t>{C, dino.size(2), dino.size(3), cnn_proj.size(2), cnn_proj.size(3), width, height};
+    return out;
+  }
+
+  static torch::autograd::variable_list backward(torch::autograd::AutogradContext* ctx, torch::autograd::variable_list grads) {
+    const auto saved = ctx->get_saved_variables();
+    const auto& d = saved[0];
+    const auto& gd = saved[1];
+    const auto& cp = saved[2];
+    const auto& gc = saved[3];
+    const auto& points = saved[4];
+    const auto sh = ctx->saved_data["shape"].toIntVector();
+    const int64_t C = sh[0], hd = sh[1], wd = sh[2], hc = sh[3], wc = sh[4], W = sh[5], H = sh[6], N = points.size(0);
+    auto go = grads[0].contiguous();
+    auto r_d = torch::empty({N, C}, go.options()), r_c = torch::empty({N, C}, go.options()), r_g = torch::empty({N, C}, go.options());
+    auto g_d = torch::empty({hd, wd, C}, go.options()), g_gd = torch::empty({hd, wd, C}, go.options());
+    auto g_c = torch::empty({hc, wc, C}, go.options()), g_gc = torch::empty({hc, wc, C}, go.options());
+    AT_DISPATCH_FLOATING_TYPES(go.scalar_type(), "gated_sample_backward", [&] {
+      gated_backward_rows<scalar_t>(d.data_ptr<scalar_t>(), gd.data_ptr<scalar_t>(), cp.data_ptr<scalar_t>(),
+                                    gc.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), go.data_ptr<scalar_t>(),
+                                    r_d.data_ptr<scalar_t>(), r_c.data_ptr<scalar_t>(), r_g.data_ptr<scalar_t>(), N, C, hd, wd,
+                                    hc, wc, W, H);
+      const TexelScatter<scalar_t> sd(points.data_ptr<scalar_t>(), N, hd, wd, W, H), sc(points.data_ptr<scalar_t>(), N, hc, wc, W, H);
+      sd.apply(r_d.data_ptr<scalar_t>(), g_d.data_ptr<scalar_t>(), C);
+      sd.apply(r_g.data_ptr<scalar_t>(), g_gd.data_ptr<scalar_t>(), C);
+      sc.apply(r_c.data_ptr<scalar_t>(), g_c.data_ptr<scalar_t>(), C);
+      sc.apply(r_g.data_ptr<scalar_t>(), g_gc.data_ptr<scalar_t>(), C);
+    });
+    auto back = [](const torch::Tensor& m) { return m.permute({2, 0, 1}).unsqueeze(0); };
+    return {back(g_d), back(g_gd), back(g_c), back(g_gc), torch::Tensor(), torch::Tensor(), torch::Tensor()};
+  }
+};
+
 }  // namespace
 
 torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor& uv, int64_t width, int64_t height) {
@@ -115,6 +235,22 @@ torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor
   ISPLAT_CHECK(uv.dim() == 2 && uv.size(1) == 2, "sample_features: uv must be [N,2], got ", uv.sizes());
   ISPLAT_CHECK(width > 0 && height > 0, "sample_features: image size must be positive");
   return SampleFeatures::apply(features, uv.detach(), width, height);
+}
+
+}  // namespace isplat
+
+namespace isplat {
+
+torch::Tensor gated_sample(const torch::Tensor& dino, const torch::Tensor& gate_dino, const torch::Tensor& cnn_proj,
+                           const torch::Tensor& gate_cnn, const torch::Tensor& uv, int64_t width, int64_t height) {
+  ISPLAT_CHECK(dino.dim() == 4 && dino.size(0) == 1 && gate_dino.sizes() == dino.sizes(),
+               "gated_sample: dino and gate_dino must be equal [1,C,h,w] maps, got ", dino.sizes(), " and ", gate_dino.sizes());
+  ISPLAT_CHECK(cnn_proj.dim() == 4 && cnn_proj.size(0) == 1 && gate_cnn.sizes() == cnn_proj.sizes() &&
+                   cnn_proj.size(1) == dino.size(1),
+               "gated_sample: cnn_proj and gate_cnn must be equal [1,C,h,w] maps with the dino's C, got ", cnn_proj.sizes(),
+               " and ", gate_cnn.sizes());
+  ISPLAT_CHECK(uv.dim() == 2 && uv.size(1) == 2, "gated_sample: uv must be [N,2], got ", uv.sizes());
+  return GatedSample::apply(dino, gate_dino, cnn_proj, gate_cnn, uv.detach(), width, height);
 }
 
 }  // namespace isplat

@@ -72,7 +72,7 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
   // cnn_proj and the gate's input layer are linear, and bilinear sampling is a convex combination, so
   // they commute: apply them once per feature texel, then sample. Same result as decode_features() on
   // sampled features, at a fraction of the cost (thousands of texels instead of 10^5..10^6 supports).
-  torch::Tensor dino, cproj, gate_map;
+  torch::Tensor dino, cproj;
   if (dino_dim > 0 && cnn_dim > 0) {
     dino = f.dino.narrow(0, 0, 1);
     auto as_conv = [](const torch::Tensor& w) { return w.view({w.size(0), w.size(1), 1, 1}); };
@@ -81,14 +81,10 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
     auto wg = gate->weight;  // [Cd, 2Cd] acting on [f_dino, c']
     auto g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
     auto g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
-    gate_map = g_cnn;  // sampled at H/4; g_dino is sampled separately at H/16
     std::vector<torch::Tensor> out;
     for (int64_t s = 0; s < N; s += chunk) {
       auto part = uv.narrow(0, s, std::min(chunk, N - s));
-      auto fd = sample_features(dino, part, width, height);
-      auto fc = sample_features(cproj, part, width, height);
-      auto g = torch::sigmoid(sample_features(g_dino, part, width, height) + sample_features(gate_map, part, width, height));
-      auto h = g * fd + (1 - g) * fc;
+      auto h = gated_sample(dino, g_dino, cproj, g_cnn, part, width, height);
       for (auto& layer : *mlp) h = torch::relu(layer->as<torch::nn::Linear>()->forward(h));
       out.push_back(head->forward(h));
     }

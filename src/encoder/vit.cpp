@@ -8,6 +8,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "io/checkpoint.h"
 #include "io/safetensors.h"
 
 namespace isplat {
@@ -167,38 +168,10 @@ torch::Tensor DinoViTImpl::forward(const torch::Tensor& image) {
 }
 
 void load_dinov3_safetensors(DinoViT& vit, const std::string& path) {
-  const SafeTensors st = read_safetensors(path);
-  std::map<std::string, torch::Tensor> ours;
-  for (const auto& p : vit->named_parameters(true)) ours[p.key()] = p.value();
-  for (const auto& b : vit->named_buffers(true)) ours[b.key()] = b.value();
   // Present in some official checkpoints but unused at inference (untied cls norms).
   auto ignorable = [](const std::string& k) { return k.rfind("local_cls_norm.", 0) == 0 || k.rfind("cls_norm.", 0) == 0; };
-  std::vector<std::string> missing, unexpected, mismatched;
-  for (const auto& [name, t] : ours)
-    if (!st.has(name)) missing.push_back(name);
-  for (const auto& [name, t] : st.tensors) {
-    auto it = ours.find(name);
-    if (it == ours.end()) {
-      if (!ignorable(name)) unexpected.push_back(name);
-    } else if (it->second.sizes() != t.sizes()) {
-      mismatched.push_back(cat(name, " (checkpoint ", t.sizes(), ", model ", it->second.sizes(), ")"));
-    }
-  }
-  if (!missing.empty() || !unexpected.empty() || !mismatched.empty()) {
-    auto list = [](const std::vector<std::string>& v) {
-      std::string s;
-      for (size_t i = 0; i < v.size() && i < 12; ++i) s += (i ? ", " : "") + v[i];
-      if (v.size() > 12) s += cat(", ... (", v.size(), " in all)");
-      return s;
-    };
-    std::string msg = path + ": does not fit this ViT (encoder.vit.size/registers must match the checkpoint).";
-    if (!missing.empty()) msg += "\n  missing keys: " + list(missing);
-    if (!unexpected.empty()) msg += "\n  unexpected keys: " + list(unexpected);
-    if (!mismatched.empty()) msg += "\n  shape mismatches: " + list(mismatched);
-    fail(msg);
-  }
-  torch::NoGradGuard no_grad;
-  for (auto& [name, t] : ours) t.copy_(st.at(name).to(t.scalar_type()));
+  load_named_tensors(*vit, read_safetensors(path).tensors, "",
+                     path + ": does not fit this ViT (encoder.vit.size/registers must match the checkpoint).", ignorable);
 }
 
 }  // namespace isplat

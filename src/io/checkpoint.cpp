@@ -4,13 +4,17 @@
 #include <torch/torch.h>
 
 #include "core/error.h"
+#include "core/parse.h"
 #include "io/safetensors.h"
 
 namespace isplat {
 
 int64_t Checkpoint::step() const {
   auto it = metadata.find("step");
-  return it == metadata.end() ? 0 : std::stoll(it->second);
+  if (it == metadata.end()) return 0;
+  const auto v = parse_int(it->second);
+  if (!v || *v < 0) fail("checkpoint: metadata 'step' is '", it->second, "', not a step count");
+  return *v;
 }
 
 const std::string& Checkpoint::config_json() const {
@@ -24,34 +28,43 @@ void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::stri
   for (const auto& b : module.named_buffers(true)) ck.tensors[prefix + b.key()] = b.value().detach().clone();
 }
 
-void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix) {
+void load_named_tensors(torch::nn::Module& module, const std::map<std::string, torch::Tensor>& tensors,
+                        const std::string& prefix, const std::string& what,
+                        const std::function<bool(const std::string&)>& ignorable) {
   std::map<std::string, torch::Tensor> ours;
   for (const auto& p : module.named_parameters(true)) ours[p.key()] = p.value();
   for (const auto& b : module.named_buffers(true)) ours[b.key()] = b.value();
   std::vector<std::string> missing, unexpected, mismatched;
   for (const auto& [name, t] : ours) {
-    auto it = ck.tensors.find(prefix + name);
-    if (it == ck.tensors.end())
+    auto it = tensors.find(prefix + name);
+    if (it == tensors.end())
       missing.push_back(name);
     else if (it->second.sizes() != t.sizes())
-      mismatched.push_back(cat(name, " ", it->second.sizes(), " vs ", t.sizes()));
+      mismatched.push_back(cat(name, " (file ", it->second.sizes(), ", model ", t.sizes(), ")"));
   }
-  for (const auto& [name, t] : ck.tensors)
-    if (name.rfind(prefix, 0) == 0 && !ours.count(name.substr(prefix.size()))) unexpected.push_back(name.substr(prefix.size()));
+  for (const auto& [key, t] : tensors) {
+    if (key.rfind(prefix, 0) != 0) continue;
+    const std::string name = key.substr(prefix.size());
+    if (!ours.count(name) && !(ignorable && ignorable(name))) unexpected.push_back(name);
+  }
   if (!missing.empty() || !unexpected.empty() || !mismatched.empty()) {
     auto list = [](const std::vector<std::string>& v) {
       std::string s;
-      for (size_t i = 0; i < v.size() && i < 8; ++i) s += (i ? ", " : "") + v[i];
-      return v.size() > 8 ? s + cat(", ... (", v.size(), ")") : s;
+      for (size_t i = 0; i < v.size() && i < 12; ++i) s += (i ? ", " : "") + v[i];
+      return v.size() > 12 ? s + cat(", ... (", v.size(), " in all)") : s;
     };
-    std::string msg = source + ": checkpoint does not fit the model built from its config.";
-    if (!missing.empty()) msg += "\n  missing: " + list(missing);
-    if (!unexpected.empty()) msg += "\n  unexpected: " + list(unexpected);
-    if (!mismatched.empty()) msg += "\n  shape mismatch: " + list(mismatched);
+    std::string msg = what;
+    if (!missing.empty()) msg += "\n  missing keys: " + list(missing);
+    if (!unexpected.empty()) msg += "\n  unexpected keys: " + list(unexpected);
+    if (!mismatched.empty()) msg += "\n  shape mismatches: " + list(mismatched);
     fail(msg);
   }
   torch::NoGradGuard g;
-  for (auto& [name, t] : ours) t.copy_(ck.tensors.at(prefix + name));
+  for (auto& [name, t] : ours) t.copy_(tensors.at(prefix + name).to(t.scalar_type()));
+}
+
+void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix) {
+  load_named_tensors(module, ck.tensors, prefix, source + ": checkpoint does not fit the model built from its config.");
 }
 
 void save_checkpoint(const std::string& path, const Checkpoint& ck) {

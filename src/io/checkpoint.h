@@ -1,6 +1,7 @@
 // Checkpoints: one safetensors file holding the model weights under their module names ("model/..."),
 // optional extra tensors, and metadata (format, step, config JSON, RNG state). Written atomically.
 #pragma once
+#include <functional>
 #include <map>
 #include <string>
 
@@ -17,6 +18,13 @@ struct Checkpoint {
 };
 
 constexpr const char* kCheckpointFormat = "infinisplat-checkpoint-v1";
+
+// Copies tensors[prefix + name] into every parameter and buffer of `module`. Missing keys, unexpected keys
+// under `prefix` (unless `ignorable` says so) and shape mismatches are listed together in one Error that
+// starts with `what`.
+void load_named_tensors(torch::nn::Module& module, const std::map<std::string, torch::Tensor>& tensors,
+                        const std::string& prefix, const std::string& what,
+                        const std::function<bool(const std::string&)>& ignorable = nullptr);
 
 // Weights and buffers of `module` under "model/<name>" (prefix configurable).
 void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::string& prefix = "model/");

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/parse.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -27,16 +28,9 @@ const std::string& CsvTable::cell(size_t row, const std::string& name) const {
 
 double CsvTable::number(size_t row, const std::string& name) const {
   const std::string& s = cell(row, name);
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != s.size())
-    fail(source, ": data row ", row + 1, ", column '", name, "': expected a number, got '", s, "'");
-  return v;
+  const auto v = parse_double(s);
+  if (!v) fail(source, ": data row ", row + 1, ", column '", name, "': expected a number, got '", s, "'");
+  return *v;
 }
 
 bool CsvTable::boolean(size_t row, const std::string& name) const {

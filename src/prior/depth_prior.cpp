@@ -12,6 +12,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "io/checkpoint.h"
 #include "io/safetensors.h"
 #include "prior/learned_depth.h"
 
@@ -82,28 +83,14 @@ class LearnedPrior final : public DepthPrior {
   explicit LearnedPrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded = nullptr)
       : o_(o), net_(o.learned_width) {
     if (embedded && embedded->count("prior/stem.weight")) {
-      torch::NoGradGuard g;
-      for (auto& p : net_->named_parameters(true)) {
-        auto it = embedded->find("prior/" + p.key());
-        if (it == embedded->end() || it->second.sizes() != p.value().sizes())
-          fail("checkpoint: embedded depth-net tensor 'prior/", p.key(), "' is missing or has the wrong shape");
-        p.value().copy_(it->second);
-      }
+      load_named_tensors(*net_, *embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
       source_ = "weights embedded in the checkpoint";
     } else if (o.learned_weights.empty()) {
       log_warn("depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
                "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
     } else {
-      const SafeTensors st = read_safetensors(o.learned_weights);
-      torch::NoGradGuard g;
-      for (auto& p : net_->named_parameters(true)) {
-        if (!st.has(p.key())) fail(o.learned_weights, ": missing tensor '", p.key(), "' (learned_width must match)");
-        const auto& t = st.at(p.key());
-        if (t.sizes() != p.value().sizes())
-          fail(o.learned_weights, ": tensor '", p.key(), "' has shape ", t.sizes(), ", the net expects ", p.value().sizes(),
-               " (prior.learned_width must match the trained net)");
-        p.value().copy_(t);
-      }
+      load_named_tensors(*net_, read_safetensors(o.learned_weights).tensors, "",
+                         o.learned_weights + ": does not fit the learned depth net (prior.learned_width must match)");
       source_ = o.learned_weights;
     }
     net_->eval();

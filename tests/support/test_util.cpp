@@ -1,6 +1,8 @@
 // Shared test helpers.
 #include "support/test_util.h"
 
+#include "core/error.h"
+
 #include <unistd.h>
 
 #include <atomic>
@@ -44,6 +46,15 @@ std::string read_bytes(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "<no error>";
 }
 
 }  // namespace isplat::test

@@ -1,5 +1,6 @@
 // Shared test helpers: a fresh temporary folder per test and the shared-weights location.
 #pragma once
+#include <functional>
 #include <string>
 
 namespace isplat::test {
@@ -11,5 +12,7 @@ std::string shared_weights_dir();
 // Writes raw bytes to a file (for crafting corrupt inputs).
 void write_bytes(const std::string& path, const std::string& bytes);
 std::string read_bytes(const std::string& path);
+// The message of the isplat::Error that `f` throws, or "<no error>".
+std::string error_of(const std::function<void()>& f);
 
 }  // namespace isplat::test

@@ -1,0 +1,18 @@
+// Tiny model and training configurations for tests: the real code paths at toy sizes.
+#pragma once
+#include <string>
+
+#include "data/synth/generate.h"
+#include "model/infinisplat.h"
+#include "train/train_config.h"
+
+namespace isplat::test {
+
+// ViT 32-d with `vit_depth` blocks and 2 heads, CNN width 4, MLP [32, 16], `budget` supports.
+ModelOptions tiny_model_options(int64_t budget = 600, int64_t vit_depth = 1);
+
+// Trains tiny_model_options on a tiny generated dataset at 48x32 with 2 targets, dataset depth,
+// no perceptual term and no loader threads.
+TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps);
+
+}  // namespace isplat::test
