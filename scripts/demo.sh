@@ -33,12 +33,14 @@ stamp "4. the quickstart model (ViT-S, 100k supports, 256x192, 1 context + 3 tar
   --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart" \
   --set model.prior.learned_weights="$out/depth/depth_net.safetensors" --resume auto
 
-stamp "5. evaluation: trained vs step 0 vs baselines on the pair protocol"
+stamp "5. evaluation: trained vs step 0 vs baselines on the pair protocol (held-out rooms, then two other styles)"
 "$bin/infinisplat-eval" --config configs/eval_synthetic.json \
-  --set "datasets[0].root=$out/data/eval/courtyard_colmap" --set "datasets[1].root=$out/data/eval/atrium_nerfstudio" \
+  --set "datasets[0].root=$out/data/hypersim" \
+  --set "datasets[1].root=$out/data/eval/courtyard_colmap" --set "datasets[2].root=$out/data/eval/atrium_nerfstudio" \
   --set "methods[0].checkpoint=$out/quickstart/checkpoints/last.safetensors" \
-  --set "methods[1].checkpoint=$out/quickstart/checkpoints/init.safetensors" \
-  --set scoring.out="$out/eval" --set scoring.max_per_bin=8
+  --set "methods[1].checkpoint=$out/quickstart/checkpoints/last.safetensors" \
+  --set "methods[2].checkpoint=$out/quickstart/checkpoints/init.safetensors" \
+  --set scoring.out="$out/eval" --set scoring.max_per_bin=6
 
 stamp "6. one photo -> Gaussians (PLY) -> orbit video"
 photo="$out/data/eval/courtyard_colmap/scene_0/images/IMG_0010.jpg"
@@ -57,6 +59,6 @@ echo "training:      $out/quickstart (train_log.jsonl, val/*.png, checkpoints/)"
 echo "scene + video: $out/predict/scene.ply, $out/predict/orbit/video.mp4"
 echo "onnx:          $out/export/model.onnx"
 echo
-sed -n '/^## /,$p' "$out/eval/report.md" | grep -E "^## |\| (trained|step0|lift|identity) \| all" || true
+sed -n '/^## /,$p' "$out/eval/report.md" | grep -E "^## |\| (trained|trained-lidar|step0|lift|identity) \| all" || true
 echo
 echo "demo.sh: everything is under $(cd "$out" && pwd)"

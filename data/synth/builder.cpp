@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <algorithm>
 #include <random>
 #include <stdexcept>
 
@@ -371,13 +372,27 @@ std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t
   std::vector<CameraPose> out;
   Vec3 pos = waypoints[0];
   size_t wp = 1;
-  double step = std::exp(rng.uniform(std::log(min_step), std::log(max_step)));
+  // Step length per block of 8 frames, stratified over [min_step, max_step] on a log scale and shuffled,
+  // so every trajectory mixes centimetre steps with metre-scale ones (all baseline bins get pairs).
+  constexpr int kBlock = 8, kStrata = 5;
+  std::vector<int> strata;
+  auto next_step = [&]() {
+    if (strata.empty()) {
+      for (int k = 0; k < kStrata; ++k) strata.push_back(k);
+      std::shuffle(strata.begin(), strata.end(), rng.gen);
+    }
+    const double t = (strata.back() + rng.uniform(0.0, 1.0)) / kStrata;
+    strata.pop_back();
+    return std::exp(std::log(min_step) + t * (std::log(max_step) - std::log(min_step)));
+  };
+  double step = next_step();
   double look_phase = rng.uniform(0, 2 * kPi);
   for (int i = 0; i < frames; ++i) {
     // Gaze drifts smoothly around the focus point.
     const Vec3 target = focus + Vec3(2.0 * std::sin(look_phase + 0.23 * i), 0, 0.6 * std::sin(0.7 * look_phase + 0.17 * i));
     out.push_back({pos, look_rotation(pos, target)});
-    // Advance along the waypoint polyline by `step`, re-drawing the step length at each waypoint.
+    if ((i + 1) % kBlock == 0) step = next_step();
+    // Advance along the waypoint polyline by `step`.
     double remaining = step;
     while (remaining > 0 && wp < waypoints.size()) {
       const Vec3 to = waypoints[wp] - pos;
@@ -389,12 +404,9 @@ std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t
       } else {
         pos = waypoints[wp++];
         remaining -= len;
-        step = std::exp(rng.uniform(std::log(min_step), std::log(max_step)));
       }
     }
-    if (wp >= waypoints.size()) {
-      waypoints.push_back(free_point(rng.uniform(0.0, 1.0)));
-    }
+    if (wp >= waypoints.size()) waypoints.push_back(free_point(rng.uniform(0.0, 1.0)));
   }
   return out;
 }

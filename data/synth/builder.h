@@ -19,8 +19,8 @@ struct CameraPose {
 };
 
 // `frames` poses along a smooth walk through scene.walk_min..walk_max, looking towards one of the
-// scene's focus points. Step lengths vary per segment (log-uniform), so windows of 10 frames span
-// baselines from a few centimetres to several metres.
+// scene's focus points. Step lengths change every 8 frames, stratified on a log scale between min_step
+// and max_step, so windows of 10 frames span baselines from centimetres to several metres.
 std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t seed, double min_step = 0.04,
                                         double max_step = 0.5);
 
