@@ -128,45 +128,77 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   write_csv((fs::path(out) / "report.csv").string(), csv);
   write_file_atomic((fs::path(out) / "report.json").string(), js.dump(2) + "\n");
 
-  // Speed/quality chart: x = inference + render time (log scale), y = PSNR, one marker per dataset x method.
-  const int W = 900, H = 560, L = 80, R = 260, T = 40, B = 60;
+  // Speed/quality chart: x = inference + render time per pair (log scale), y = masked PSNR.
+  // Colour = method, marker = dataset, so each point reads without a long legend.
+  const int W = 960, H = 560, L = 80, R = 230, T = 40, B = 60;
   cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
   std::vector<const ReportRow*> pts;
-  for (const auto& r : rows)
-    if (r.bin == "all" && std::isfinite(r.psnr)) pts.push_back(&r);
+  std::vector<std::string> methods, sets;
+  for (const auto& r : rows) {
+    if (r.bin != "all" || !std::isfinite(r.psnr)) continue;
+    pts.push_back(&r);
+    if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) methods.push_back(r.method);
+    if (std::find(sets.begin(), sets.end(), r.dataset) == sets.end()) sets.push_back(r.dataset);
+  }
   if (!pts.empty()) {
+    auto xval = [](const ReportRow* r) { return std::log10(std::max(0.1, r->infer_ms + r->render_ms)); };
     double x0 = 1e18, x1 = -1e18, y0 = 1e18, y1 = -1e18;
     for (const auto* r : pts) {
-      const double x = std::log10(std::max(0.1, r->infer_ms + r->render_ms));
-      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, r->psnr), y1 = std::max(y1, r->psnr);
+      x0 = std::min(x0, xval(r)), x1 = std::max(x1, xval(r)), y0 = std::min(y0, r->psnr), y1 = std::max(y1, r->psnr);
     }
-    x0 -= 0.2, x1 += 0.2, y0 -= 1.0, y1 += 1.0;
+    x0 = std::floor(x0 - 0.2), x1 = std::ceil(x1 + 0.2), y0 -= 1.0, y1 += 1.0;
     auto px = [&](double x) { return L + static_cast<int>((x - x0) / (x1 - x0) * (W - L - R)); };
     auto py = [&](double y) { return H - B - static_cast<int>((y - y0) / (y1 - y0) * (H - T - B)); };
-    cv::rectangle(img, {L, T}, {W - R, H - B}, cv::Scalar(0, 0, 0), 1);
-    for (int e = static_cast<int>(std::ceil(x0)); e <= static_cast<int>(std::floor(x1)); ++e) {
-      cv::line(img, {px(e), H - B}, {px(e), H - B + 5}, cv::Scalar(0, 0, 0));
-      cv::putText(img, cat(static_cast<long long>(std::llround(std::pow(10.0, e))), " ms"), {px(e) - 20, H - B + 22},
-                  cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    const cv::Scalar black(0, 0, 0);
+    auto text = [&](const std::string& s, cv::Point p, double scale = 0.45) {
+      cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, black, 1, cv::LINE_AA);
+    };
+    cv::rectangle(img, {L, T}, {W - R, H - B}, black, 1);
+    for (int e = static_cast<int>(x0); e <= static_cast<int>(x1); ++e) {
+      cv::line(img, {px(e), H - B}, {px(e), H - B + 5}, black);
+      std::ostringstream lab;
+      lab << std::pow(10.0, e) << " ms";
+      text(e == static_cast<int>(x0) ? "<= " + lab.str() : lab.str(), {px(e) - 22, H - B + 22});
     }
     for (int t = 0; t <= 4; ++t) {
       const double y = y0 + (y1 - y0) * t / 4;
-      cv::line(img, {L - 5, py(y)}, {L, py(y)}, cv::Scalar(0, 0, 0));
-      cv::putText(img, fmt(y, 1), {L - 48, py(y) + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      cv::line(img, {L - 5, py(y)}, {L, py(y)}, black);
+      text(fmt(y, 1), {L - 48, py(y) + 5});
     }
-    cv::putText(img, "time per pair (inference + render), log scale", {L + 120, H - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
-                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    cv::putText(img, "masked PSNR (dB)", {10, T - 15}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    static const cv::Scalar colors[] = {{31, 119, 180}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214},
+    text("time per pair (inference + render), log scale", {L + 150, H - 15}, 0.5);
+    text("masked PSNR (dB), average over pairs", {10, T - 15}, 0.5);
+    static const cv::Scalar colors[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214},
                                         {189, 103, 148}, {75, 86, 140}, {194, 119, 227}, {127, 127, 127}};
-    for (size_t i = 0; i < pts.size(); ++i) {
-      const auto* r = pts[i];
-      const cv::Scalar c = colors[i % 8];
-      const cv::Point p(px(std::log10(std::max(0.1, r->infer_ms + r->render_ms))), py(r->psnr));
-      cv::circle(img, p, 6, c, cv::FILLED, cv::LINE_AA);
-      cv::circle(img, {W - R + 20, T + 20 + 22 * static_cast<int>(i)}, 6, c, cv::FILLED, cv::LINE_AA);
-      cv::putText(img, r->dataset + " / " + r->method, {W - R + 32, T + 25 + 22 * static_cast<int>(i)},
-                  cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    auto marker = [&](size_t kind, cv::Point p, const cv::Scalar& c) {
+      switch (kind % 4) {
+        case 0: cv::circle(img, p, 7, c, cv::FILLED, cv::LINE_AA); break;
+        case 1: cv::rectangle(img, {p.x - 6, p.y - 6}, {p.x + 6, p.y + 6}, c, cv::FILLED); break;
+        case 2: {
+          std::vector<cv::Point> tri = {{p.x, p.y - 8}, {p.x - 7, p.y + 6}, {p.x + 7, p.y + 6}};
+          cv::fillConvexPoly(img, tri, c, cv::LINE_AA);
+          break;
+        }
+        default: cv::drawMarker(img, p, c, cv::MARKER_TILTED_CROSS, 14, 3, cv::LINE_AA);
+      }
+    };
+    auto index = [](const std::vector<std::string>& v, const std::string& s) {
+      return static_cast<size_t>(std::find(v.begin(), v.end(), s) - v.begin());
+    };
+    for (const auto* r : pts)
+      marker(index(sets, r->dataset), {px(xval(r)), py(r->psnr)}, colors[index(methods, r->method) % 8]);
+    int y = T + 10;
+    text("method (colour)", {W - R + 15, y}, 0.5);
+    for (size_t i = 0; i < methods.size(); ++i) {
+      y += 22;
+      marker(0, {W - R + 25, y - 5}, colors[i % 8]);
+      text(methods[i], {W - R + 40, y});
+    }
+    y += 34;
+    text("dataset (marker)", {W - R + 15, y}, 0.5);
+    for (size_t i = 0; i < sets.size(); ++i) {
+      y += 22;
+      marker(i, {W - R + 25, y - 5}, black);
+      text(sets[i], {W - R + 40, y});
     }
   }
   cv::Mat rgb;

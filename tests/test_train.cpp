@@ -103,3 +103,40 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
   for (int i = 0; i < 30; ++i) l.push_back(trainer.train_step().losses.at("total"));
   CHECK((l[25] + l[26] + l[27] + l[28] + l[29]) < 0.8 * (l[0] + l[1] + l[2] + l[3] + l[4]));
 }
+
+TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoints, and --resume auto continues",
+          "[train]") {
+  QuietLogs quiet;
+  const auto data = test::make_tiny_dataset("train_run", 8);
+  const std::string out = test::temp_dir("train_run_out");
+  auto cfg = test::tiny_train_config(data, out, 4);
+  cfg.train.checkpoint_every = 1;
+  cfg.train.val_every = 2;
+  cfg.train.keep_last = 2;
+  cfg.train.val_images = 1;
+  {
+    Trainer t(cfg);
+    CHECK(t.run() == 0);
+  }
+  const fs::path ck = fs::path(out) / "checkpoints";
+  for (const char* f : {"init.safetensors", "last.safetensors", "best.safetensors", "step_000003.safetensors",
+                        "step_000004.safetensors"})
+    CHECK(fs::exists(ck / f));
+  CHECK_FALSE(fs::exists(ck / "step_000002.safetensors"));  // only the last 2 periodic ones stay
+  CHECK(fs::hard_link_count(ck / "step_000004.safetensors") >= 2);  // last is a link, not a copy
+  CHECK(load_checkpoint((ck / "last.safetensors").string()).step() == 4);
+  CHECK(load_checkpoint((ck / "init.safetensors").string()).tensors.count("optim/state") == 0);
+  CHECK(fs::exists(fs::path(out) / "train_log.jsonl"));
+  CHECK(fs::exists(fs::path(out) / "summary.json"));
+  bool panel = false;
+  for (const auto& e : fs::directory_iterator(fs::path(out) / "val")) panel |= e.path().extension() == ".png";
+  CHECK(panel);
+  cfg.train.steps = 6;
+  Trainer more(cfg);
+  more.resume("auto");
+  CHECK(more.step() == 4);
+  CHECK(more.run() == 0);
+  CHECK(load_checkpoint((ck / "last.safetensors").string()).step() == 6);
+  Trainer fresh(cfg);
+  CHECK_THROWS_WITH(fresh.resume((ck / "init.safetensors").string()), Catch::Contains("holds no optimizer state"));
+}

@@ -284,14 +284,16 @@ void Trainer::write_val_images(const Batch& batch, const std::vector<torch::Tens
   write_image((fs::path(run_dir_) / "val" / name).string(), panel);
 }
 
-void Trainer::save(const std::string& path) const {
+void Trainer::save(const std::string& path, bool with_optimizer) const {
   Checkpoint ck;
   put_module(ck, trainable());
-  torch::serialize::OutputArchive archive;
-  optimizer_->save(archive);
-  std::ostringstream bytes;
-  archive.save_to(bytes);
-  ck.tensors["optim/state"] = bytes_to_tensor(bytes.str());
+  if (with_optimizer) {
+    torch::serialize::OutputArchive archive;
+    optimizer_->save(archive);
+    std::ostringstream bytes;
+    archive.save_to(bytes);
+    ck.tensors["optim/state"] = bytes_to_tensor(bytes.str());
+  }
   ck.tensors["rng/torch"] = at::detail::getDefaultCPUGenerator().get_state();
   ck.metadata["step"] = std::to_string(step_);
   ck.metadata["task"] = config_.task;
@@ -319,6 +321,8 @@ void Trainer::resume(const std::string& requested) {
   if (it != ck.metadata.end() && it->second != config_.task)
     fail(path, ": checkpoint is for task '", it->second, "', the config says '", config_.task, "'");
   load_module(ck, trainable(), path);
+  if (!ck.tensors.count("optim/state"))
+    fail(path, ": holds no optimizer state (a weights-only checkpoint such as init); it cannot be resumed");
   torch::serialize::InputArchive archive;
   std::istringstream bytes(tensor_to_bytes(ck.tensors.at("optim/state")));
   archive.load_from(bytes);
@@ -332,19 +336,34 @@ void Trainer::resume(const std::string& requested) {
   log_info("train: resumed from ", path, " at step ", step_);
 }
 
+namespace {
+// Points `alias` at the same bytes as `file` (hard link, renamed into place atomically), or copies.
+void alias_file(const fs::path& file, const fs::path& alias) {
+  const fs::path tmp = alias.parent_path() / ("." + alias.filename().string() + ".tmp");
+  std::error_code ec;
+  fs::remove(tmp, ec);
+  fs::create_hard_link(file, tmp, ec);
+  if (ec) fs::copy_file(file, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, alias);
+}
+}  // namespace
+
 void Trainer::checkpoint(bool periodic) {
   const fs::path dir = fs::path(run_dir_) / "checkpoints";
-  save((dir / "last.safetensors").string());
-  if (!periodic) return;
+  if (!periodic) {
+    save((dir / "last.safetensors").string());
+    return;
+  }
   char name[64];
   std::snprintf(name, sizeof name, "step_%06lld.safetensors", static_cast<long long>(step_));
   save((dir / name).string());
+  alias_file(dir / name, dir / "last.safetensors");  // one file on disk for both names
   std::vector<fs::path> periodic_files;
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().filename().string().rfind("step_", 0) == 0) periodic_files.push_back(e.path());
   std::sort(periodic_files.begin(), periodic_files.end());
   while (static_cast<int64_t>(periodic_files.size()) > config_.train.keep_last) {
-    fs::remove(periodic_files.front());
+    fs::remove(periodic_files.front());  // last/best keep their own links
     periodic_files.erase(periodic_files.begin());
   }
 }
@@ -358,7 +377,7 @@ void Trainer::write_log(const StepStats& s) {
 
 int Trainer::run() {
   const fs::path ckdir = fs::path(run_dir_) / "checkpoints";
-  if (step_ == 0) save((ckdir / "init.safetensors").string());  // the model before training, for comparisons
+  if (step_ == 0) save((ckdir / "init.safetensors").string(), false);  // the untrained model, for comparisons
   std::signal(SIGINT, [](int) { request_stop(); });
   std::signal(SIGTERM, [](int) { request_stop(); });
   ProgressBar bar("train", config_.train.steps - step_, "step");
@@ -374,14 +393,22 @@ int Trainer::run() {
       if (s.losses.count(k)) post += cat(" ", k, " ", std::setprecision(3), s.losses.at(k));
     bar.postfix(post);
     bar.tick();
+    const bool periodic = step_ % config_.train.checkpoint_every == 0 || step_ == config_.train.steps;
+    bool checkpointed = false;
     if (step_ % config_.train.val_every == 0 || step_ == config_.train.steps) {
       const double v = validate(true);
       if (std::isfinite(v) && v < best_val_) {
-        best_val_ = v;
-        save((ckdir / "best.safetensors").string());
+        best_val_ = v;  // before saving, so the checkpoint records it
+        if (periodic) {
+          checkpoint(true);
+          checkpointed = true;
+          alias_file(ckdir / "last.safetensors", ckdir / "best.safetensors");
+        } else {
+          save((ckdir / "best.safetensors").string());
+        }
       }
     }
-    if (step_ % config_.train.checkpoint_every == 0 || step_ == config_.train.steps) checkpoint(true);
+    if (periodic && !checkpointed) checkpoint(true);
     if (g_stop) {
       bar.finish();
       checkpoint(false);

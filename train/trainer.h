@@ -36,7 +36,7 @@ class Trainer {
 
   StepStats train_step();                       // one optimizer step on the next batch
   double validate(bool write_images);           // mean validation loss (also logs PSNR)
-  void save(const std::string& path) const;     // atomic
+  void save(const std::string& path, bool with_optimizer = true) const;  // atomic
   int64_t step() const { return step_; }
   torch::nn::Module& trainable();
   const torch::nn::Module& trainable() const;
