@@ -164,13 +164,7 @@ Manifest Manifest::from_json(const nlohmann::json& j, const std::string& source)
 void write_manifest(const std::string& path, const Manifest& m) { write_file_atomic(path, m.to_json().dump(2) + "\n"); }
 
 Manifest read_manifest(const std::string& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(read_file_bytes(path));
-  } catch (const nlohmann::json::parse_error& e) {
-    fail(path, ": invalid JSON: ", e.what());
-  }
-  return Manifest::from_json(j, path);
+  return Manifest::from_json(read_json_file(path), path);
 }
 
 }  // namespace isplat

@@ -10,8 +10,6 @@
 namespace isplat::synth {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 struct Rng {
   std::mt19937_64 gen;
   explicit Rng(uint64_t seed) : gen(seed) {}

@@ -26,6 +26,7 @@
 namespace isplat {
 namespace fs = std::filesystem;
 using synth::CameraPose;
+using synth::kPi;
 using synth::Scene;
 
 void GenerateOptions::visit(ConfigVisitor& v) {
@@ -62,18 +63,16 @@ std::string generated_eval_root(const std::string& out, const std::string& datas
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 std::string scene_name(int64_t index) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "ai_%03d_%03d", static_cast<int>(index / 10 + 1), static_cast<int>(index % 10 + 1));
   return buf;
 }
 
-std::vector<float> to_vector(const cv::Mat& m) {
-  cv::Mat c = m.isContinuous() ? m : m.clone();
-  const float* p = c.ptr<float>(0);
-  return std::vector<float>(p, p + c.total() * c.channels());
+// The rendered float buffers are written as they are (render_frame allocates them continuous).
+const float* float_pixels(const cv::Mat& m) {
+  ISPLAT_CHECK(m.isContinuous() && m.depth() == CV_32F, "generate: expected a continuous float image");
+  return m.ptr<float>(0);
 }
 
 // Pinhole intrinsics with the given horizontal field of view.
@@ -126,16 +125,19 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
                        "settings_units_info_meters_scale", "use_camera_physical"};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) camera_csv.header.push_back(cat("M_cam_from_uv_", i, j));
+  auto add_camera_row = [&](const std::string& scene, double mpau, bool tilt_shift, const Eigen::Matrix3d& M) {
+    std::vector<std::string> row = {scene, cat(H, ".0"), cat(W, ".0"), cat(mpau), tilt_shift ? "True" : "False"};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) row.push_back(cat(std::setprecision(17), M(i, j)));
+    camera_csv.rows.push_back(row);
+  };
 
   for (size_t k = 0; k < plans.size(); ++k) {
     const auto& plan = plans[k];
     const Scene scene = synth::build_room(plan.seed);
     const std::string scene_dir = (fs::path(root) / plan.name).string();
     const Eigen::Matrix3d M = camera_matrix(plan.tilt_shift, W, H, rng);
-    std::vector<std::string> row = {plan.name, cat(H, ".0"), cat(W, ".0"), cat(plan.mpau), plan.tilt_shift ? "True" : "False"};
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) row.push_back(cat(std::setprecision(17), M(i, j)));
-    camera_csv.rows.push_back(row);
+    add_camera_row(plan.name, plan.mpau, plan.tilt_shift, M);
     CsvTable meta;
     meta.header = {"parameter_name", "parameter_value"};
     meta.rows = {{"meters_per_asset_unit", cat(std::setprecision(17), plan.mpau)}};
@@ -172,10 +174,10 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
         write_image((fs::path(L::preview_dir(scene_dir, cam)) / (stem + ".tonemap.jpg")).string(),
                     apply_exposure_gamma(frame.radiance, exposure), 95);
         write_hdf5((fs::path(L::geometry_dir(scene_dir, cam)) / (stem + ".depth_meters.hdf5")).string(), {H, W},
-                   to_vector(frame.distance).data(), H5Type::Float16, 4);
+                   float_pixels(frame.distance), H5Type::Float16, 4);
         if (o.hdf5_color)
           write_hdf5((fs::path(L::hdf5_color_dir(scene_dir, cam)) / (stem + ".color.hdf5")).string(), {H, W, 3},
-                     to_vector(frame.radiance).data(), H5Type::Float16, 4);
+                     float_pixels(frame.radiance), H5Type::Float16, 4);
         bar.tick();
       }
       const std::string cam_dir = L::detail_camera_dir(scene_dir, cam);
@@ -187,11 +189,7 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
   }
   // A scene listed in the metadata but absent from disk, as for scenes without public images.
   for (int f = 0; f < 3; ++f) split_csv.rows.push_back({"ai_099_001", "cam_00", std::to_string(f), "True", "", "train"});
-  std::vector<std::string> absent = {"ai_099_001", cat(H, ".0"), cat(W, ".0"), "0.0254", "False"};
-  const Eigen::Matrix3d M_std = camera_matrix(false, W, H, rng);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) absent.push_back(cat(std::setprecision(17), M_std(i, j)));
-  camera_csv.rows.push_back(absent);
+  add_camera_row("ai_099_001", 0.0254, false, camera_matrix(false, W, H, rng));
   write_csv((fs::path(root) / "metadata_images_split_scene_v1.csv").string(), split_csv);
   write_csv((fs::path(root) / "metadata_camera_parameters.csv").string(), camera_csv);
 }

@@ -8,7 +8,6 @@
 namespace isplat::synth {
 
 constexpr double kEps = 1e-7;
-constexpr double kPi = 3.14159265358979323846;
 
 // ---------------------------------------------------------------- noise
 double hash01(int64_t x, int64_t y, int64_t z, uint64_t salt) {

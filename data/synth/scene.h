@@ -12,6 +12,8 @@ namespace isplat::synth {
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 enum class Pattern { Solid, Checker, Stripes, Noise, Bricks, Wood, Tiles, Marble, Dots, Grid };
 
 struct Material {

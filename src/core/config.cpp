@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/parse.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -64,7 +65,7 @@ std::string ConfigDocument::source_of(const std::string& key) const {
 
 json read_json_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) fail(path, ": cannot open config file (", fs::exists(path) ? "permission denied" : "no such file", ")");
+  if (!in) fail(path, fs::exists(path) ? ": cannot open (permission denied)" : ": no such file");
   try {
     return json::parse(in);
   } catch (const json::parse_error& e) {
@@ -106,13 +107,7 @@ static void merge_file(const std::string& path, ConfigDocument& doc, std::vector
   merge_into(doc.json, j);
 }
 
-ConfigDocument merge_config(const std::string& path, const std::vector<std::string>& overrides) {
-  ConfigDocument doc;
-  if (!path.empty()) {
-    std::vector<std::string> chain;
-    merge_file(path, doc, chain);
-    doc.origin[""] = path;
-  }
+void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overrides) {
   for (const auto& item : overrides) {
     const std::string source = "--set " + item;
     auto eq = item.find('=');
@@ -134,27 +129,23 @@ ConfigDocument merge_config(const std::string& path, const std::vector<std::stri
       names.push_back(part);
     }
     // A component may index a list of sections: datasets[0].root=...
-    auto step = [&](const std::string& name, bool last) -> json* {
+    auto step = [&](const std::string& name) -> json* {
       const auto br = name.find('[');
       const std::string field = name.substr(0, br);
       prefix += (prefix.empty() ? "" : ".") + field;
       json* child = &(*node)[field];
       if (br == std::string::npos) return child;
       if (name.back() != ']') fail(source, ": bad index in '", name, "'");
-      size_t index = 0;
-      try {
-        index = std::stoul(name.substr(br + 1, name.size() - br - 2));
-      } catch (const std::exception&) {
-        fail(source, ": bad index in '", name, "'");
-      }
+      const auto parsed = parse_int(name.substr(br + 1, name.size() - br - 2));
+      if (!parsed || *parsed < 0) fail(source, ": bad index in '", name, "'");
+      const size_t index = static_cast<size_t>(*parsed);
       if (!child->is_array() || index >= child->size())
         fail(source, ": '", prefix, "' has no element ", index, " (lists are extended in the config file, not by --set)");
       prefix += cat("[", index, "]");
-      (void)last;
       return &(*child)[index];
     };
     for (size_t i = 0; i + 1 < names.size(); ++i) {
-      json& child = *step(names[i], false);
+      json& child = *step(names[i]);
       if (child.is_null()) child = json::object();
       if (!child.is_object()) fail(source, ": '", prefix, "' is a value, not a section");
       node = &child;
@@ -163,6 +154,16 @@ ConfigDocument merge_config(const std::string& path, const std::vector<std::stri
     (*node)[names.back()] = value;
     record_origins(value, key, source, doc.origin);
   }
+}
+
+ConfigDocument merge_config(const std::string& path, const std::vector<std::string>& overrides) {
+  ConfigDocument doc;
+  if (!path.empty()) {
+    std::vector<std::string> chain;
+    merge_file(path, doc, chain);
+    doc.origin[""] = path;
+  }
+  apply_overrides(doc, overrides);
   return doc;
 }
 

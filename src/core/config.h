@@ -88,6 +88,9 @@ struct ConfigDocument {
 // Reads `path` (empty = defaults only), following "base": "other.json" chains, then applies
 // overrides of the form "a.b=value" (value parsed as JSON, else taken as a string).
 ConfigDocument merge_config(const std::string& path, const std::vector<std::string>& overrides);
+// Applies "a.b=value" / "list[0].key=value" overrides to an existing document.
+void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overrides);
+// Parses any JSON file; a missing file or invalid JSON throws Error naming the path.
 nlohmann::json read_json_file(const std::string& path);
 
 // Visitor plumbing; use the templates below.

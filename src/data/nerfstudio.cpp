@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <filesystem>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "geometry/convert.h"
 #include "io/atomic_file.h"
@@ -63,12 +64,7 @@ Intrinsics intrinsics(const json& global, const json& frame, const std::string& 
 
 Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset, const std::string& transforms_name) {
   const std::string path = (fs::path(scene_dir) / transforms_name).string();
-  json j;
-  try {
-    j = json::parse(read_file_bytes(path));
-  } catch (const json::parse_error& e) {
-    fail(path, ": invalid JSON: ", e.what());
-  }
+  json j = read_json_file(path);
   if (!j.is_object() || !j.contains("frames") || !j["frames"].is_array()) fail(path, ": missing 'frames' list");
   if (j["frames"].empty()) fail(path, ": 'frames' is empty (empty sequence)");
   Eigen::Matrix4d undo = Eigen::Matrix4d::Identity();

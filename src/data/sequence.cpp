@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -76,18 +77,25 @@ cv::Mat load_raw_depth(const Sequence& seq, const FrameRecord& f) {
   return cv::Mat();
 }
 
-// Removes lens distortion with K kept as the new camera: bilinear for colour, nearest for depth.
-void undistort(cv::Mat& m, const Intrinsics& intr, const std::vector<double>& dist, bool nearest) {
-  cv::Mat K(3, 3, CV_64F), D(1, static_cast<int>(dist.size()), CV_64F), map1, map2, out;
-  const Eigen::Matrix3d Ke = intr.K();
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) K.at<double>(i, j) = Ke(i, j);
-  for (size_t i = 0; i < dist.size(); ++i) D.at<double>(0, static_cast<int>(i)) = dist[i];
-  cv::initUndistortRectifyMap(K, D, cv::Mat(), K, m.size(), CV_32FC1, map1, map2);
-  cv::remap(m, out, map1, map2, nearest ? cv::INTER_NEAREST : cv::INTER_LINEAR, cv::BORDER_CONSTANT,
-            cv::Scalar::all(nearest ? std::numeric_limits<double>::quiet_NaN() : 0.0));
-  m = out;
-}
+// Removes lens distortion with K kept as the new camera. The maps are built once per frame and serve
+// both the colour (bilinear) and the depth (nearest), which share the intrinsics' size.
+struct Undistorter {
+  cv::Mat map1, map2;
+  Undistorter(const Intrinsics& intr, const std::vector<double>& dist) {
+    cv::Mat K(3, 3, CV_64F), D(1, static_cast<int>(dist.size()), CV_64F);
+    const Eigen::Matrix3d Ke = intr.K();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) K.at<double>(i, j) = Ke(i, j);
+    for (size_t i = 0; i < dist.size(); ++i) D.at<double>(0, static_cast<int>(i)) = dist[i];
+    cv::initUndistortRectifyMap(K, D, cv::Mat(), K, cv::Size(intr.width, intr.height), CV_32FC1, map1, map2);
+  }
+  void apply(cv::Mat& m, bool nearest) const {
+    cv::Mat out;
+    cv::remap(m, out, map1, map2, nearest ? cv::INTER_NEAREST : cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+              cv::Scalar::all(nearest ? std::numeric_limits<double>::quiet_NaN() : 0.0));
+    m = out;
+  }
+};
 
 }  // namespace
 
@@ -112,14 +120,18 @@ LoadedFrame load_frame(const Sequence& sequence, size_t index, bool with_depth) 
     out.view.intr = f.view.intr.resized(out.image.cols, out.image.rows);
   }
   check_size(out.image, out.view, f.image_path);
-  if (!f.distortion.empty()) undistort(out.image, out.view.intr, f.distortion, false);
+  std::optional<Undistorter> undistorter;
+  if (!f.distortion.empty()) {
+    undistorter.emplace(out.view.intr, f.distortion);
+    undistorter->apply(out.image, false);
+  }
   if (with_depth && f.depth != DepthSource::None) {
     cv::Mat raw = raw_depth;
     if (f.rescale_to_image && (raw.cols != out.view.intr.width || raw.rows != out.view.intr.height) &&
         std::fabs(static_cast<double>(raw.cols) * out.view.intr.height / (raw.rows * out.view.intr.width) - 1.0) < 0.01)
       raw = resize_depth(raw, out.view.intr.width, out.view.intr.height);
     check_size(raw, out.view, f.depth_path);
-    if (!f.distortion.empty()) undistort(raw, out.view.intr, f.distortion, true);
+    if (undistorter) undistorter->apply(raw, true);
     out.depth = sanitize_depth(raw);
   }
   return out;

@@ -141,7 +141,8 @@ TupleSample TupleSampler::sample(int64_t index) const {
       count_skip(cat("skipping context without depth: ", seq.frames[c].name));
       continue;
     }
-    const double valid_fraction = cv::countNonZero(context.depth.valid) / static_cast<double>(context.depth.valid.total());
+    const auto pixels = static_cast<int64_t>(context.depth.valid.total());
+    const double valid_fraction = static_cast<double>(pixels - context.depth.invalid_count) / static_cast<double>(pixels);
     if (valid_fraction < options_.min_valid_depth) {
       count_skip(cat("skipping context with ", static_cast<int>(valid_fraction * 100), "% valid depth: ", seq.frames[c].name));
       continue;

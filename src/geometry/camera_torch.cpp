@@ -93,10 +93,19 @@ torch::Tensor pixel_centers(int64_t height, int64_t width, torch::Dtype dtype) {
   return torch::stack({grids[1], grids[0]}, -1);
 }
 
+torch::Tensor usable_depth(const torch::Tensor& depth, const torch::Tensor& valid) {
+  return (valid != 0) & torch::isfinite(depth) & (depth > 0);
+}
+
 torch::Tensor backproject_depth(const torch::Tensor& depth, const torch::Tensor& K) {
   ISPLAT_CHECK(depth.dim() == 2, "backproject_depth: depth must be [H, W], got ", depth.sizes());
   auto uv = pixel_centers(depth.size(0), depth.size(1), depth.scalar_type()).reshape({-1, 2});
   return backproject_points(uv, depth.reshape({-1}), K.to(depth.scalar_type())).reshape({depth.size(0), depth.size(1), 3});
+}
+
+torch::Tensor resize_bilinear(const torch::Tensor& x, int64_t height, int64_t width) {
+  return F::interpolate(
+      x, F::InterpolateFuncOptions().size(std::vector<int64_t>{height, width}).mode(torch::kBilinear).align_corners(false));
 }
 
 std::pair<torch::Tensor, torch::Tensor> resize_with_K(const torch::Tensor& image, const torch::Tensor& K,

@@ -32,9 +32,13 @@ torch::Tensor transform_points(const torch::Tensor& T, const torch::Tensor& poin
 torch::Tensor invert_poses(const torch::Tensor& T);  // rigid inverse of [..., 4, 4]
 // Pixel-centre coordinates (j + 0.5, i + 0.5) as [H, W, 2] (u, v).
 torch::Tensor pixel_centers(int64_t height, int64_t width, torch::Dtype dtype = torch::kFloat32);
+// Where depth can be used: the mask says so and the depth is finite and positive (bool [H, W]).
+torch::Tensor usable_depth(const torch::Tensor& depth, const torch::Tensor& valid);
 // Back-project a depth map [H, W] through K [3, 3] at pixel centres: [H, W, 3].
 torch::Tensor backproject_depth(const torch::Tensor& depth, const torch::Tensor& K);
 
+// Maps [B, C, h, w] resized bilinearly to height x width (align_corners = false, no antialiasing).
+torch::Tensor resize_bilinear(const torch::Tensor& x, int64_t height, int64_t width);
 // Image [C, H, W] resized with its intrinsics K [3, 3] (bilinear with antialiasing when shrinking).
 std::pair<torch::Tensor, torch::Tensor> resize_with_K(const torch::Tensor& image, const torch::Tensor& K,
                                                       int64_t new_height, int64_t new_width);

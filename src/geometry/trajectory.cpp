@@ -5,9 +5,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "geometry/convert.h"
-#include "io/atomic_file.h"
 
 namespace isplat {
 
@@ -55,12 +55,7 @@ CameraPath dolly_path(const View& base, double depth, int frames, double travel_
 }
 
 CameraPath load_camera_path(const std::string& path, const View& base) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(read_file_bytes(path));
-  } catch (const nlohmann::json::parse_error& e) {
-    fail(path, ": invalid JSON: ", e.what());
-  }
+  nlohmann::json j = read_json_file(path);
   auto number = [&](const nlohmann::json& v, const std::string& where) {
     if (!v.is_number()) fail(path, ": ", where, " must be a number");
     return v.get<double>();

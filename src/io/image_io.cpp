@@ -97,23 +97,27 @@ cv::Mat read_png16(const std::string& path) {
   return img;
 }
 
-void write_image(const std::string& path, const cv::Mat& rgb, int jpeg_quality) {
-  ISPLAT_CHECK(!rgb.empty(), path, ": refusing to write an empty image");
+cv::Mat rgb_to_bgr8(const cv::Mat& rgb, const std::string& what) {
   cv::Mat img8;
   if (rgb.depth() == CV_32F || rgb.depth() == CV_64F)
     rgb.convertTo(img8, CV_8U, 255.0, 0.0);  // saturate_cast rounds and clamps
   else if (rgb.depth() == CV_8U)
     img8 = rgb;
   else
-    fail(path, ": write_image expects float [0,1] or 8-bit data");
+    fail(what, ": expected float [0,1] or 8-bit image data");
   cv::Mat bgr;
   if (img8.channels() == 3)
     cv::cvtColor(img8, bgr, cv::COLOR_RGB2BGR);
   else if (img8.channels() == 1)
     bgr = img8;
   else
-    fail(path, ": write_image expects 1 or 3 channels, got ", img8.channels());
-  encode_and_write(path, bgr, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+    fail(what, ": expected 1 or 3 channels, got ", img8.channels());
+  return bgr;
+}
+
+void write_image(const std::string& path, const cv::Mat& rgb, int jpeg_quality) {
+  ISPLAT_CHECK(!rgb.empty(), path, ": refusing to write an empty image");
+  encode_and_write(path, rgb_to_bgr8(rgb, path), {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
 }
 
 void write_png16(const std::string& path, const cv::Mat& image16) {

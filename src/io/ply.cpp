@@ -16,45 +16,45 @@ namespace {
 const char* kProps[] = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
                         "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
 
-size_t type_size(const std::string& t) {
-  if (t == "float" || t == "float32" || t == "int" || t == "int32" || t == "uint" || t == "uint32") return 4;
-  if (t == "double" || t == "float64") return 8;
-  if (t == "uchar" || t == "uint8" || t == "char" || t == "int8") return 1;
-  if (t == "short" || t == "int16" || t == "ushort" || t == "uint16") return 2;
-  return 0;
+// Property types, resolved once from the header so the per-vertex loop does not compare strings.
+enum class PlyType { F32, F64, U8, I8, I16, U16, I32, U32 };
+
+struct PlyTypeName {
+  const char* name;
+  PlyType type;
+  size_t size;
+};
+constexpr PlyTypeName kTypes[] = {
+    {"float", PlyType::F32, 4}, {"float32", PlyType::F32, 4}, {"double", PlyType::F64, 8}, {"float64", PlyType::F64, 8},
+    {"uchar", PlyType::U8, 1},  {"uint8", PlyType::U8, 1},    {"char", PlyType::I8, 1},    {"int8", PlyType::I8, 1},
+    {"short", PlyType::I16, 2}, {"int16", PlyType::I16, 2},   {"ushort", PlyType::U16, 2}, {"uint16", PlyType::U16, 2},
+    {"int", PlyType::I32, 4},   {"int32", PlyType::I32, 4},   {"uint", PlyType::U32, 4},   {"uint32", PlyType::U32, 4}};
+
+const PlyTypeName* find_type(const std::string& t) {
+  for (const auto& k : kTypes)
+    if (t == k.name) return &k;
+  return nullptr;
 }
 
-double read_value(const char* p, const std::string& t) {
-  if (t == "float" || t == "float32") {
-    float v;
-    std::memcpy(&v, p, 4);
-    return v;
+template <class T>
+double load(const char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return static_cast<double>(v);
+}
+
+double read_value(const char* p, PlyType t) {
+  switch (t) {
+    case PlyType::F32: return load<float>(p);
+    case PlyType::F64: return load<double>(p);
+    case PlyType::U8: return load<uint8_t>(p);
+    case PlyType::I8: return load<int8_t>(p);
+    case PlyType::I16: return load<int16_t>(p);
+    case PlyType::U16: return load<uint16_t>(p);
+    case PlyType::I32: return load<int32_t>(p);
+    case PlyType::U32: return load<uint32_t>(p);
   }
-  if (t == "double" || t == "float64") {
-    double v;
-    std::memcpy(&v, p, 8);
-    return v;
-  }
-  if (t == "uchar" || t == "uint8") return static_cast<unsigned char>(*p);
-  if (t == "char" || t == "int8") return static_cast<signed char>(*p);
-  if (t == "short" || t == "int16") {
-    int16_t v;
-    std::memcpy(&v, p, 2);
-    return v;
-  }
-  if (t == "ushort" || t == "uint16") {
-    uint16_t v;
-    std::memcpy(&v, p, 2);
-    return v;
-  }
-  if (t == "int" || t == "int32") {
-    int32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-  }
-  uint32_t v;
-  std::memcpy(&v, p, 4);
-  return v;
+  return 0;
 }
 
 }  // namespace
@@ -91,7 +91,7 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   std::string line, format;
   int64_t n = -1;
   bool in_vertex = false;
-  std::vector<std::pair<std::string, std::string>> props;  // name, type
+  std::vector<std::pair<std::string, const PlyTypeName*>> props;
   while (std::getline(hs, line)) {
     std::istringstream ls(line);
     std::string word;
@@ -110,8 +110,9 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
       ls >> type;
       if (type == "list") fail(path, ": list properties are not supported in the vertex element");
       ls >> name;
-      if (type_size(type) == 0) fail(path, ": property '", name, "' has unknown type '", type, "'");
-      props.emplace_back(name, type);
+      const PlyTypeName* t = find_type(type);
+      if (!t) fail(path, ": property '", name, "' has unknown type '", type, "'");
+      props.emplace_back(name, t);
     }
   }
   if (format != "binary_little_endian") fail(path, ": format '", format, "' is not supported (binary_little_endian only)");
@@ -121,7 +122,7 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   size_t stride = 0;
   for (size_t i = 0; i < props.size(); ++i) {
     offset[i] = stride;
-    stride += type_size(props[i].second);
+    stride += props[i].second->size;
     for (int k = 0; k < 17; ++k)
       if (props[i].first == kProps[k]) col[k] = static_cast<int>(i);
   }
@@ -135,7 +136,7 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   for (int64_t v = 0; v < n; ++v) {
     const char* rec = bytes.data() + data + v * stride;
     for (int k = 0; k < 17; ++k)
-      o[v * 17 + k] = col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second));
+      o[v * 17 + k] = col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second->type));
   }
   Gaussians g;
   g.means = out.narrow(1, 0, 3).contiguous();

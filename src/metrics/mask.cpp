@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "io/tensor_image.h"
 
 namespace isplat {
 
@@ -42,11 +43,7 @@ torch::Tensor projected_mask(const torch::Tensor& depth_in, const torch::Tensor&
     const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);  // default border: never erodes from the image edge
   }
-  auto out = torch::empty({Ht, Wt});
-  float* o = out.data_ptr<float>();
-  for (int y = 0; y < Ht; ++y)
-    for (int x = 0; x < Wt; ++x) o[y * Wt + x] = mask.at<uint8_t>(y, x);
-  return out;
+  return map_to_tensor(mask);
 }
 
 }  // namespace isplat

@@ -21,18 +21,18 @@ ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::stri
   ConfigDocument doc;
   doc.json = config["model"];
   doc.origin[""] = source + " (stored config)";
-  for (const auto& o : overrides) {  // reuse the --set machinery on the model section
-    ConfigDocument extra = merge_config("", {o});
-    doc.json.merge_patch(extra.json);
-    for (const auto& [k, v] : extra.origin) doc.origin[k] = v;
-  }
+  apply_overrides(doc, overrides);  // the --set machinery, on the model section
   ModelOptions options;
   apply_config(doc, options);
   return options;
 }
 
 std::unique_ptr<Pipeline> load_pipeline(const std::string& path, const std::vector<std::string>& overrides) {
-  const Checkpoint ck = load_checkpoint(path);
+  return load_pipeline(load_checkpoint(path), path, overrides);
+}
+
+std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string& path,
+                                        const std::vector<std::string>& overrides) {
   ModelOptions options = model_options_from_checkpoint(ck, path, overrides);
   options.encoder.vit.weights.clear();  // the checkpoint already holds the ViT weights
   auto pipeline = std::make_unique<Pipeline>(options, &ck.tensors);
