@@ -214,17 +214,7 @@ void run(const Case& cs) {
   const double rss0 = status_mb("VmRSS");
 
   // Per-phase times through the kernels (the same calls render() makes), and the buffer sizes.
-  splat::CameraParams cp;
-  {
-    const auto K = cam.K.to(torch::kFloat64), T = cam.T_cw.to(torch::kFloat64);
-    cp.fx = K[0][0].item<double>(), cp.skew = K[0][1].item<double>(), cp.cx = K[0][2].item<double>();
-    cp.fy = K[1][1].item<double>(), cp.cy = K[1][2].item<double>();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) cp.R[3 * r + c] = T[r][c].item<double>();
-      cp.t[r] = T[r][3].item<double>();
-    }
-    cp.width = cs.W, cp.height = cs.H;
-  }
+  const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, cs.W, cs.H);
   const double bg[3] = {0, 0, 0};
   std::vector<double> t_proj, t_bin, t_rast, t_rbwd, t_pbwd, c_fwd, c_bwd;
   int64_t isects = 0, visible = 0;

@@ -4,12 +4,13 @@
 
 #include <torch/torch.h>
 
-#include <Eigen/Geometry>
+#include <Eigen/Core>
 #include <cmath>
 
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
+#include "geometry/convert.h"
 
 namespace isplat {
 
@@ -50,9 +51,8 @@ torch::Tensor quaternion_from_matrix(const torch::Tensor& R) {
   Eigen::Matrix3d M;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) M(i, j) = m[i * 3 + j];
-  Eigen::Quaterniond q(M);
-  q.normalize();
-  return torch::tensor({q.w(), q.x(), q.y(), q.z()}, torch::kFloat64).to(R.scalar_type());
+  const Eigen::Vector4d q = quaternion_from_rotation(M);  // w >= 0
+  return torch::tensor({q[0], q[1], q[2], q[3]}, torch::kFloat64).to(R.scalar_type());
 }
 
 Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,

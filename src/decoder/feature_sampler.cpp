@@ -125,16 +125,17 @@ class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
 
 
 // ---- gated fusion fused with its four queries
-template <class T>
-void gated_forward(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, T* out, int64_t N, int64_t C,
-                   int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H) {
+// For each support n and channel c: the four bilinear queries and the gate, handed to visit(n, c, fd, fc, g).
+// The forward and the backward share it, so the backward recomputes exactly the forward's values.
+template <class T, class Visit>
+void for_each_gated_query(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, int64_t N, int64_t C, int64_t hd,
+                          int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H, const Visit& visit) {
   at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
     for (int64_t n = b; n < e; ++n) {
       int64_t id[4], ic[4];
       T wdt[4], wct[4];
       corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hd, wd, id, wdt);
       corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hc, wc, ic, wct);
-      T* o = out + n * C;
       for (int64_t c = 0; c < C; ++c) {
         T fd = 0, g1 = 0, fc = 0, g2 = 0;
         for (int k = 0; k < 4; ++k) {
@@ -143,11 +144,17 @@ void gated_forward(const T* d, const T* gd, const T* cp, const T* gc, const T* u
           fc += wct[k] * cp[ic[k] * C + c];
           g2 += wct[k] * gc[ic[k] * C + c];
         }
-        const T g = T(1) / (T(1) + std::exp(-(g1 + g2)));
-        o[c] = g * fd + (T(1) - g) * fc;
+        visit(n, c, fd, fc, T(1) / (T(1) + std::exp(-(g1 + g2))));
       }
     }
   });
+}
+
+template <class T>
+void gated_forward(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, T* out, int64_t N, int64_t C,
+                   int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H) {
+  for_each_gated_query(d, gd, cp, gc, uv, N, C, hd, wd, hc, wc, W, H,
+                       [&](int64_t n, int64_t c, T fd, T fc, T g) { out[n * C + c] = g * fd + (T(1) - g) * fc; });
 }
 
 // Per-support gradients of the four queried values (recomputed from the maps, nothing stored).
@@ -155,26 +162,11 @@ template <class T>
 void gated_backward_rows(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, const T* go, T* r_d, T* r_c,
                          T* r_g, int64_t N, int64_t C, int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W,
                          int64_t H) {
-  at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
-    for (int64_t n = b; n < e; ++n) {
-      int64_t id[4], ic[4];
-      T wdt[4], wct[4];
-      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hd, wd, id, wdt);
-      corners<T>(uv[2 * n], uv[2 * n + 1], W, H, hc, wc, ic, wct);
-      for (int64_t c = 0; c < C; ++c) {
-        T fd = 0, g1 = 0, fc = 0, g2 = 0;
-        for (int k = 0; k < 4; ++k) {
-          fd += wdt[k] * d[id[k] * C + c];
-          g1 += wdt[k] * gd[id[k] * C + c];
-          fc += wct[k] * cp[ic[k] * C + c];
-          g2 += wct[k] * gc[ic[k] * C + c];
-        }
-        const T g = T(1) / (T(1) + std::exp(-(g1 + g2))), dh = go[n * C + c];
-        r_d[n * C + c] = g * dh;                                 // d h / d fd
-        r_c[n * C + c] = (T(1) - g) * dh;                        // d h / d fc
-        r_g[n * C + c] = (fd - fc) * dh * g * (T(1) - g);        // d h / d (g1 + g2)
-      }
-    }
+  for_each_gated_query(d, gd, cp, gc, uv, N, C, hd, wd, hc, wc, W, H, [&](int64_t n, int64_t c, T fd, T fc, T g) {
+    const T dh = go[n * C + c];
+    r_d[n * C + c] = g * dh;                           // d h / d fd
+    r_c[n * C + c] = (T(1) - g) * dh;                  // d h / d fc
+    r_g[n * C + c] = (fd - fc) * dh * g * (T(1) - g);  // d h / d (g1 + g2)
   });
 }
 
@@ -236,10 +228,6 @@ torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor
   ISPLAT_CHECK(width > 0 && height > 0, "sample_features: image size must be positive");
   return SampleFeatures::apply(features, uv.detach(), width, height);
 }
-
-}  // namespace isplat
-
-namespace isplat {
 
 torch::Tensor gated_sample(const torch::Tensor& dino, const torch::Tensor& gate_dino, const torch::Tensor& cnn_proj,
                            const torch::Tensor& gate_cnn, const torch::Tensor& uv, int64_t width, int64_t height) {

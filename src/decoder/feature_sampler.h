@@ -10,10 +10,6 @@ namespace isplat {
 // Returns [N,C]. Supports are fixed inputs here, so uv receives no gradient.
 torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor& uv, int64_t width, int64_t height);
 
-}  // namespace isplat
-
-namespace isplat {
-
 // The decoder's gated fusion fused with the four feature queries it needs (DESIGN §3):
 //   fd = q(dino), fc = q(cnn_proj), g = sigmoid(q(gate_dino) + q(gate_cnn)), h = g * fd + (1 - g) * fc,
 // where q samples a map bilinearly at uv as sample_features does. dino/gate_dino share one resolution,

@@ -3,10 +3,13 @@
 
 #include <torch/torch.h>
 
+#include <functional>
+
 #include "core/config.h"
 #include "core/error.h"
 #include "decoder/composer.h"
 #include "decoder/feature_sampler.h"
+#include "geometry/camera_torch.h"
 
 namespace isplat {
 namespace nn = torch::nn;
@@ -34,7 +37,7 @@ torch::Tensor query_features(const torch::Tensor& features, const torch::Tensor&
 ImplicitDecoderImpl::ImplicitDecoderImpl(const DecoderOptions& o, int64_t dd, int64_t cd)
     : dino_dim(dd), cnn_dim(cd), chunk(o.chunk) {
   ISPLAT_CHECK(dd > 0 || cd > 0, "decoder: both encoder branches are off");
-  fused_dim = dd > 0 ? dd : cd;
+  const int64_t fused_dim = dd > 0 ? dd : cd;
   if (dd > 0 && cd > 0) {
     cnn_proj = register_module("cnn_proj", nn::Linear(cd, dd));
     gate = register_module("gate", nn::Linear(2 * dd, dd));
@@ -62,6 +65,10 @@ torch::Tensor ImplicitDecoderImpl::decode_features(const torch::Tensor& f_dino, 
   } else {
     h = dino_dim > 0 ? f_dino : f_cnn;
   }
+  return mlp_head(h);
+}
+
+torch::Tensor ImplicitDecoderImpl::mlp_head(torch::Tensor h) {
   for (auto& layer : *mlp) h = torch::relu(layer->as<nn::Linear>()->forward(h));
   return head->forward(h);
 }
@@ -72,32 +79,22 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
   // cnn_proj and the gate's input layer are linear, and bilinear sampling is a convex combination, so
   // they commute: apply them once per feature texel, then sample. Same result as decode_features() on
   // sampled features, at a fraction of the cost (thousands of texels instead of 10^5..10^6 supports).
-  torch::Tensor dino, cproj;
+  std::function<torch::Tensor(const torch::Tensor&)> fused;  // the fused feature [n,C] of a chunk of supports
+  torch::Tensor dino, cproj, g_dino, g_cnn;
   if (dino_dim > 0 && cnn_dim > 0) {
     dino = f.dino.narrow(0, 0, 1);
     auto as_conv = [](const torch::Tensor& w) { return w.view({w.size(0), w.size(1), 1, 1}); };
-    namespace F = torch::nn::functional;
     cproj = F::conv2d(f.cnn.narrow(0, 0, 1), as_conv(cnn_proj->weight), F::Conv2dFuncOptions().bias(cnn_proj->bias));
     auto wg = gate->weight;  // [Cd, 2Cd] acting on [f_dino, c']
-    auto g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
-    auto g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
-    std::vector<torch::Tensor> out;
-    for (int64_t s = 0; s < N; s += chunk) {
-      auto part = uv.narrow(0, s, std::min(chunk, N - s));
-      auto h = gated_sample(dino, g_dino, cproj, g_cnn, part, width, height);
-      for (auto& layer : *mlp) h = torch::relu(layer->as<torch::nn::Linear>()->forward(h));
-      out.push_back(head->forward(h));
-    }
-    return out.size() == 1 ? out[0] : torch::cat(out, 0);
+    g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
+    g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
+    fused = [&](const torch::Tensor& part) { return gated_sample(dino, g_dino, cproj, g_cnn, part, width, height); };
+  } else {  // one branch: its features are h
+    const torch::Tensor map = (dino_dim > 0 ? f.dino : f.cnn).narrow(0, 0, 1);
+    fused = [&, map](const torch::Tensor& part) { return sample_features(map, part, width, height); };
   }
   std::vector<torch::Tensor> out;
-  for (int64_t s = 0; s < N; s += chunk) {
-    auto part = uv.narrow(0, s, std::min(chunk, N - s));
-    torch::Tensor fd, fc;
-    if (dino_dim > 0) fd = sample_features(f.dino.narrow(0, 0, 1), part, width, height);
-    if (cnn_dim > 0) fc = sample_features(f.cnn.narrow(0, 0, 1), part, width, height);
-    out.push_back(decode_features(fd, fc));
-  }
+  for (int64_t s = 0; s < N; s += chunk) out.push_back(mlp_head(fused(uv.narrow(0, s, std::min(chunk, N - s)))));
   return out.size() == 1 ? out[0] : torch::cat(out, 0);
 }
 
@@ -113,7 +110,7 @@ DenseHeadImpl::DenseHeadImpl(int64_t dd, int64_t cd, int64_t width) : dino_dim(d
 
 torch::Tensor DenseHeadImpl::forward(const EncoderFeatures& f, int64_t width, int64_t height) {
   auto up = [](const torch::Tensor& x, int64_t h, int64_t w) {
-    return F::interpolate(x, F::InterpolateFuncOptions().size(std::vector<int64_t>{h, w}).mode(torch::kBilinear).align_corners(false));
+    return resize_bilinear(x, h, w);
   };
   const int64_t h4 = (height + 3) / 4, w4 = (width + 3) / 4;
   std::vector<torch::Tensor> parts;

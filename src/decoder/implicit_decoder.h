@@ -33,9 +33,10 @@ struct ImplicitDecoderImpl : torch::nn::Module {
   // Updates [N,14] for supports uv [N,2] of a W x H image, from one image's features (batch index 0).
   torch::Tensor forward(const torch::Tensor& uv, int64_t width, int64_t height, const EncoderFeatures& features);
   torch::Tensor decode_features(const torch::Tensor& f_dino, const torch::Tensor& f_cnn);  // [N,*] -> [N,14]
+  torch::Tensor mlp_head(torch::Tensor fused);  // the MLP and the head on fused features [N,C] -> [N,14]
   torch::nn::Linear cnn_proj{nullptr}, gate{nullptr}, head{nullptr};
   torch::nn::ModuleList mlp{nullptr};
-  int64_t dino_dim, cnn_dim, fused_dim, chunk;
+  int64_t dino_dim, cnn_dim, chunk;
 };
 TORCH_MODULE(ImplicitDecoder);
 

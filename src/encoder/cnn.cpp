@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include "core/config.h"
+#include "geometry/camera_torch.h"
 
 namespace isplat {
 namespace nn = torch::nn;
@@ -53,10 +54,7 @@ torch::Tensor CNNEncoderImpl::forward(const torch::Tensor& image) {
   for (size_t b = 0; b < blocks->size(); ++b) {
     x = blocks[b]->as<ResidualBlock>()->forward(x);
     if (b % 2 == 1)  // end of a stage: H/2, H/4, H/8, H/16 -> all to H/4
-      scales.push_back(F::interpolate(x, F::InterpolateFuncOptions()
-                                             .size(std::vector<int64_t>{H4, W4})
-                                             .mode(torch::kBilinear)
-                                             .align_corners(false)));
+      scales.push_back(resize_bilinear(x, H4, W4));
   }
   auto fused = torch::relu(instance_norm(fuse->forward(torch::cat(scales, 1))));
   return project->forward(fused);

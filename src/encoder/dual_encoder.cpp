@@ -6,9 +6,9 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "geometry/camera_torch.h"
 
 namespace isplat {
-namespace F = torch::nn::functional;
 
 void EncoderOptions::visit(ConfigVisitor& v) {
   v.field("dino", dino, "use the ViT (DINO) branch; false = the 'w/o DINO' ablation");
@@ -41,7 +41,7 @@ EncoderFeatures DualEncoderImpl::forward(const torch::Tensor& image) {
   const int64_t H = std::max<int64_t>(16, (image.size(2) + 8) / 16 * 16), W = std::max<int64_t>(16, (image.size(3) + 8) / 16 * 16);
   torch::Tensor x = image;
   if (H != image.size(2) || W != image.size(3))
-    x = F::interpolate(image, F::InterpolateFuncOptions().size(std::vector<int64_t>{H, W}).mode(torch::kBilinear).align_corners(false));
+    x = resize_bilinear(image, H, W);
   EncoderFeatures f;
   if (vit) f.dino = vit->forward(x);
   if (cnn) f.cnn = cnn->forward(x);

@@ -8,11 +8,18 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "encoder/imagenet.h"
 #include "io/checkpoint.h"
 #include "io/safetensors.h"
 
 namespace isplat {
 namespace nn = torch::nn;
+
+torch::Tensor imagenet_mean() { return torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]}).view({1, 3, 1, 1}); }
+torch::Tensor imagenet_std() { return torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]}).view({1, 3, 1, 1}); }
+torch::Tensor imagenet_normalize(const torch::Tensor& x) {
+  return (x - imagenet_mean().to(x.dtype())) / imagenet_std().to(x.dtype());
+}
 
 void ViTOptions::visit(ConfigVisitor& v) {
   v.field("size", size, "ViT size: S (384-d, 12 blocks), B (768, 12), L (1024, 24; paper), or custom", {"S", "B", "L", "custom"});
@@ -26,23 +33,32 @@ void ViTOptions::visit(ConfigVisitor& v) {
                               "(no pretrained DINO weights ship with this project)");
 }
 
+namespace {
+struct ViTPreset {
+  const char* size;
+  int64_t dim, blocks, heads;
+};
+constexpr ViTPreset kViTPresets[] = {{"S", 384, 12, 6}, {"B", 768, 12, 12}, {"L", 1024, 24, 16}};
+
+const ViTPreset* vit_preset(const std::string& size) {
+  for (const auto& p : kViTPresets)
+    if (size == p.size) return &p;
+  return nullptr;  // custom
+}
+}  // namespace
+
 int64_t ViTOptions::dim() const {
-  if (size == "S") return 384;
-  if (size == "B") return 768;
-  if (size == "L") return 1024;
+  if (const ViTPreset* p = vit_preset(size)) return p->dim;
   ISPLAT_CHECK(embed_dim > 0, "encoder.vit.size = custom needs encoder.vit.embed_dim");
   return embed_dim;
 }
 int64_t ViTOptions::blocks() const {
-  if (size == "S" || size == "B") return 12;
-  if (size == "L") return 24;
+  if (const ViTPreset* p = vit_preset(size)) return p->blocks;
   ISPLAT_CHECK(depth > 0, "encoder.vit.size = custom needs encoder.vit.depth");
   return depth;
 }
 int64_t ViTOptions::num_heads() const {
-  if (size == "S") return 6;
-  if (size == "B") return 12;
-  if (size == "L") return 16;
+  if (const ViTPreset* p = vit_preset(size)) return p->heads;
   ISPLAT_CHECK(heads > 0, "encoder.vit.size = custom needs encoder.vit.heads");
   return heads;
 }
@@ -149,10 +165,7 @@ torch::Tensor DinoViTImpl::forward(const torch::Tensor& image) {
   ISPLAT_CHECK(image.dim() == 4 && image.size(1) == 3, "ViT: image must be [B, 3, H, W], got ", image.sizes());
   ISPLAT_CHECK(image.size(2) >= 16 && image.size(3) >= 16 && image.size(2) % 16 == 0 && image.size(3) % 16 == 0,
                "ViT: image size ", image.size(3), "x", image.size(2), " must be a multiple of the 16-px patch");
-  static const float mean[] = {0.485f, 0.456f, 0.406f}, stdv[] = {0.229f, 0.224f, 0.225f};
-  auto m = torch::tensor({mean[0], mean[1], mean[2]}).view({1, 3, 1, 1}).to(image.dtype());
-  auto s = torch::tensor({stdv[0], stdv[1], stdv[2]}).view({1, 3, 1, 1}).to(image.dtype());
-  auto x = patch_embed->proj->forward((image - m) / s);  // [B,C,h,w]
+  auto x = patch_embed->proj->forward(imagenet_normalize(image));  // [B,C,h,w]
   const int64_t B = x.size(0), h = x.size(2), w = x.size(3);
   x = x.flatten(2).transpose(1, 2);  // [B,h*w,C]
   std::vector<torch::Tensor> parts = {(cls_token + 0 * mask_token.unsqueeze(0)).expand({B, 1, dim_})};

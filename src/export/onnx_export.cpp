@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "decoder/composer.h"
+#include "encoder/imagenet.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -139,8 +140,7 @@ std::string rotate_half(Graph& G, const std::string& x, int64_t dh) {
 std::string export_vit(Graph& G, DinoViTImpl& vit, const std::string& image, int64_t H, int64_t W) {
   const int64_t C = vit.dim(), h = H / 16, w = W / 16, P = h * w;
   const int64_t R = vit.storage_tokens.defined() ? vit.storage_tokens.size(1) : 0, prefix = 1 + R, N = prefix + P;
-  auto mean = torch::tensor({0.485f, 0.456f, 0.406f}).view({1, 3, 1, 1}), stdv = torch::tensor({0.229f, 0.224f, 0.225f}).view({1, 3, 1, 1});
-  auto x = G.op("Div", {G.op("Sub", {image, G.init("mean", mean)}), G.init("std", stdv)});
+  auto x = G.op("Div", {G.op("Sub", {image, G.init("mean", imagenet_mean())}), G.init("std", imagenet_std())});
   x = G.conv(x, vit.patch_embed->proj);
   x = G.transpose(G.reshape(x, {1, C, P}), {0, 2, 1});
   std::vector<torch::Tensor> pre = {vit.cls_token};
@@ -297,13 +297,9 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
   std::string delta;
   if (model->decoder) delta = export_decoder(G, *model->decoder, dino, cnn, grid);
   else delta = export_dense(G, *model->dense, dino, cnn, o.height, o.width, grid);
-  auto out = G.op("Identity", {delta});
-  add_io(g->mutable_output(), out, {std::string("num_supports"), int64_t{kDeltaDim}});
-  // Name the output "delta".
-  for (auto& n : *g->mutable_node())
-    for (auto& name : *n.mutable_output())
-      if (name == out) name = "delta";
-  g->mutable_output(0)->set_name("delta");
+  G.op("Identity", {delta});
+  g->mutable_node(g->node_size() - 1)->set_output(0, "delta");  // the graph output under its public name
+  add_io(g->mutable_output(), "delta", {std::string("num_supports"), int64_t{kDeltaDim}});
   return mp;
 }
 

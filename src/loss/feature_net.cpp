@@ -9,23 +9,6 @@
 namespace isplat {
 namespace F = torch::nn::functional;
 
-namespace {
-using L = std::vector<std::tuple<char, int64_t, int64_t, int64_t, int64_t, int64_t>>;  // kind, in, out, k, stride, pad
-
-void vgg_layers(const std::vector<int64_t>& cfg, std::vector<std::tuple<char, int64_t, int64_t>>& out) {
-  int64_t in = 3;
-  for (int64_t c : cfg) {
-    if (c == 0) {
-      out.emplace_back('M', 0, 0);
-    } else {
-      out.emplace_back('C', in, c);
-      out.emplace_back('R', 0, 0);
-      in = c;
-    }
-  }
-}
-}  // namespace
-
 FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std::string& path)
     : arch_(arch), taps_(std::move(taps)) {
   auto conv = [&](int64_t in, int64_t out, int64_t k, int64_t s, int64_t p) {
@@ -47,6 +30,17 @@ FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std
     l.e3 = e3;
     layers_.push_back(l);
   };
+  auto vgg = [&](const std::vector<int64_t>& cfg) {  // conv widths, 0 = max-pool
+    int64_t in = 3;
+    for (int64_t c : cfg) {
+      if (c == 0) {
+        pool(2, 2, false);
+      } else {
+        conv(in, c, 3, 1, 1), relu();
+        in = c;
+      }
+    }
+  };
   if (arch == "squeezenet1_1") {
     conv(3, 64, 3, 2, 0), relu(), pool(3, 2, true), fire(64, 16, 64, 64), fire(128, 16, 64, 64), pool(3, 2, true),
         fire(128, 32, 128, 128), fire(256, 32, 128, 128), pool(3, 2, true), fire(256, 48, 192, 192),
@@ -54,23 +48,24 @@ FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std
   } else if (arch == "alexnet") {
     conv(3, 64, 11, 4, 2), relu(), pool(3, 2, false), conv(64, 192, 5, 1, 2), relu(), pool(3, 2, false),
         conv(192, 384, 3, 1, 1), relu(), conv(384, 256, 3, 1, 1), relu(), conv(256, 256, 3, 1, 1), relu(), pool(3, 2, false);
-  } else if (arch == "vgg16" || arch == "vgg19") {
-    std::vector<std::tuple<char, int64_t, int64_t>> v;
-    if (arch == "vgg16")
-      vgg_layers({64, 64, 0, 128, 128, 0, 256, 256, 256, 0, 512, 512, 512, 0, 512, 512, 512, 0}, v);
-    else
-      vgg_layers({64, 64, 0, 128, 128, 0, 256, 256, 256, 256, 0, 512, 512, 512, 512, 0, 512, 512, 512, 512, 0}, v);
-    for (auto& [k, in, out] : v) {
-      if (k == 'C') conv(in, out, 3, 1, 1);
-      if (k == 'R') relu();
-      if (k == 'M') pool(2, 2, false);
-    }
+  } else if (arch == "vgg16") {
+    vgg({64, 64, 0, 128, 128, 0, 256, 256, 256, 0, 512, 512, 512, 0, 512, 512, 512, 0});
+  } else if (arch == "vgg19") {
+    vgg({64, 64, 0, 128, 128, 0, 256, 256, 256, 256, 0, 512, 512, 512, 512, 0, 512, 512, 512, 512, 0});
   } else {
     fail("feature network: unknown architecture '", arch, "' (squeezenet1_1 | vgg16 | vgg19 | alexnet)");
   }
   for (int t : taps_) ISPLAT_CHECK(t >= 0 && t < static_cast<int>(layers_.size()), arch, ": tap ", t, " out of range");
-  // Parameters, in torchvision's names.
+  // Parameters, in torchvision's names: random only when no file is given, else the shapes the file
+  // must provide.
+  const bool random = path.empty();
+  std::map<std::string, std::vector<int64_t>> expected;
   auto add = [&](const std::string& name, int64_t out, int64_t in, int64_t k) {
+    if (!random) {
+      expected[name + ".weight"] = {out, in, k, k};
+      expected[name + ".bias"] = {out};
+      return;
+    }
     const double bound = 1.0 / std::sqrt(static_cast<double>(in * k * k));
     params_[name + ".weight"] = (torch::rand({out, in, k, k}) * 2 - 1) * bound;
     params_[name + ".bias"] = (torch::rand({out}) * 2 - 1) * bound;
@@ -85,10 +80,10 @@ FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std
       add(n + ".expand3x3", l.e3, l.squeeze, 3);
     }
   }
-  if (path.empty()) return;
+  if (random) return;
   const SafeTensors st = read_safetensors(path);
   std::vector<std::string> missing;
-  for (auto& [name, t] : params_) {
+  for (const auto& [name, shape] : expected) {
     const std::string alt = "features." + name;
     const std::string key = st.has(name) ? name : st.has(alt) ? alt : "";
     if (key.empty()) {
@@ -96,8 +91,9 @@ FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std
       continue;
     }
     const auto& w = st.at(key);
-    if (w.sizes() != t.sizes()) fail(path, ": tensor '", key, "' has shape ", w.sizes(), ", ", arch, " expects ", t.sizes());
-    t = w.to(torch::kFloat32).contiguous();
+    if (w.sizes() != torch::IntArrayRef(shape))
+      fail(path, ": tensor '", key, "' has shape ", w.sizes(), ", ", arch, " expects ", torch::IntArrayRef(shape));
+    params_[name] = w.to(torch::kFloat32).contiguous();
   }
   if (!missing.empty())
     fail(path, ": not a torchvision ", arch, " `features` checkpoint; missing ", missing.size(), " tensors, e.g. '",
@@ -156,10 +152,6 @@ std::vector<int> FeatureNet::perceptual_taps(const std::string& arch) {
   fail("perceptual loss: unknown network '", arch, "'");
 }
 
-torch::Tensor imagenet_normalize(const torch::Tensor& x) {
-  auto m = torch::tensor({0.485f, 0.456f, 0.406f}).view({1, 3, 1, 1}).to(x.dtype());
-  auto s = torch::tensor({0.229f, 0.224f, 0.225f}).view({1, 3, 1, 1}).to(x.dtype());
-  return (x - m) / s;
-}
+torch::Tensor normalize_channels(const torch::Tensor& f) { return f / (torch::sqrt((f * f).sum(1, true)) + 1e-10); }
 
 }  // namespace isplat

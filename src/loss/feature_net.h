@@ -40,7 +40,7 @@ class FeatureNet {
   bool pretrained_ = false;
 };
 
-// ImageNet normalization of [0,1] RGB, as torchvision networks expect.
-torch::Tensor imagenet_normalize(const torch::Tensor& x);
+// Feature maps [B,C,H,W] scaled to unit length over channels (LPIPS; the perceptual loss does the same).
+torch::Tensor normalize_channels(const torch::Tensor& features);
 
 }  // namespace isplat

@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "encoder/imagenet.h"
 
 namespace isplat {
 
@@ -65,10 +66,9 @@ torch::Tensor PerceptualLoss::operator()(const torch::Tensor& x, const torch::Te
   }
   // Features are unit-normalized over channels (as LPIPS does), so every layer contributes on the same
   // scale and the term is commensurate with L1 on [0,1] images.
-  auto unit = [](const torch::Tensor& f) { return f / (torch::sqrt((f * f).sum(1, true)) + 1e-10); };
   torch::Tensor total = torch::zeros({}, x.options());
   for (size_t l = 0; l < fx.size(); ++l) {
-    const auto a = unit(fx[l]), b = unit(fy[l]);
+    const auto a = normalize_channels(fx[l]), b = normalize_channels(fy[l]);
     total = total + torch::mse_loss(a, b) * static_cast<double>(a.size(1));  // per-pixel squared distance
     if (gamma_ > 0) total = total + gamma_ * torch::mse_loss(gram_matrix(a), gram_matrix(b)) * static_cast<double>(a.size(1));
   }

@@ -91,9 +91,17 @@ double ssim(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor&
   return map.masked_select(ok).sum().item<double>() / n;
 }
 
+namespace {
+// LPIPS network name -> torchvision backbone ("" if unknown); its weights are "<arch>_features.safetensors".
+std::string lpips_arch(const std::string& net) {
+  return net == "squeeze" ? "squeezenet1_1" : net == "alex" ? "alexnet" : net == "vgg" ? "vgg16" : "";
+}
+const char* kLpipsNets = "(squeeze | alex | vgg)";
+}  // namespace
+
 Lpips::Lpips(const std::string& net, const std::string& backbone, const std::string& heads) : net_(net) {
-  const std::string arch = net == "squeeze" ? "squeezenet1_1" : net == "alex" ? "alexnet" : net == "vgg" ? "vgg16" : "";
-  ISPLAT_CHECK(!arch.empty(), "LPIPS: unknown network '", net, "' (squeeze | alex | vgg)");
+  const std::string arch = lpips_arch(net);
+  ISPLAT_CHECK(!arch.empty(), "LPIPS: unknown network '", net, "' ", kLpipsNets);
   ISPLAT_CHECK(!backbone.empty() && !heads.empty(), "LPIPS-", net, " needs a backbone and linear-head weights file");
   features_ = std::make_unique<FeatureNet>(arch, FeatureNet::lpips_taps(arch), backbone);
   const SafeTensors st = read_safetensors(heads);
@@ -119,9 +127,7 @@ double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const t
   const auto fa = features_->forward(prep(a)), fb = features_->forward(prep(b));
   double total = 0;
   for (size_t l = 0; l < fa.size(); ++l) {
-    auto na = fa[l] / (torch::sqrt((fa[l] * fa[l]).sum(1, true)) + 1e-10);
-    auto nb = fb[l] / (torch::sqrt((fb[l] * fb[l]).sum(1, true)) + 1e-10);
-    auto d = F::conv2d((na - nb).pow(2), heads_[l]);  // [1,1,h,w]
+    auto d = F::conv2d((normalize_channels(fa[l]) - normalize_channels(fb[l])).pow(2), heads_[l]);  // [1,1,h,w]
     if (mask.defined()) {
       auto m = F::interpolate(mask.to(torch::kFloat32).view({1, 1, mask.size(0), mask.size(1)}),
                               F::InterpolateFuncOptions().size(std::vector<int64_t>{d.size(2), d.size(3)}).mode(torch::kArea));
@@ -137,10 +143,12 @@ double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const t
 
 std::unique_ptr<Lpips> Lpips::from_folder(const std::string& net, const std::string& folder, std::string& why) {
   namespace fs = std::filesystem;
-  const std::string backbone_name = net == "squeeze" ? "squeezenet1_1_features.safetensors"
-                                    : net == "alex"  ? "alexnet_features.safetensors"
-                                                     : "vgg16_features.safetensors";
-  const fs::path backbone = fs::path(folder) / backbone_name, heads = fs::path(folder) / ("lpips_v0.1_" + net + "_lin.safetensors");
+  const std::string arch = lpips_arch(net);
+  if (arch.empty()) {
+    why = cat("LPIPS: unknown network '", net, "' ", kLpipsNets);
+    return nullptr;
+  }
+  const fs::path backbone = fs::path(folder) / (arch + "_features.safetensors"), heads = fs::path(folder) / ("lpips_v0.1_" + net + "_lin.safetensors");
   if (folder.empty() || !fs::exists(backbone) || !fs::exists(heads)) {
     why = cat("LPIPS-", net, " needs ", backbone.string(), " and ", heads.string());
     return nullptr;

@@ -12,12 +12,13 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "geometry/bilinear.h"
+#include "geometry/camera_torch.h"
 #include "io/checkpoint.h"
 #include "io/safetensors.h"
 #include "prior/learned_depth.h"
 
 namespace isplat {
-namespace F = torch::nn::functional;
 
 void SparsePriorOptions::visit(ConfigVisitor& v) {
   v.field("prompts", prompts, "sparse depth prompts drawn from the source depth (paper: 1500)", Range::at_least(3));
@@ -40,8 +41,8 @@ void PriorOptions::visit(ConfigVisitor& v) {
 }
 
 torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg) {
-  const double f = 0.5 * width / std::tan(0.5 * hfov_deg * M_PI / 180.0);
-  return torch::tensor({f, 0.0, width / 2.0, 0.0, f, height / 2.0, 0.0, 0.0, 1.0}, torch::kFloat64).reshape({3, 3}).to(torch::kFloat32);
+  const Intrinsics k = Intrinsics::from_hfov(hfov_deg * M_PI / 180.0, static_cast<int>(width), static_cast<int>(height));
+  return make_K(k.fx, k.fy, k.cx, k.cy, torch::kFloat32);
 }
 
 namespace {
@@ -104,6 +105,7 @@ class LearnedPrior final : public DepthPrior {
   std::string describe() const override {
     return source_.empty() ? "learned depth net (untrained)" : "learned depth net (" + source_ + ")";
   }
+  const torch::nn::Module* embeddable_weights() const override { return source_.empty() ? nullptr : net_.get(); }
 
  private:
   PriorOptions o_;
@@ -177,25 +179,18 @@ class SparsePrior final : public DepthPrior {
     return cat("sparse prompts (", o_.sparse.prompts, ", noise ", o_.sparse.noise, ") aligning ",
                mono_ ? mono_->describe() : std::string("a constant"));
   }
+  const torch::nn::Module* embeddable_weights() const override { return mono_ ? mono_->embeddable_weights() : nullptr; }
 
  private:
   PriorOptions o_;
   std::unique_ptr<DepthPrior> mono_;
 };
 
-float sample_bilinear(const float* m, int64_t H, int64_t W, double u, double v) {
-  const double x = std::clamp(u - 0.5, 0.0, W - 1.0), y = std::clamp(v - 0.5, 0.0, H - 1.0);
-  const int64_t j = std::min<int64_t>(static_cast<int64_t>(x), W - 2 < 0 ? 0 : W - 2), i = std::min<int64_t>(static_cast<int64_t>(y), H - 2 < 0 ? 0 : H - 2);
-  const int64_t j1 = std::min(j + 1, W - 1), i1 = std::min(i + 1, H - 1);
-  const double fx = x - j, fy = y - i;
-  return static_cast<float>((m[i * W + j] * (1 - fx) + m[i * W + j1] * fx) * (1 - fy) + (m[i1 * W + j] * (1 - fx) + m[i1 * W + j1] * fx) * fy);
-}
-
 }  // namespace
 
 torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise, uint64_t seed) {
   auto d = depth.to(torch::kFloat32).contiguous();
-  auto ok = ((valid != 0) & torch::isfinite(d) & (d > 0)).contiguous();
+  auto ok = usable_depth(d, valid).contiguous();
   auto idx = torch::nonzero(ok.flatten()).squeeze(1);
   ISPLAT_CHECK(idx.numel() > 0, "sparse prior: the source depth has no valid pixel to draw prompts from");
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 12345);
@@ -227,7 +222,7 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   // 1. Global scale/shift in inverse depth: a * r + b = 1/z, least squares with one trimming pass.
   std::vector<double> r(P), t(P);
   for (int64_t i = 0; i < P; ++i) {
-    r[i] = 1.0 / std::max(1e-6f, sample_bilinear(m, H, W, p[3 * i], p[3 * i + 1]));
+    r[i] = 1.0 / std::max(1e-6f, bilinear_at(m, H, W, p[3 * i], p[3 * i + 1]));
     t[i] = 1.0 / std::max(1e-6f, p[3 * i + 2]);
   }
   std::vector<char> use(P, 1);
@@ -237,14 +232,12 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
     for (int64_t i = 0; i < P; ++i)
       if (use[i]) sr += r[i], st += t[i], srr += r[i] * r[i], srt += r[i] * t[i], n += 1;
     const double den = n * srr - sr * sr;
-    if (n >= 2 && std::fabs(den) > 1e-12 * n * srr) {
+    const bool fit = n >= 2 && std::fabs(den) > 1e-12 * n * srr;
+    if (fit) {
       a = (n * srt - sr * st) / den;
       b = (st - a * sr) / n;
-    } else {  // constant mono depth: shift only
-      a = 0;
-      b = st / std::max(1.0, n);
     }
-    if (a < 0) {  // an inverted prior is useless: fall back to a pure shift
+    if (!fit || a < 0) {  // constant mono depth, or an inverted (useless) prior: a pure shift
       a = 0;
       b = st / std::max(1.0, n);
     }
@@ -260,7 +253,7 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   float* al = aligned.data_ptr<float>();
   for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
   std::vector<double> logs(P);
-  for (int64_t i = 0; i < P; ++i) logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, sample_bilinear(al, H, W, p[3 * i], p[3 * i + 1])));
+  for (int64_t i = 0; i < P; ++i) logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1])));
   const int64_t cell = 8, gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
   const double sigma = bandwidth * std::sqrt(double(H) * H + double(W) * W), inv2s2 = 1.0 / (2 * sigma * sigma);
   auto field = torch::empty({1, 1, gh, gw});
@@ -279,7 +272,7 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
         f[gy * gw + gx] = static_cast<float>(s / (sw + 1e-3));  // far from every prompt: no correction
       }
   });
-  auto up = F::interpolate(field, F::InterpolateFuncOptions().size(std::vector<int64_t>{gh * cell, gw * cell}).mode(torch::kBilinear).align_corners(false));
+  auto up = resize_bilinear(field, gh * cell, gw * cell);
   up = up[0][0].narrow(0, 0, H).narrow(1, 0, W);
   return aligned * torch::exp(up);
 }

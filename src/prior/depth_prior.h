@@ -7,6 +7,10 @@
 
 #include <torch/types.h>
 
+namespace torch::nn {
+class Module;
+}
+
 namespace isplat {
 
 class ConfigVisitor;
@@ -49,6 +53,9 @@ class DepthPrior {
   virtual ~DepthPrior() = default;
   virtual PriorOutput predict(const PriorInput& input) = 0;  // frozen: no gradients
   virtual std::string describe() const = 0;
+  // The trained network a checkpoint should carry as "prior/<name>" so it alone predicts from a photo;
+  // null when the prior has no loaded weights (oracle depth, TorchScript, an untrained net).
+  virtual const torch::nn::Module* embeddable_weights() const { return nullptr; }
 };
 
 // `embedded`: tensors "prior/<name>" carried by a checkpoint; when present they replace learned_weights,

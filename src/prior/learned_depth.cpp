@@ -6,10 +6,10 @@
 #include <cmath>
 
 #include "encoder/cnn.h"
+#include "geometry/camera_torch.h"
 
 namespace isplat {
 namespace nn = torch::nn;
-namespace F = torch::nn::functional;
 
 LearnedDepthNetImpl::LearnedDepthNetImpl(int64_t w) {
   stem = register_module("stem", nn::Conv2d(nn::Conv2dOptions(3, w, 3).padding(1)));
@@ -34,7 +34,7 @@ torch::Tensor LearnedDepthNetImpl::forward_log(const torch::Tensor& image) {
   for (auto& m : *up) {
     auto skip = skips.back();
     skips.pop_back();
-    x = F::interpolate(x, F::InterpolateFuncOptions().size(std::vector<int64_t>{skip.size(2), skip.size(3)}).mode(torch::kBilinear).align_corners(false));
+    x = resize_bilinear(x, skip.size(2), skip.size(3));
     x = torch::relu(instance_norm(m->as<nn::Conv2d>()->forward(torch::cat({x, skip}, 1))));
   }
   return head->forward(x);

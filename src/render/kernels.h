@@ -29,6 +29,11 @@ struct CameraParams {
   int64_t tiles_y() const { return (height + kTile - 1) / kTile; }
 };
 
+// K [3,3] and T_cw [4,4] (any float dtype) as CameraParams. With `validate`, non-finite values,
+// non-positive focal lengths and a K that is not [[fx, s, cx], [0, fy, cy], [0, 0, 1]] throw Error.
+CameraParams camera_params(const torch::Tensor& K, const torch::Tensor& T_cw, int64_t width, int64_t height,
+                           bool validate = false);
+
 struct ProjectSettings {
   double near = 0.01;        // cull camera-space z < near
   double dilation = 0.3;     // px² added to the 2D covariance diagonal

@@ -27,6 +27,14 @@ struct Geometry {
   T opac;         // effective opacity o'
 };
 
+// J (2×3, row-major), the projection's Jacobian at depth tz and the clamped normalized point (ac, bc);
+// one definition for the forward and the backward pass.
+template <class T>
+inline void projection_jacobian(T fx, T fy, T sk, T tz, T ac, T bc, T (&J)[6]) {
+  J[0] = fx / tz, J[1] = sk / tz, J[2] = -(fx * ac + sk * bc) / tz;
+  J[3] = 0, J[4] = fy / tz, J[5] = -fy * bc / tz;
+}
+
 // Returns false when the Gaussian is culled (behind the near plane, degenerate, invisible or non-finite).
 template <class T>
 bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& cam, const ProjectSettings& st,
@@ -62,7 +70,8 @@ bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& 
   g.ac = g.u_clamped ? ((uc < ulo ? ulo : uhi) - cx - sk * g.bc) / fx : g.a;
 
   // J (2×3) at the clamped point, then Tm = J·W.
-  const T J[6] = {fx / tz, sk / tz, -(fx * g.ac + sk * g.bc) / tz, 0, fy / tz, -fy * g.bc / tz};
+  T J[6];
+  projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 3; ++c)
       g.Tm[3 * r + c] = J[3 * r] * T(R[c]) + J[3 * r + 1] * T(R[3 + c]) + J[3 * r + 2] * T(R[6 + c]);
@@ -238,7 +247,8 @@ void project_bwd_impl(const T* means, const T* scales, const T* quats, const T* 
           gJ[3 * r + c] =
               gTm[3 * r] * T(R[3 * c]) + gTm[3 * r + 1] * T(R[3 * c + 1]) + gTm[3 * r + 2] * T(R[3 * c + 2]);
       const T tz = g.t[2];
-      const T J[6] = {fx / tz, sk / tz, -(fx * g.ac + sk * g.bc) / tz, 0, fy / tz, -fy * g.bc / tz};
+      T J[6];
+      projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
       T g_tz = 0;
       for (int k = 0; k < 6; ++k) g_tz -= gJ[k] * J[k] / tz;  // every entry of J is ∝ 1/z
       T g_ac = -fx * gJ[2] / tz;

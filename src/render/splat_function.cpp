@@ -1,6 +1,9 @@
 // The autograd Function around the render kernels, plus input validation, batching and RenderOptions.
 #include <torch/torch.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/config.h"
 #include "core/error.h"
 #include "render/kernels.h"
@@ -23,11 +26,24 @@ using torch::Tensor;
 using torch::autograd::AutogradContext;
 using torch::autograd::variable_list;
 
-CameraParams camera_params(const Tensor& K_in, const Tensor& T_in, int64_t width, int64_t height) {
+void check_no_nonfinite(int64_t bad, const char* name) {
+  ISPLAT_CHECK(bad == 0, "render: ", name, " has ", bad, " non-finite value", bad == 1 ? "" : "s");
+}
+
+}  // namespace
+
+CameraParams camera_params(const torch::Tensor& K_in, const torch::Tensor& T_in, int64_t width, int64_t height, bool validate) {
   const auto K = K_in.detach().to(torch::kFloat64).contiguous();
   const auto T = T_in.detach().to(torch::kFloat64).contiguous();
   const double* k = K.data_ptr<double>();
   const double* t = T.data_ptr<double>();
+  if (validate) {
+    check_no_nonfinite(std::count_if(k, k + 9, [](double x) { return !std::isfinite(x); }), "camera K");
+    check_no_nonfinite(std::count_if(t, t + 16, [](double x) { return !std::isfinite(x); }), "camera T_cw");
+    ISPLAT_CHECK(k[0] > 0 && k[4] > 0, "render: camera focal lengths must be positive, got fx=", k[0], " fy=", k[4]);
+    ISPLAT_CHECK(k[3] == 0 && k[6] == 0 && k[7] == 0 && k[8] == 1,
+                 "render: camera K must be [[fx, s, cx], [0, fy, cy], [0, 0, 1]]");
+  }
   CameraParams cam;
   cam.fx = k[0], cam.skew = k[1], cam.cx = k[2], cam.fy = k[4], cam.cy = k[5];
   for (int r = 0; r < 3; ++r) {
@@ -37,6 +53,8 @@ CameraParams camera_params(const Tensor& K_in, const Tensor& T_in, int64_t width
   cam.width = width, cam.height = height;
   return cam;
 }
+
+namespace {
 
 struct Settings {
   ProjectSettings project;
@@ -61,10 +79,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const ProjectSettings ps{options.near, options.dilation, options.antialiased};
     const Projection proj = project_fwd(means, scales, quats, colors, opacities, cam, ps);
     static const char* names[5] = {"means", "scales", "quats", "colors", "opacities"};
-    for (int k = 0; k < 5; ++k) {  // checked in the projection pass rather than by extra passes over the inputs
-      const int64_t bad = proj.nonfinite[k];
-      ISPLAT_CHECK(bad == 0, "render: ", names[k], " has ", bad, " non-finite value", bad == 1 ? "" : "s");
-    }
+    for (int k = 0; k < 5; ++k) check_no_nonfinite(proj.nonfinite[k], names[k]);  // counted by the projection pass
     const TileBins bins = bin_tiles(proj, cam);
     RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data());
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
@@ -98,11 +113,6 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
   }
 };
 
-void check_finite(const Tensor& t, const char* name) {
-  const int64_t bad = t.numel() == 0 ? 0 : torch::logical_not(torch::isfinite(t)).sum().item<int64_t>();
-  ISPLAT_CHECK(bad == 0, "render: ", name, " has ", bad, " non-finite value", bad == 1 ? "" : "s");
-}
-
 Tensor checked(const Tensor& t, const char* name, int64_t n, int64_t cols, torch::Dtype dtype) {
   ISPLAT_CHECK(t.defined(), "render: ", name, " is undefined");
   ISPLAT_CHECK(t.device().is_cpu(), "render: ", name, " must be on the CPU, got ", t.device());
@@ -129,14 +139,7 @@ RenderOutput render_one(const Gaussians& g, const Camera& cam, const RenderOptio
                "render: camera K must be [3, 3]");
   ISPLAT_CHECK(cam.T_cw.defined() && cam.T_cw.dim() == 2 && cam.T_cw.size(0) == 4 && cam.T_cw.size(1) == 4,
                "render: camera T_cw must be [4, 4]");
-  check_finite(cam.K, "camera K");
-  check_finite(cam.T_cw, "camera T_cw");
-  const CameraParams cp = camera_params(cam.K, cam.T_cw, cam.width, cam.height);
-  ISPLAT_CHECK(cp.fx > 0 && cp.fy > 0, "render: camera focal lengths must be positive, got fx=", cp.fx, " fy=", cp.fy);
-  const auto k = cam.K.to(torch::kFloat64);
-  ISPLAT_CHECK(k[1][0].item<double>() == 0 && k[2][0].item<double>() == 0 && k[2][1].item<double>() == 0 &&
-                   k[2][2].item<double>() == 1,
-               "render: camera K must be [[fx, s, cx], [0, fy, cy], [0, 0, 1]]");
+  camera_params(cam.K, cam.T_cw, cam.width, cam.height, /*validate=*/true);
   const auto outs =
       SplatFunction::apply(means, scales, quats, colors, opacities, cam.K, cam.T_cw, cam.width, cam.height, options);
   return {outs[0], outs[1], outs[2], outs[3]};

@@ -7,10 +7,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/bilinear.h"
+#include "geometry/camera_torch.h"
 
 namespace isplat {
 
@@ -51,8 +52,7 @@ Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const tor
                "sampler: image must be [3, H, W] matching depth ", depth.sizes(), ", got ", image.sizes());
   ISPLAT_CHECK(K.sizes() == torch::IntArrayRef({3, 3}), "sampler: K must be [3, 3], got ", K.sizes());
   d_keep = depth.detach().to(torch::kFloat32).contiguous();
-  // NaN/inf/<=0 depth is invalid whatever the mask says.
-  v_keep = ((valid.detach().to(torch::kFloat32) != 0) & torch::isfinite(d_keep) & (d_keep > 0)).to(torch::kFloat32).contiguous();
+  v_keep = usable_depth(d_keep, valid.detach()).to(torch::kFloat32).contiguous();
   i_keep = image.detach().to(torch::kFloat32).contiguous();
   auto Kd = K.detach().to(torch::kFloat64).contiguous();
   const double* k = Kd.data_ptr<double>();
@@ -95,15 +95,6 @@ double triangle_area(const Grid& g, int64_t i, int64_t j, int t) {
   return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
 }
 
-inline float bilinear(const float* m, int64_t H, int64_t W, double u, double v) {
-  const double x = std::clamp(u - 0.5, 0.0, static_cast<double>(W - 1)), y = std::clamp(v - 0.5, 0.0, static_cast<double>(H - 1));
-  const int64_t j0 = std::min<int64_t>(static_cast<int64_t>(x), W - 1), i0 = std::min<int64_t>(static_cast<int64_t>(y), H - 1);
-  const int64_t j1 = std::min(j0 + 1, W - 1), i1 = std::min(i0 + 1, H - 1);
-  const double fx = x - j0, fy = y - i0;
-  return static_cast<float>((m[i0 * W + j0] * (1 - fx) + m[i0 * W + j1] * fx) * (1 - fy) +
-                            (m[i1 * W + j0] * (1 - fx) + m[i1 * W + j1] * fx) * fy);
-}
-
 // 64-bit mix for per-triangle sequence offsets.
 inline uint64_t mix(uint64_t x) {
   x ^= x >> 33;
@@ -122,12 +113,28 @@ void write_support(const Grid& g, const Output& o, int64_t k, double u, double v
   o.uv[2 * k] = static_cast<float>(u);
   o.uv[2 * k + 1] = static_cast<float>(v);
   o.depth[k] = z;
-  for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear(g.image + c * g.H * g.W, g.H, g.W, u, v);
+  for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear_at(g.image + c * g.H * g.W, g.H, g.W, u, v);
   o.area[k] = area;
 }
 
-// Fixed row chunks (independent of the thread count) so sums and outputs are reproducible.
-constexpr int64_t kRowChunk = 8;
+// Runs fn(i) for rows 0..rows-1 in fixed chunks (independent of the thread count), so sums and
+// outputs are reproducible.
+template <class F>
+void for_each_row(int64_t rows, const F& fn) {
+  constexpr int64_t kRowChunk = 8;
+  at::parallel_for(0, (rows + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
+    for (int64_t chunk = b; chunk < e; ++chunk)
+      for (int64_t i = chunk * kRowChunk; i < std::min(rows, (chunk + 1) * kRowChunk); ++i) fn(i);
+  });
+}
+
+// Row offsets from per-row sums: [start, start + s0, start + s0 + s1, ...].
+template <class T>
+std::vector<T> row_offsets(const std::vector<T>& per_row, T start) {
+  std::vector<T> out(per_row.size() + 1, start);
+  for (size_t i = 0; i < per_row.size(); ++i) out[i + 1] = out[i] + per_row[i];
+  return out;
+}
 
 // Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
 double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first) {
@@ -135,22 +142,17 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
   ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
   std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
   std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
-  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
-    for (int64_t chunk = b; chunk < e; ++chunk)
-      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
-        double s = 0;
-        for (int64_t j = 0; j < Wq; ++j)
-          for (int t = 0; t < 2; ++t) {
-            const double a = triangle_area(g, i, j, t);
-            area[(i * Wq + j) * 2 + t] = static_cast<float>(a);
-            s += static_cast<float>(a);
-          }
-        row_sum[i] = s;
+  for_each_row(Hq, [&](int64_t i) {
+    double s = 0;
+    for (int64_t j = 0; j < Wq; ++j)
+      for (int t = 0; t < 2; ++t) {
+        const double a = triangle_area(g, i, j, t);
+        area[(i * Wq + j) * 2 + t] = static_cast<float>(a);
+        s += static_cast<float>(a);
       }
+    row_sum[i] = s;
   });
-  std::vector<double> row_start(static_cast<size_t>(Hq) + 1, 0.0);
-  for (int64_t i = 0; i < Hq; ++i) row_start[i + 1] = row_start[i] + row_sum[i];
-  const double total = row_start[Hq];
+  const double total = row_offsets(row_sum, 0.0)[Hq];
   ISPLAT_CHECK(total > 0, "sampler: the depth map has no valid triangle (all depth is invalid, NaN/inf/<=0, or broken "
                           "by discontinuities)");
   if (n == 0) return total;
@@ -160,79 +162,68 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
   std::vector<int64_t> qarea(area.size());
   std::vector<int64_t> row_qsum(static_cast<size_t>(Hq), 0);
   const double quantum = std::ldexp(1.0, 40) / total;
-  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
-    for (int64_t chunk = b; chunk < e; ++chunk)
-      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
-        int64_t rs = 0;
-        for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) rs += qarea[q] = std::llround(area[q] * quantum);
-        row_qsum[i] = rs;
-      }
+  for_each_row(Hq, [&](int64_t i) {
+    int64_t rs = 0;
+    for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) rs += qarea[q] = std::llround(area[q] * quantum);
+    row_qsum[i] = rs;
   });
-  std::vector<int64_t> row_qstart(static_cast<size_t>(Hq) + 1, 0);
-  for (int64_t i = 0; i < Hq; ++i) row_qstart[i + 1] = row_qstart[i] + row_qsum[i];
+  const std::vector<int64_t> row_qstart = row_offsets<int64_t>(row_qsum, 0);
   const __int128 Q = row_qstart[Hq];
   ISPLAT_CHECK(Q > 0, "sampler: the depth map has no valid triangle");
   const __int128 X = static_cast<__int128>(unit(seed * 2654435761ull + 17) * static_cast<double>(Q));
   std::vector<int32_t> counts(area.size());
   std::vector<int64_t> row_count(static_cast<size_t>(Hq), 0);
-  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
-    for (int64_t chunk = b; chunk < e; ++chunk)
-      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
-        __int128 c = row_qstart[i];
-        __int128 prev = (c * n + X) / Q;
-        int64_t rc = 0;
-        for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) {
-          c += qarea[q];
-          const __int128 cur = (c * n + X) / Q;
-          counts[q] = static_cast<int32_t>(cur - prev);
-          rc += counts[q];
-          prev = cur;
-        }
-        row_count[i] = rc;
-      }
+  for_each_row(Hq, [&](int64_t i) {
+    __int128 c = row_qstart[i];
+    __int128 prev = (c * n + X) / Q;
+    int64_t rc = 0;
+    for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) {
+      c += qarea[q];
+      const __int128 cur = (c * n + X) / Q;
+      counts[q] = static_cast<int32_t>(cur - prev);
+      rc += counts[q];
+      prev = cur;
+    }
+    row_count[i] = rc;
   });
-  std::vector<int64_t> row_first(static_cast<size_t>(Hq) + 1, first);
-  for (int64_t i = 0; i < Hq; ++i) row_first[i + 1] = row_first[i] + row_count[i];
+  const std::vector<int64_t> row_first = row_offsets(row_count, first);
   ISPLAT_CHECK(row_first[Hq] - first == n, "sampler: allocated ", row_first[Hq] - first, " supports, expected ", n);
   // R2 low-discrepancy sequence inside each triangle, offset per triangle.
   constexpr double g2 = 1.32471795724474602596;
   const double a1 = 1.0 / g2, a2 = 1.0 / (g2 * g2);
-  at::parallel_for(0, (Hq + kRowChunk - 1) / kRowChunk, 1, [&](int64_t b, int64_t e) {
-    for (int64_t chunk = b; chunk < e; ++chunk)
-      for (int64_t i = chunk * kRowChunk; i < std::min(Hq, (chunk + 1) * kRowChunk); ++i) {
-        int64_t k = row_first[i];
-        for (int64_t j = 0; j < Wq; ++j)
-          for (int t = 0; t < 2; ++t) {
-            const int64_t q = (i * Wq + j) * 2 + t;
-            const int32_t cnt = counts[q];
-            if (cnt == 0) continue;
-            int64_t r[3], c[3];
-            triangle_pixels(i, j, t, r, c);
-            // Bilinear depth only when the quad's other triangle is accepted too (no discontinuity).
-            const bool quad_ok = area[(i * Wq + j) * 2 + (1 - t)] > 0;
-            // Allocation is proportional to area, so every support stands for the same area, total / n
-            // (= A_t / n_t in expectation). Unlike A_t / n_t it stays right when n is below the triangle
-            // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
-            const float rep = static_cast<float>(total / n);
-            const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
-                         s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
-            for (int32_t m = 0; m < cnt; ++m, ++k) {
-              double b1 = s1 + (m + 1) * a1, b2 = s2 + (m + 1) * a2;
-              b1 -= std::floor(b1);
-              b2 -= std::floor(b2);
-              if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
-              const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
-              const double v = r[0] + 0.5 + b1 * (r[1] - r[0]) + b2 * (r[2] - r[0]);
-              float z;
-              if (quad_ok) {
-                z = bilinear(g.depth, g.H, g.W, u, v);
-              } else {
-                const float z0 = g.depth[r[0] * g.W + c[0]], z1 = g.depth[r[1] * g.W + c[1]], z2 = g.depth[r[2] * g.W + c[2]];
-                z = static_cast<float>(z0 + b1 * (z1 - z0) + b2 * (z2 - z0));
-              }
-              write_support(g, o, k, u, v, z, rep);
-            }
+  for_each_row(Hq, [&](int64_t i) {
+    int64_t k = row_first[i];
+    for (int64_t j = 0; j < Wq; ++j)
+      for (int t = 0; t < 2; ++t) {
+        const int64_t q = (i * Wq + j) * 2 + t;
+        const int32_t cnt = counts[q];
+        if (cnt == 0) continue;
+        int64_t r[3], c[3];
+        triangle_pixels(i, j, t, r, c);
+        // Bilinear depth only when the quad's other triangle is accepted too (no discontinuity).
+        const bool quad_ok = area[(i * Wq + j) * 2 + (1 - t)] > 0;
+        // Allocation is proportional to area, so every support stands for the same area, total / n
+        // (= A_t / n_t in expectation). Unlike A_t / n_t it stays right when n is below the triangle
+        // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
+        const float rep = static_cast<float>(total / n);
+        const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
+                     s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
+        for (int32_t m = 0; m < cnt; ++m, ++k) {
+          double b1 = s1 + (m + 1) * a1, b2 = s2 + (m + 1) * a2;
+          b1 -= std::floor(b1);
+          b2 -= std::floor(b2);
+          if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
+          const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
+          const double v = r[0] + 0.5 + b1 * (r[1] - r[0]) + b2 * (r[2] - r[0]);
+          float z;
+          if (quad_ok) {
+            z = bilinear_at(g.depth, g.H, g.W, u, v);
+          } else {
+            const float z0 = g.depth[r[0] * g.W + c[0]], z1 = g.depth[r[1] * g.W + c[1]], z2 = g.depth[r[2] * g.W + c[2]];
+            z = static_cast<float>(z0 + b1 * (z1 - z0) + b2 * (z2 - z0));
           }
+          write_support(g, o, k, u, v, z, rep);
+        }
       }
   });
   return total;
@@ -261,6 +252,16 @@ Output pointers(Supports& s) {
   return {s.uv.data_ptr<float>(), s.depth.data_ptr<float>(), s.color.data_ptr<float>(), s.area.data_ptr<float>()};
 }
 
+// Supports 0..count-1 at the centres of the given pixels (flat indices).
+void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, int64_t count) {
+  at::parallel_for(0, count, 4096, [&](int64_t b, int64_t e) {
+    for (int64_t k = b; k < e; ++k) {
+      const int64_t p = pixels[k], i = p / g.W, j = p % g.W;
+      write_support(g, o, k, j + 0.5, i + 0.5, g.depth[p], pixel_area(g, i, j));
+    }
+  });
+}
+
 }  // namespace
 
 int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K) {
@@ -273,11 +274,10 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
     auto Kd = K.to(torch::kFloat64);
     const double fx = Kd[0][0].item<double>(), fy = Kd[1][1].item<double>(), cx = Kd[0][2].item<double>(),
                  cy = Kd[1][2].item<double>();
-    auto uv = torch::stack(torch::meshgrid({torch::arange(depth.size(0), torch::kFloat64) + 0.5,
-                                            torch::arange(depth.size(1), torch::kFloat64) + 0.5}, "ij"), -1);
-    auto x = (uv.select(-1, 1) - cx) / fx, y = (uv.select(-1, 0) - cy) / fy;
+    const auto uv = pixel_centers(depth.size(0), depth.size(1), torch::kFloat64);
+    auto x = (uv.select(-1, 0) - cx) / fx, y = (uv.select(-1, 1) - cy) / fy;
     auto cos3 = torch::pow(1.0 + x * x + y * y, -1.5);
-    auto ok = ((valid != 0) & torch::isfinite(depth) & (depth > 0)).to(torch::kFloat64);
+    auto ok = usable_depth(depth, valid).to(torch::kFloat64);
     const double omega = (cos3 * ok).sum().item<double>() / (fx * fy);
     n = static_cast<int64_t>(std::llround(o.density * omega));
   } else {
@@ -297,13 +297,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       if (g.valid[p] != 0.0f) idx.push_back(p);
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
     Supports s = allocate(static_cast<int64_t>(idx.size()));
-    const Output o = pointers(s);
-    at::parallel_for(0, static_cast<int64_t>(idx.size()), 4096, [&](int64_t b, int64_t e) {
-      for (int64_t k = b; k < e; ++k) {
-        const int64_t i = idx[k] / g.W, j = idx[k] % g.W;
-        write_support(g, o, k, j + 0.5, i + 0.5, g.depth[idx[k]], pixel_area(g, i, j));
-      }
-    });
+    write_pixel_supports(g, pointers(s), idx, static_cast<int64_t>(idx.size()));
     return s;
   }
   const int64_t n = resolve_budget(options, dk, vk, K);
@@ -341,12 +335,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   std::nth_element(priority.begin(), priority.begin() + nv, priority.end(), stronger);
   Supports s = allocate(n);
   const Output o = pointers(s);
-  at::parallel_for(0, nv, 4096, [&](int64_t b, int64_t e) {
-    for (int64_t k = b; k < e; ++k) {
-      const int64_t i = priority[k] / g.W, j = priority[k] % g.W;
-      write_support(g, o, k, j + 0.5, i + 0.5, g.depth[priority[k]], pixel_area(g, i, j));
-    }
-  });
+  write_pixel_supports(g, o, priority, nv);
   const double total = sample_faces(g, n - nv, seed, o, nv);
   // Vertices and faces both stand for the surface: rescale so the areas sum to the surface area once.
   const double sum = s.area.sum().item<double>();
