@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include "core/progress.h"
 #include "core/runtime.h"
 #include "decoder/feature_sampler.h"
 #include "decoder/implicit_decoder.h"
@@ -12,7 +13,6 @@ using namespace isplat;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-double ms(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void run(int64_t dino_dim, int64_t n, int64_t W, int64_t H) {
   DecoderOptions o;
@@ -24,17 +24,17 @@ void run(int64_t dino_dim, int64_t n, int64_t W, int64_t H) {
   for (int r = 0; r < 4; ++r) {
     auto t0 = Clock::now();
     auto delta = d->forward(uv, W, H, f);
-    fwd.push_back(ms(t0));
+    fwd.push_back(ms_since(t0));
     t0 = Clock::now();
     delta.sum().backward();
-    bwd.push_back(ms(t0));
+    bwd.push_back(ms_since(t0));
     torch::NoGradGuard g;
     t0 = Clock::now();
     auto q = sample_features(f.dino, uv, W, H);
-    sample.push_back(ms(t0));
+    sample.push_back(ms_since(t0));
     t0 = Clock::now();
     auto q2 = query_features(f.dino, uv, W, H);
-    grid.push_back(ms(t0));
+    grid.push_back(ms_since(t0));
   }
   std::sort(fwd.begin(), fwd.end());
   std::sort(bwd.begin(), bwd.end());

@@ -5,6 +5,7 @@
 
 #include <torch/torch.h>
 
+#include "core/progress.h"
 #include "core/runtime.h"
 #include "loss/knn.h"
 #include "metrics/mask.h"
@@ -20,7 +21,7 @@ double median_ms(F f, int reps = 5) {
   for (int r = 0; r < reps; ++r) {
     auto t0 = Clock::now();
     f();
-    t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    t.push_back(ms_since(t0));
   }
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];

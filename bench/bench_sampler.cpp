@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include "core/progress.h"
 #include "core/runtime.h"
 #include "geometry/camera_torch.h"
 #include "sampler/sampler.h"
@@ -38,7 +39,7 @@ void run(int64_t W, int64_t H, int64_t budget, const std::string& mode) {
   for (int r = 0; r < 5; ++r) {
     auto t0 = std::chrono::steady_clock::now();
     auto s = sample_supports(depth, valid, K, image, o, 1);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    ms.push_back(ms_since(t0));
     count = s.count();
   }
   std::sort(ms.begin(), ms.end());

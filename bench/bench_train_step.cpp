@@ -9,6 +9,7 @@
 
 #include "core/config.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "core/runtime.h"
 #include "data/synth/generate.h"
 #include "train/trainer.h"
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
   for (int i = 0; i < steps; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     const StepStats s = trainer.train_step();
-    const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double total = ms_since(t0);
     if (i == 0) continue;  // warm-up
     t["total"].push_back(total);
     for (const auto& [k, v] : s.timings_ms) t[k].push_back(v);

@@ -48,8 +48,7 @@ int run_export_onnx(int argc, char** argv) {
     {
       torch::NoGradGuard g;
       f = model->encoder->forward(image);
-      expect = model->decoder ? model->decoder->forward(uv, width, height, f)
-                              : query_features(model->dense->forward(f, width, height), uv, width, height);
+      expect = model->decode(f, uv, width, height);
     }
     std::string why;
     const auto got = run_onnxruntime(out, image, uv, why);

@@ -10,6 +10,7 @@
 #include "core/args.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "core/runtime.h"
 #include "geometry/camera_torch.h"
 #include "geometry/image_ops.h"
@@ -83,7 +84,7 @@ int run_predict(int argc, char** argv) {
   if (!depth_path.empty()) sets.push_back("prior.type=dataset");
   if (!prompts_path.empty()) sets.push_back("prior.type=sparse");
   const Checkpoint ck = load_checkpoint(checkpoint);
-  auto pipeline = load_pipeline(checkpoint, sets);
+  auto pipeline = load_pipeline(ck, checkpoint, sets);
 
   cv::Mat photo = read_image(image_path);
   const int W0 = photo.cols, H0 = photo.rows;
@@ -152,7 +153,7 @@ int run_predict(int argc, char** argv) {
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k)) std::cout << " " << k << " " << std::setprecision(0) << pred.timings_ms.at(k);
-  std::cout << " | total " << std::chrono::duration<double, std::milli>(Clock::now() - t_start).count() << "\n";
+  std::cout << " | total " << ms_since(t_start) << "\n";
   std::cout << "wrote        " << fs::absolute(out).string() << "\n             " << fs::absolute(camera_sidecar_path(out)).string()
             << "\n";
   return 0;

@@ -26,13 +26,6 @@ namespace isplat::cli {
 namespace fs = std::filesystem;
 
 namespace {
-cv::Mat to_u8_bgr(const cv::Mat& rgb_float) {
-  cv::Mat u8, bgr;
-  rgb_float.convertTo(u8, CV_8UC3, 255.0);
-  cv::cvtColor(u8, bgr, cv::COLOR_RGB2BGR);
-  return bgr;
-}
-
 // Expected depth / alpha, colour-mapped over [near, far] (turbo), black where nothing was hit.
 cv::Mat depth_visual(const RenderOutput& r, double near, double far) {
   auto d = (r.depth[0] / torch::clamp_min(r.alpha[0], 1e-4)).contiguous();
@@ -40,10 +33,7 @@ cv::Mat depth_visual(const RenderOutput& r, double near, double far) {
   m = (m - near) / std::max(1e-6, far - near);
   m.convertTo(u8, CV_8U, 255.0);
   cv::applyColorMap(u8, color, cv::COLORMAP_TURBO);
-  cv::Mat alpha = tensor_to_map(r.alpha[0]);
-  for (int i = 0; i < color.rows; ++i)
-    for (int j = 0; j < color.cols; ++j)
-      if (alpha.at<float>(i, j) < 0.5f) color.at<cv::Vec3b>(i, j) = cv::Vec3b(0, 0, 0);
+  color.setTo(cv::Scalar::all(0), tensor_to_map(r.alpha[0]) < 0.5f);
   cv::Mat rgb;
   cv::cvtColor(color, rgb, cv::COLOR_BGR2RGB);
   return rgb;
@@ -84,8 +74,7 @@ int run_render(int argc, char** argv) {
   } else {
     ISPLAT_CHECK(camera_json.empty(), camera_json, ": no such file");
     base = {Intrinsics::from_hfov(hfov * M_PI / 180.0, width ? int(width) : 512, height ? int(height) : 384), Pose::Identity()};
-    auto z = transform_points(torch::eye(4), g.means).select(1, 2);
-    typical_depth = z.median().item<double>();
+    typical_depth = g.means.select(1, 2).median().item<double>();  // the camera sits at the origin
     log_info("render: no camera JSON beside ", ply, "; using a ", hfov, " degree camera at the origin");
   }
   if (width > 0 && height > 0) base.intr = base.intr.resized(static_cast<int>(width), static_cast<int>(height));
@@ -114,12 +103,12 @@ int run_render(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     torch::NoGradGuard ng;
     const RenderOutput r = render(g, to_camera(v));
-    total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    total_ms += ms_since(t0);
     const cv::Mat rgb = tensor_to_image(torch::clamp(linear_to_srgb(torch::clamp(r.rgb, 0.0, 1.0)), 0.0, 1.0));
     char name[64];
     std::snprintf(name, sizeof name, "frame_%04zu.png", i);
     write_image((fs::path(out) / name).string(), rgb);
-    if (!no_video) video.write(to_u8_bgr(rgb));
+    if (!no_video) video.write(rgb_to_bgr8(rgb, video_path));
     if (depth) {
       std::snprintf(name, sizeof name, "depth_%04zu.png", i);
       write_image((fs::path(out) / name).string(), depth_visual(r, 0.3 * typical_depth, 2.5 * typical_depth));

@@ -82,4 +82,11 @@ std::vector<Sequence> load_eval_dataset(const EvalDatasetOptions& o) {
   return out;
 }
 
+std::vector<ColmapModel> load_eval_points3d(const EvalDatasetOptions& o) {
+  ISPLAT_CHECK(o.format == "colmap", "eval dataset '", o.name, "': prompts = points3d needs format colmap");
+  std::vector<ColmapModel> models;
+  for (const auto& dir : scene_dirs(o, o.sparse_dir)) models.push_back(read_colmap((fs::path(dir) / o.sparse_dir).string()));
+  return models;
+}
+
 }  // namespace isplat

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "data/colmap.h"
 #include "data/sequence.h"
 
 namespace isplat {
@@ -33,5 +34,9 @@ struct EvalDatasetOptions {
 
 // All sequences of the dataset, scenes sorted by name. Errors name the dataset and the offending file.
 std::vector<Sequence> load_eval_dataset(const EvalDatasetOptions& options);
+
+// The COLMAP model of each sequence of a colmap dataset, in load_eval_dataset's order: the source of
+// points3D prompts (prompts = points3d).
+std::vector<ColmapModel> load_eval_points3d(const EvalDatasetOptions& options);
 
 }  // namespace isplat

@@ -88,7 +88,7 @@ std::string safe(const std::string& s) {
 }  // namespace
 
 std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
-                                         const MethodOptions& mo) {
+                                         const MethodOptions& mo, const std::vector<ColmapModel>& points) {
   const auto& ds = config_.datasets[d];
   const fs::path dir = fs::path(config_.scoring.out) / ds.name;
   const std::string results_path = (dir / ("results_" + safe(mo.name) + ".jsonl")).string();
@@ -125,19 +125,6 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     return results;
   }
   auto method = make_method(mo, config_.scoring.render);
-  // COLMAP points3D as sparse prompts: one model per sequence, projected into each source view.
-  std::map<size_t, ColmapModel> points;
-  if (ds.prompts == "points3d") {
-    ISPLAT_CHECK(ds.format == "colmap", "eval dataset '", ds.name, "': prompts = points3d needs format colmap");
-    for (size_t s = 0; s < sequences.size(); ++s) {
-      for (const auto& dir : {fs::path(ds.root) / sequences[s].scene / ds.sparse_dir, fs::path(ds.root) / ds.sparse_dir})
-        if (fs::exists(dir)) {
-          points[s] = read_colmap(dir.string());
-          break;
-        }
-      if (!points.count(s)) fail("eval dataset '", ds.name, "': no COLMAP model for scene ", sequences[s].scene);
-    }
-  }
   log_info("eval: ", ds.name, " / ", mo.name, " (", method->describe(), "): ", todo, " pairs to score",
            done.empty() ? "" : cat(", ", done.size(), " resumed"));
   std::ofstream out(results_path, std::ios::app);
@@ -150,14 +137,14 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
                  " but the dataset has ", sequences.size(), " (re-draw the manifest)");
     const Sequence& seq = sequences[p.sequence_index];
     const int64_t W = ds.width, H = ds.height;
-    const LoadedFrame sf = load_frame(seq, p.source), tf = load_frame(seq, p.target);
+    const LoadedFrame sf = load_frame(seq, p.source), tf = load_frame(seq, p.target, /*with_depth=*/false);
     const ViewTensors src = make_view_tensors(sf, p.source_name, W ? W : sf.image.cols, H ? H : sf.image.rows);
     const ViewTensors tgt = make_view_tensors(tf, p.target_name, W ? W : sf.image.cols, H ? H : sf.image.rows);
     const torch::Tensor mask = projected_mask(src.depth, src.valid, to_view(src.camera), to_view(tgt.camera),
                                               static_cast<int>(config_.scoring.mask_radius));
     torch::Tensor prompts;
-    if (ds.prompts == "points3d") {
-      // Points are projected at native resolution, then scaled like the image.
+    if (!points.empty()) {
+      // COLMAP points3D as sparse prompts, projected at native resolution, then scaled like the image.
       const auto native = colmap_sparse_depth(points.at(p.sequence_index), sf.view);
       const View ev = to_view(src.camera);
       auto t = torch::empty({static_cast<int64_t>(native.size()), 3});
@@ -208,7 +195,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
 std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   fs::create_directories(config_.scoring.out);
   write_file_atomic((fs::path(config_.scoring.out) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
-  std::vector<std::string> nets(config_.scoring.lpips.begin(), config_.scoring.lpips.end());
+  const std::vector<std::string>& nets = config_.scoring.lpips;
   std::vector<ReportRow> rows;
   std::vector<std::string> notes = notes_;
   if (config_.scoring.max_per_bin > 0)
@@ -227,8 +214,10 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     }
     if (pairs_only) continue;
     std::vector<int64_t> requested(m.bin_counts.size(), config_.protocol.pairs_per_bin);
+    const auto& ds = config_.datasets[d];
+    const std::vector<ColmapModel> points = ds.prompts == "points3d" ? load_eval_points3d(ds) : std::vector<ColmapModel>{};
     for (const auto& mo : config_.methods) {
-      const auto results = score(d, sequences, m, mo);
+      const auto results = score(d, sequences, m, mo, points);
       auto r = summarize(config_.datasets[d].name, mo.name, labels, requested, results, nets);
       rows.insert(rows.end(), r.begin(), r.end());
     }

@@ -21,7 +21,9 @@ class Evaluator {
   // The manifest for dataset d: reused when <out>/<name>/manifest.json exists with the same protocol.
   Manifest manifest(size_t d, const std::vector<Sequence>& sequences);
   // Scores one method on a manifest, appending to results_<method>.jsonl and skipping pairs already there.
-  std::vector<PairResult> score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, const MethodOptions& mo);
+  // `points` holds each sequence's COLMAP model when the dataset's prompts are points3D, else nothing.
+  std::vector<PairResult> score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, const MethodOptions& mo,
+                                const std::vector<ColmapModel>& points = {});
 
  private:
   EvalConfig config_;

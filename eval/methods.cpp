@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "core/error.h"
+#include "core/progress.h"
 #include "decoder/composer.h"
 #include "model/model_io.h"
 #include "render/render.h"
@@ -15,7 +16,6 @@ namespace isplat {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 torch::Tensor to_srgb(const torch::Tensor& rgb, bool linear) {
   auto c = torch::clamp(rgb, 0.0, 1.0);

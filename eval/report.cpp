@@ -167,8 +167,9 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     }
     text("time per pair (inference + render), log scale", {L + 150, H - 15}, 0.5);
     text("masked PSNR (dB), average over pairs", {10, T - 15}, 0.5);
-    static const cv::Scalar colors[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214},
-                                        {189, 103, 148}, {75, 86, 140}, {194, 119, 227}, {127, 127, 127}};
+    // RGB (write_image takes RGB): the matplotlib "tab10" palette.
+    static const cv::Scalar colors[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44}, {214, 39, 40},
+                                        {148, 103, 189}, {140, 86, 75}, {227, 119, 194}, {127, 127, 127}};
     auto marker = [&](size_t kind, cv::Point p, const cv::Scalar& c) {
       switch (kind % 4) {
         case 0: cv::circle(img, p, 7, c, cv::FILLED, cv::LINE_AA); break;
@@ -201,9 +202,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
       text(sets[i], {W - R + 40, y});
     }
   }
-  cv::Mat rgb;
-  cv::cvtColor(img, rgb, cv::COLOR_BGR2RGB);  // write_image takes RGB
-  write_image((fs::path(out) / "speed_quality.png").string(), rgb);
+  write_image((fs::path(out) / "speed_quality.png").string(), img);
 }
 
 }  // namespace isplat

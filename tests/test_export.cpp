@@ -30,7 +30,7 @@ void randomize_head(InfiniSplat& m) {
 torch::Tensor reference(InfiniSplat& m, const torch::Tensor& image, const torch::Tensor& uv, int64_t W, int64_t H) {
   torch::NoGradGuard g;
   const auto f = m->encoder->forward(image);
-  return m->decoder ? m->decoder->forward(uv, W, H, f) : query_features(m->dense->forward(f, W, H), uv, W, H);
+  return m->decode(f, uv, W, H);
 }
 }  // namespace
 

@@ -35,7 +35,6 @@ namespace {
 std::atomic<bool> g_stop{false};
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 std::vector<Sequence> read_split(const HypersimOptions& base, const std::string& split) {
   HypersimOptions h = base;
@@ -44,12 +43,6 @@ std::vector<Sequence> read_split(const HypersimOptions& base, const std::string&
 }
 
 bool finite(const torch::Tensor& t) { return torch::isfinite(t).all().item<bool>(); }
-
-cv::Mat to_bgr8(const torch::Tensor& chw) {
-  cv::Mat rgb = tensor_to_image(chw.clamp(0, 1)), out;
-  rgb.convertTo(out, CV_8UC3, 255.0);
-  return out;  // still RGB order; write_image expects RGB
-}
 }  // namespace
 
 void Trainer::request_stop() { g_stop = true; }
@@ -272,7 +265,8 @@ void Trainer::write_val_images(const Batch& batch, const std::vector<torch::Tens
   for (int64_t t = 0; t < batch.targets(); ++t) {
     const auto target = batch.target_image[0][t], pred = preds[0][t];
     const auto err = ((pred - target).abs() * 4.0).clamp(0, 1);
-    std::vector<cv::Mat> cols = {to_bgr8(batch.context_image[0]), to_bgr8(target), to_bgr8(pred), to_bgr8(err)};
+    std::vector<cv::Mat> cols = {tensor_to_image(batch.context_image[0]), tensor_to_image(target),
+                                 tensor_to_image(pred), tensor_to_image(err)};  // write_image clamps to [0, 1]
     cv::Mat row;
     cv::hconcat(cols, row);
     rows.push_back(row);
@@ -300,10 +294,8 @@ void Trainer::save(const std::string& path, bool with_optimizer) const {
   ck.metadata["best_val"] = cat(best_val_);
   ck.metadata["config"] = config_to_json(config_).dump();
   // Carry the learned depth prior's weights, so the checkpoint alone predicts from a photo.
-  const auto& prior = config_.model.prior;
-  const bool learned = prior.type == "learned" || (prior.type == "sparse" && prior.sparse.mono == "learned");
-  if (config_.task == "gaussians" && learned && !prior.learned_weights.empty() && fs::exists(prior.learned_weights))
-    for (const auto& [name, t] : read_safetensors(prior.learned_weights).tensors) ck.tensors["prior/" + name] = t;
+  if (pipeline_)
+    if (const torch::nn::Module* prior_net = pipeline_->prior().embeddable_weights()) put_module(ck, *prior_net, "prior/");
   save_checkpoint(path, ck);
 }
 
@@ -394,21 +386,19 @@ int Trainer::run() {
     bar.postfix(post);
     bar.tick();
     const bool periodic = step_ % config_.train.checkpoint_every == 0 || step_ == config_.train.steps;
-    bool checkpointed = false;
+    bool improved = false;
     if (step_ % config_.train.val_every == 0 || step_ == config_.train.steps) {
       const double v = validate(true);
-      if (std::isfinite(v) && v < best_val_) {
-        best_val_ = v;  // before saving, so the checkpoint records it
-        if (periodic) {
-          checkpoint(true);
-          checkpointed = true;
-          alias_file(ckdir / "last.safetensors", ckdir / "best.safetensors");
-        } else {
-          save((ckdir / "best.safetensors").string());
-        }
-      }
+      improved = std::isfinite(v) && v < best_val_;
+      if (improved) best_val_ = v;  // before saving, so the checkpoint records it
     }
-    if (periodic && !checkpointed) checkpoint(true);
+    if (periodic) checkpoint(true);
+    if (improved) {
+      if (periodic)
+        alias_file(ckdir / "last.safetensors", ckdir / "best.safetensors");
+      else
+        save((ckdir / "best.safetensors").string());
+    }
     if (g_stop) {
       bar.finish();
       checkpoint(false);

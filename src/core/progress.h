@@ -7,6 +7,11 @@
 
 namespace isplat {
 
+// Wall-clock milliseconds since t0, for per-stage timings.
+inline double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 class ProgressBar {
  public:
   // `total` may be 0 when unknown (then no ETA is shown). Output goes to stderr.

@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "decoder/feature_sampler.h"
 
 namespace isplat {
@@ -31,12 +32,6 @@ InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o) {
     log_warn("decoder.mode = dense predicts per pixel; the paper's ablation pairs it with sampler.mode = pixel");
 }
 
-namespace {
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
-
 Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                                     const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed) {
   ISPLAT_CHECK(image.dim() == 3 && image.size(0) == 3, "model: image must be [3, H, W], got ", image.sizes());
@@ -56,17 +51,18 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
     const EncoderFeatures f = encoder->forward(image.unsqueeze(0));
     p.timings_ms["encoder"] = ms_since(t0);
     t0 = std::chrono::steady_clock::now();
-    if (options.decoder.mode == "implicit") {
-      p.delta = decoder->forward(p.supports.uv, W, H, f);
-    } else {
-      p.delta = sample_features(dense->forward(f, W, H), p.supports.uv, W, H);
-    }
+    p.delta = decode(f, p.supports.uv, W, H);
     p.timings_ms["decoder"] = ms_since(t0);
   }
   t0 = std::chrono::steady_clock::now();
   p.gaussians = compose(p.base, p.delta, K.to(torch::kFloat32), T_cw.to(torch::kFloat32), options.composer);
   p.timings_ms["composer"] = ms_since(t0);
   return p;
+}
+
+torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width, int64_t height) {
+  ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
+  return decoder ? decoder->forward(uv, width, height, f) : sample_features(dense->forward(f, width, height), uv, width, height);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

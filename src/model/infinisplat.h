@@ -48,6 +48,9 @@ struct InfiniSplatImpl : torch::nn::Module {
   // Inference: no autograd, decoder chunks bound memory.
   Prediction predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
+  // Updates [N,14] at supports uv of a W x H image from its encoder features: the implicit decoder, or
+  // the dense head's map sampled at the supports (decoder.mode = dense).
+  torch::Tensor decode(const EncoderFeatures& features, const torch::Tensor& uv, int64_t width, int64_t height);
 
   ModelOptions options;
   DualEncoder encoder{nullptr};
@@ -61,7 +64,6 @@ class Pipeline {
  public:
   explicit Pipeline(const ModelOptions& options, const std::map<std::string, torch::Tensor>* embedded_prior = nullptr);
   Prediction run(const PriorInput& input, const torch::Tensor& T_cw, bool train);
-  PriorOutput prior_only(const PriorInput& input) { return prior_->predict(input); }
   InfiniSplat& model() { return model_; }
   const DepthPrior& prior() const { return *prior_; }
 
