@@ -17,11 +17,6 @@ using namespace isplat;
 namespace fs = std::filesystem;
 
 namespace {
-struct QuietLogs {
-  LogLevel before = log_level();
-  QuietLogs() { set_log_level(LogLevel::Warn); }
-  ~QuietLogs() { set_log_level(before); }
-};
 
 EvalDatasetOptions colmap_set(const GenerateOptions& g) {
   EvalDatasetOptions d;
@@ -33,7 +28,7 @@ EvalDatasetOptions colmap_set(const GenerateOptions& g) {
 }  // namespace
 
 TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   auto g = test::tiny_dataset_options(test::temp_dir("pairs_data"), 24);
   g.eval_scenes = 2;
   g.train_scenes = 0;
@@ -89,7 +84,7 @@ TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
 }
 
 TEST_CASE("pairs: a generated trajectory of the default length populates all four bins", "[eval][pairs]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   auto g = test::tiny_dataset_options(test::temp_dir("pairs_bins"), 40);  // 40 frames: the default eval length
   g.train_scenes = 0;
   g.val_scenes = 0;
@@ -103,7 +98,7 @@ TEST_CASE("pairs: a generated trajectory of the default length populates all fou
 }
 
 TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_e2e", 16);
   // A LiDAR-variant checkpoint whose prompts come from the COLMAP points3D (an untrained tiny model).
   const std::string ck = test::temp_dir("eval_e2e_ck") + "/tiny.safetensors";

@@ -92,6 +92,17 @@ std::vector<Tensor> grads_of(const Gaussians& g) {
 }
 const char* kNames[] = {"means", "scales", "quats", "colors", "opacities"};
 
+// Renders, back-propagates the weighted loss and returns rgb, alpha, depth, normal, then every gradient.
+std::vector<Tensor> outputs_and_grads(const Gaussians& scene, const Camera& cam, const Weights& w,
+                                      const RenderOptions& opt = {}) {
+  const Gaussians a = with_grad(scene);
+  const RenderOutput out = render(a, cam, opt);
+  weighted_loss(out, w).backward();
+  std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
+  for (const Tensor& g : grads_of(a)) r.push_back(g);
+  return r;
+}
+
 double max_abs(const Tensor& t) {
   return t.numel() ? t.abs().max().item<double>() : 0.0;
 }
@@ -403,12 +414,7 @@ TEST_CASE("render: bit-identical results with 1 and 2 threads", "[render]") {
   std::vector<std::vector<Tensor>> results;
   for (int threads : {1, 2}) {
     at::set_num_threads(threads);
-    const Gaussians a = with_grad(scene);
-    const RenderOutput out = render(a, cam);
-    weighted_loss(out, w).backward();
-    std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
-    for (const Tensor& g : grads_of(a)) r.push_back(g);
-    results.push_back(r);
+    results.push_back(outputs_and_grads(scene, cam, w));
   }
   at::set_num_threads(before);
   REQUIRE(results[0].size() == results[1].size());
@@ -442,12 +448,7 @@ TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]")
     const bool before = splat::set_simd_enabled(simd);
     RenderOptions opt;
     opt.background = {0.2f, 0.3f, 0.4f};
-    const Gaussians a = with_grad(scene);
-    const RenderOutput out = render(a, cam, opt);
-    weighted_loss(out, w).backward();
-    std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
-    for (const Tensor& g : grads_of(a)) r.push_back(g);
-    results.push_back(r);
+    results.push_back(outputs_and_grads(scene, cam, w, opt));
     splat::set_simd_enabled(before);
   }
   for (size_t k = 0; k < results[0].size(); ++k) {

@@ -24,15 +24,10 @@ std::map<std::string, torch::Tensor> weights(Trainer& t) {
   return w;
 }
 
-struct QuietLogs {
-  LogLevel before = log_level();
-  QuietLogs() { set_log_level(LogLevel::Warn); }
-  ~QuietLogs() { set_log_level(before); }
-};
 }  // namespace
 
 TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_falls", 10);
   Trainer trainer(test::tiny_train_config(data, test::temp_dir("train_falls_run"), 40));
   std::vector<double> losses;
@@ -44,7 +39,7 @@ TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
 }
 
 TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[train]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_resume", 10);
   const std::string a_dir = test::temp_dir("resume_a"), b_dir = test::temp_dir("resume_b");
   Trainer straight(test::tiny_train_config(data, a_dir, 4));
@@ -76,7 +71,7 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
 }
 
 TEST_CASE("train: repeated non-finite losses stop training with a clear message", "[train]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_nan", 8);
   auto cfg = test::tiny_train_config(data, test::temp_dir("train_nan_run"), 10);
   cfg.train.max_bad_steps = 2;
@@ -91,7 +86,7 @@ TEST_CASE("train: repeated non-finite losses stop training with a clear message"
 }
 
 TEST_CASE("train: the depth task trains the learned prior", "[train]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_depth", 8);
   auto cfg = test::tiny_train_config(data, test::temp_dir("train_depth_run"), 30);
   cfg.task = "depth";
@@ -106,7 +101,7 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
 
 TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoints, and --resume auto continues",
           "[train]") {
-  QuietLogs quiet;
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_run", 8);
   const std::string out = test::temp_dir("train_run_out");
   auto cfg = test::tiny_train_config(data, out, 4);

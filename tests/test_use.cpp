@@ -91,8 +91,7 @@ TEST_CASE("trajectory: orbit, dolly and camera-path files", "[use]") {
 }
 
 TEST_CASE("use: predict writes a PLY that render turns into frames and a video", "[use]") {
-  const LogLevel before = log_level();
-  set_log_level(LogLevel::Warn);
+  test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("use_e2e", 8);
   const std::string run = test::temp_dir("use_run");
   TrainConfig c = test::tiny_train_config(data, run, 1);
@@ -101,7 +100,6 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   Trainer t(c);
   t.train_step();
   t.save(run + "/ck.safetensors");
-  set_log_level(before);
   const std::string scene = generated_eval_root(data.out, "courtyard_colmap") + "/scene_0";
   const std::string tool = (fs::path(ISPLAT_BINARY_DIR) / "infinisplat").string();
   const std::string out = test::temp_dir("use_out");

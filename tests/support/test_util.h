@@ -3,7 +3,18 @@
 #include <functional>
 #include <string>
 
+#include "core/log.h"
+
 namespace isplat::test {
+
+// Warnings and errors only while in scope (generation and training are chatty); restores the level.
+struct QuietLogs {
+  LogLevel before = log_level();
+  QuietLogs() { set_log_level(LogLevel::Warn); }
+  ~QuietLogs() { set_log_level(before); }
+  QuietLogs(const QuietLogs&) = delete;
+  QuietLogs& operator=(const QuietLogs&) = delete;
+};
 
 // A new empty folder under $ISPLAT_TEST_TMP (or /tmp), unique per call.
 std::string temp_dir(const std::string& tag);

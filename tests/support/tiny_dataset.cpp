@@ -27,10 +27,8 @@ GenerateOptions tiny_dataset_options(const std::string& out, int frames) {
 
 GenerateOptions make_tiny_dataset(const std::string& tag, int frames) {
   GenerateOptions o = tiny_dataset_options(temp_dir(tag), frames);
-  const LogLevel before = log_level();
-  set_log_level(LogLevel::Warn);
+  QuietLogs quiet;
   generate_datasets(o);
-  set_log_level(before);
   return o;
 }
 
