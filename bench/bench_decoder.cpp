@@ -40,16 +40,17 @@ void run(int64_t dino_dim, int64_t n, int64_t W, int64_t H) {
   std::sort(bwd.begin(), bwd.end());
   std::sort(sample.begin(), sample.end());
   std::sort(grid.begin(), grid.end());
-  std::printf("C_d %4lld  supports %8lld  forward %8.1f ms  backward %8.1f ms  | one %lld-channel query: ours %6.1f ms, "
-              "grid_sample %6.1f ms\n",
-              (long long)dino_dim, (long long)n, fwd[1], bwd[1], (long long)dino_dim, sample[1], grid[1]);
+  std::printf(
+      "C_d %4lld  supports %8lld  forward %8.1f ms  backward %8.1f ms  | one %lld-channel query: ours %6.1f ms, "
+      "grid_sample %6.1f ms\n",
+      (long long)dino_dim, (long long)n, fwd[1], bwd[1], (long long)dino_dim, sample[1], grid[1]);
 }
 }  // namespace
 
 int main(int argc, char** argv) {
   configure_threads(argc > 1 ? std::atoll(argv[1]) : 0);
   std::printf("implicit decoder benchmark, %d threads\n", at::get_num_threads());
-  run(384, 100000, 256, 192);   // quickstart: ViT-S, 100k supports
+  run(384, 100000, 256, 192);  // quickstart: ViT-S, 100k supports
   run(384, 30000, 256, 192);
   run(1024, 100000, 512, 384);  // ViT-L width
   return 0;

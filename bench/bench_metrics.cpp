@@ -58,6 +58,10 @@ int main(int argc, char** argv) {
   tgt.T_cw(0, 3) = -0.3;
   auto depth = 2.0 + torch::rand({H, W});
   std::printf("projected mask %dx%d   %8.1f ms\n", W, H,
-              median_ms([&] { projected_mask(depth, torch::ones({H, W}), src, tgt, 2); }, 3));
+              median_ms(
+                  [&] {
+                    projected_mask(depth, torch::ones({H, W}), src, tgt, 2);
+                  },
+                  3));
   return 0;
 }

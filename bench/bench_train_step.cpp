@@ -30,12 +30,13 @@ int main(int argc, char** argv) {
     root = generated_hypersim_root(g.out);
   }
   set_log_level(LogLevel::Warn);
-  const std::string weights = fs::exists("../shared/weights") ? "../shared/weights/squeezenet1_1_features.safetensors"
-                                                              : "/work/shared/weights/squeezenet1_1_features.safetensors";
-  auto config = load_config<TrainConfig>(std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json",
-                                         {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
-                                          "train.out=" + (tmp / "run").string(), "train.val_every=100000",
-                                          "loss.perceptual_weights=" + weights});
+  const std::string weights = fs::exists("../shared/weights")
+                                  ? "../shared/weights/squeezenet1_1_features.safetensors"
+                                  : "/work/shared/weights/squeezenet1_1_features.safetensors";
+  auto config = load_config<TrainConfig>(
+      std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json",
+      {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
+       "train.out=" + (tmp / "run").string(), "train.val_every=100000", "loss.perceptual_weights=" + weights});
   Trainer trainer(config);
   std::map<std::string, std::vector<double>> t;
   const int steps = 6;
@@ -51,8 +52,8 @@ int main(int argc, char** argv) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  std::printf("training step at quickstart settings (%d threads, %d steps after warm-up), median ms:\n", at::get_num_threads(),
-              steps - 1);
+  std::printf("training step at quickstart settings (%d threads, %d steps after warm-up), median ms:\n",
+              at::get_num_threads(), steps - 1);
   for (const auto& [k, v] : t) std::printf("  %-12s %8.1f\n", k.c_str(), median(v));
   std::printf("(backward includes render_bwd; the decoder and encoder backward make up the rest)\n");
   return 0;

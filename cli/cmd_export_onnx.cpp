@@ -20,9 +20,10 @@ int run_export_onnx(int argc, char** argv) {
   std::string checkpoint, out;
   int64_t width = 256, height = 192, opset = 17, threads = 0;
   bool verify = false;
-  ArgParser args("infinisplat export-onnx", "Write the encoder (ViT + CNN) and the implicit decoder of a checkpoint as "
-                                            "one ONNX graph: inputs image [1,3,H,W] and uv [N,2], output delta [N,14]. "
-                                            "Weights are initializers; the graph passes onnx::checker.");
+  ArgParser args("infinisplat export-onnx",
+                 "Write the encoder (ViT + CNN) and the implicit decoder of a checkpoint as "
+                 "one ONNX graph: inputs image [1,3,H,W] and uv [N,2], output delta [N,14]. "
+                 "Weights are initializers; the graph passes onnx::checker.");
   args.option("--checkpoint", checkpoint, "trained checkpoint", "FILE");
   args.option("--out", out, "output .onnx file", "FILE");
   args.option("--width", width, "image width the graph takes (multiple of 16)");
@@ -37,8 +38,9 @@ int run_export_onnx(int argc, char** argv) {
   auto& model = pipeline->model();
   const onnx::ModelProto mp = export_onnx(model, {width, height, opset});
   const int64_t bytes = save_onnx(mp, out);
-  std::cout << "wrote " << std::filesystem::absolute(out).string() << " (" << bytes / 1e6 << " MB, " << mp.graph().node_size()
-            << " nodes, " << mp.graph().initializer_size() << " initializers, opset " << opset << "); checker passed\n";
+  std::cout << "wrote " << std::filesystem::absolute(out).string() << " (" << bytes / 1e6 << " MB, "
+            << mp.graph().node_size() << " nodes, " << mp.graph().initializer_size() << " initializers, opset " << opset
+            << "); checker passed\n";
   if (verify) {
     torch::manual_seed(0);
     auto image = torch::rand({1, 3, height, width});
@@ -57,8 +59,8 @@ int run_export_onnx(int argc, char** argv) {
       return 0;
     }
     const double err = (*got - expect).abs().max().item<double>();
-    std::cout << "verify: ONNX Runtime vs LibTorch on 2000 supports: max abs error " << err << (err <= 1e-4 ? " (ok)" : " (TOO LARGE)")
-              << "\n";
+    std::cout << "verify: ONNX Runtime vs LibTorch on 2000 supports: max abs error " << err
+              << (err <= 1e-4 ? " (ok)" : " (TOO LARGE)") << "\n";
     return err <= 1e-4 ? 0 : 1;
   }
   return 0;

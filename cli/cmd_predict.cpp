@@ -50,9 +50,10 @@ int run_predict(int argc, char** argv) {
   int64_t threads = 0, width = 0, height = 0, seed = 0;
   bool keep_outside = false;
   std::vector<std::string> sets;
-  ArgParser args("infinisplat predict", "Turn one photograph into a 3D Gaussian scene (standard 3DGS PLY) with a trained "
-                                        "checkpoint. Intrinsics: --fx, else the photo's EXIF, else --hfov (default: "
-                                        "the model's prior.hfov_deg).");
+  ArgParser args("infinisplat predict",
+                 "Turn one photograph into a 3D Gaussian scene (standard 3DGS PLY) with a trained "
+                 "checkpoint. Intrinsics: --fx, else the photo's EXIF, else --hfov (default: "
+                 "the model's prior.hfov_deg).");
   args.option("--checkpoint", checkpoint, "trained checkpoint (.safetensors)", "FILE");
   args.option("--image", image_path, "the photograph (PNG/JPG, any size)", "FILE");
   args.option("--out", out, "output PLY (a .camera.json is written beside it)", "FILE");
@@ -68,7 +69,8 @@ int run_predict(int argc, char** argv) {
   args.option("--height", height, "working height");
   args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
-  args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01", "KEY=VALUE");
+  args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
+                "KEY=VALUE");
   args.option("--seed", seed, "sampler seed");
   args.option("--threads", threads, "threads (0 = all cores)");
   if (!args.parse(argc, argv, 2)) return 0;
@@ -144,7 +146,8 @@ int run_predict(int argc, char** argv) {
   const double typical_depth = pred.supports.depth.median().item<double>();
   write_scene_camera(camera_sidecar_path(out), view, typical_depth);
 
-  std::cout << "photo        " << image_path << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm << "\n";
+  std::cout << "photo        " << image_path << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm
+            << "\n";
   std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
   std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
   std::cout << "supports     " << pred.supports.count() << "\n";
@@ -154,8 +157,8 @@ int run_predict(int argc, char** argv) {
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k)) std::cout << " " << k << " " << std::setprecision(0) << pred.timings_ms.at(k);
   std::cout << " | total " << ms_since(t_start) << "\n";
-  std::cout << "wrote        " << fs::absolute(out).string() << "\n             " << fs::absolute(camera_sidecar_path(out)).string()
-            << "\n";
+  std::cout << "wrote        " << fs::absolute(out).string() << "\n             "
+            << fs::absolute(camera_sidecar_path(out)).string() << "\n";
   return 0;
 }
 

@@ -3,9 +3,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include <torch/torch.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
-#include <torch/torch.h>
 
 #include "cli/commands.h"
 #include "cli/scene_camera.h"
@@ -45,8 +45,9 @@ int run_render(int argc, char** argv) {
   int64_t frames = 60, fps = 30, width = 0, height = 0, threads = 0;
   double hfov = 60, radius = 0.08;
   bool depth = false, normal = false, no_video = false;
-  ArgParser args("infinisplat render", "Render novel views of a Gaussian PLY: an orbit around the source view, a dolly "
-                                       "along its axis, or a camera path (JSON). Writes PNG frames and an MP4.");
+  ArgParser args("infinisplat render",
+                 "Render novel views of a Gaussian PLY: an orbit around the source view, a dolly "
+                 "along its axis, or a camera path (JSON). Writes PNG frames and an MP4.");
   args.option("--ply", ply, "scene to render (3DGS PLY)", "FILE");
   args.option("--trajectory", trajectory, "orbit | dolly | a camera-path JSON file", "PATH");
   args.option("--out", out, "output folder", "DIR");
@@ -73,16 +74,20 @@ int run_render(int argc, char** argv) {
     base = read_scene_camera(cam_path, typical_depth);
   } else {
     ISPLAT_CHECK(camera_json.empty(), camera_json, ": no such file");
-    base = {Intrinsics::from_hfov(hfov * M_PI / 180.0, width ? int(width) : 512, height ? int(height) : 384), Pose::Identity()};
+    base = {Intrinsics::from_hfov(hfov * M_PI / 180.0, width ? int(width) : 512, height ? int(height) : 384),
+            Pose::Identity()};
     typical_depth = g.means.select(1, 2).median().item<double>();  // the camera sits at the origin
     log_info("render: no camera JSON beside ", ply, "; using a ", hfov, " degree camera at the origin");
   }
   if (width > 0 && height > 0) base.intr = base.intr.resized(static_cast<int>(width), static_cast<int>(height));
   ISPLAT_CHECK(typical_depth > 0, "render: cannot size the camera motion (typical depth ", typical_depth, ")");
   CameraPath path;
-  if (trajectory == "orbit") path = orbit_path(base, typical_depth, static_cast<int>(frames), radius);
-  else if (trajectory == "dolly") path = dolly_path(base, typical_depth, static_cast<int>(frames));
-  else path = load_camera_path(trajectory, base);
+  if (trajectory == "orbit")
+    path = orbit_path(base, typical_depth, static_cast<int>(frames), radius);
+  else if (trajectory == "dolly")
+    path = dolly_path(base, typical_depth, static_cast<int>(frames));
+  else
+    path = load_camera_path(trajectory, base);
 
   fs::create_directories(out);
   cv::VideoWriter video;
@@ -122,8 +127,8 @@ int run_render(int argc, char** argv) {
   }
   bar.finish();
   if (!no_video) video.release();
-  std::cout << "rendered " << path.views.size() << " frames of " << g.count() << " Gaussians at " << W << "x" << H << " ("
-            << std::fixed << std::setprecision(1) << total_ms / path.views.size() << " ms per frame)\n";
+  std::cout << "rendered " << path.views.size() << " frames of " << g.count() << " Gaussians at " << W << "x" << H
+            << " (" << std::fixed << std::setprecision(1) << total_ms / path.views.size() << " ms per frame)\n";
   std::cout << "wrote    " << fs::absolute(out).string() << (no_video ? "" : " (frames + video.mp4)") << "\n";
   return 0;
 }

@@ -10,8 +10,9 @@ namespace isplat::cli {
 int run_version(int argc, char** argv) {
   int64_t threads = 0;
   bool no_bench = false;
-  ArgParser args("infinisplat version", "Print the project and LibTorch versions, the thread count, the BLAS "
-                                        "library in use and a measured matmul throughput.");
+  ArgParser args("infinisplat version",
+                 "Print the project and LibTorch versions, the thread count, the BLAS "
+                 "library in use and a measured matmul throughput.");
   args.option("--threads", threads, "intra-op threads (0 = all cores)");
   args.flag("--no-bench", no_bench, "skip the matmul throughput measurement");
   if (!args.parse(argc, argv, 2)) return 0;

@@ -12,7 +12,8 @@ namespace {
 void usage(const std::map<std::string, isplat::cli::Command>& commands) {
   std::cout << "usage: infinisplat <command> [options]\n\n"
                "InfiniSplat-C++: one photograph to a renderable 3D Gaussian scene.\n\ncommands:\n";
-  for (const auto& [name, cmd] : commands) std::cout << "  " << name << std::string(16 - std::min<size_t>(15, name.size()), ' ') << cmd.summary << "\n";
+  for (const auto& [name, cmd] : commands)
+    std::cout << "  " << name << std::string(16 - std::min<size_t>(15, name.size()), ' ') << cmd.summary << "\n";
   std::cout << "\nRun 'infinisplat <command> --help' for a command's options.\n"
                "Training and evaluation have their own executables: infinisplat-train, infinisplat-eval.\n";
 }

@@ -17,8 +17,10 @@ void EvalDatasetOptions::visit(ConfigVisitor& v) {
   v.field("format", format, "layout of the scenes", {"colmap", "nerfstudio", "hypersim"});
   v.field("root", root, "folder holding one folder per scene (or a single scene folder)");
   v.field("scenes", scenes, "scene folders to use (empty = all)");
-  v.field("width", width, "evaluation width (ETH3D 2016, ScanNet++ 1536, T&T/DL3DV 1920); 0 = native", Range::at_least(0));
-  v.field("height", height, "evaluation height (ETH3D 1344, ScanNet++ 1024, T&T/DL3DV 1080); 0 = native", Range::at_least(0));
+  v.field("width", width, "evaluation width (ETH3D 2016, ScanNet++ 1536, T&T/DL3DV 1920); 0 = native",
+          Range::at_least(0));
+  v.field("height", height, "evaluation height (ETH3D 1344, ScanNet++ 1024, T&T/DL3DV 1080); 0 = native",
+          Range::at_least(0));
   v.field("images_dir", images_dir, "COLMAP: image folder relative to the scene");
   v.field("sparse_dir", sparse_dir, "COLMAP: model folder relative to the scene");
   v.field("depth_dir", depth_dir, "COLMAP: depth folder relative to the scene");
@@ -28,8 +30,9 @@ void EvalDatasetOptions::visit(ConfigVisitor& v) {
   v.field("depth_replace_to", depth_replace_to, "COLMAP: its replacement");
   v.field("transforms", transforms, "nerfstudio: transforms file name");
   v.field("split", split, "hypersim: split to evaluate", {"train", "val", "test", "all"});
-  v.field("prompts", prompts, "prompts for sparse (LiDAR) priors: drawn from the source depth, or the COLMAP "
-                              "points3D seen in the source view (real captures without a depth sensor)",
+  v.field("prompts", prompts,
+          "prompts for sparse (LiDAR) priors: drawn from the source depth, or the COLMAP "
+          "points3D seen in the source view (real captures without a depth sensor)",
           {"depth", "points3d"});
 }
 
@@ -85,7 +88,8 @@ std::vector<Sequence> load_eval_dataset(const EvalDatasetOptions& o) {
 std::vector<ColmapModel> load_eval_points3d(const EvalDatasetOptions& o) {
   ISPLAT_CHECK(o.format == "colmap", "eval dataset '", o.name, "': prompts = points3d needs format colmap");
   std::vector<ColmapModel> models;
-  for (const auto& dir : scene_dirs(o, o.sparse_dir)) models.push_back(read_colmap((fs::path(dir) / o.sparse_dir).string()));
+  for (const auto& dir : scene_dirs(o, o.sparse_dir))
+    models.push_back(read_colmap((fs::path(dir) / o.sparse_dir).string()));
   return models;
 }
 

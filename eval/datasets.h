@@ -13,10 +13,10 @@ class ConfigVisitor;
 
 struct EvalDatasetOptions {
   std::string name = "dataset";
-  std::string format = "colmap";     // colmap | nerfstudio | hypersim
-  std::string root;                  // folder of scene folders (or one scene folder)
-  std::vector<std::string> scenes;   // empty = every scene folder under root
-  int64_t width = 0, height = 0;     // evaluation size (DESIGN §5); 0 = the images' own size
+  std::string format = "colmap";    // colmap | nerfstudio | hypersim
+  std::string root;                 // folder of scene folders (or one scene folder)
+  std::vector<std::string> scenes;  // empty = every scene folder under root
+  int64_t width = 0, height = 0;    // evaluation size (DESIGN §5); 0 = the images' own size
   // COLMAP layout (ETH3D: images_dir "images", sparse_dir "dslr_calibration_undistorted",
   // depth_dir "ground_truth_depth", depth_format "raw_float32", depth_suffix "", replace
   // "dslr_images_undistorted" -> "dslr_images").

@@ -7,8 +7,9 @@ namespace isplat {
 
 void MethodOptions::visit(ConfigVisitor& v) {
   v.field("name", name, "column name in the reports");
-  v.field("type", type, "model: a checkpoint; lift: the source image lifted on its depth, one Gaussian per pixel; "
-                        "identity: the source image copied into the target view",
+  v.field("type", type,
+          "model: a checkpoint; lift: the source image lifted on its depth, one Gaussian per pixel; "
+          "identity: the source image copied into the target view",
           {"model", "lift", "identity"});
   v.field("checkpoint", checkpoint, "model: checkpoint file (train writes <out>/checkpoints/*.safetensors)");
   v.field("overrides", overrides, "model: overrides of the checkpoint's stored model config, e.g. prior.type=sparse");
@@ -17,9 +18,11 @@ void MethodOptions::visit(ConfigVisitor& v) {
 void ScoringOptions::visit(ConfigVisitor& v) {
   v.field("out", out, "output folder: manifests, per-pair results, reports, examples");
   v.field("lpips", lpips, "LPIPS variants to report (squeeze | alex | vgg); unavailable ones are reported as n/a");
-  v.field("weights_dir", weights_dir, "folder with LPIPS backbones (<net>_features.safetensors) and heads "
-                                      "(lpips_v0.1_<net>_lin.safetensors)");
-  v.field("mask_radius", mask_radius, "radius of the morphological closing of the projected mask, pixels", Range::at_least(0));
+  v.field("weights_dir", weights_dir,
+          "folder with LPIPS backbones (<net>_features.safetensors) and heads "
+          "(lpips_v0.1_<net>_lin.safetensors)");
+  v.field("mask_radius", mask_radius, "radius of the morphological closing of the projected mask, pixels",
+          Range::at_least(0));
   v.field("examples", examples, "example panels (source, target, prediction, mask) per dataset and method",
           Range::at_least(0));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",

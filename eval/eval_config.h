@@ -14,9 +14,9 @@ class ConfigVisitor;
 
 struct MethodOptions {
   std::string name = "model";
-  std::string type = "model";           // model | lift | identity
-  std::string checkpoint;               // model: checkpoint file
-  std::vector<std::string> overrides;   // model: overrides of its stored config, e.g. "prior.type=sparse"
+  std::string type = "model";          // model | lift | identity
+  std::string checkpoint;              // model: checkpoint file
+  std::vector<std::string> overrides;  // model: overrides of its stored config, e.g. "prior.type=sparse"
   void visit(ConfigVisitor& v);
 };
 
@@ -25,8 +25,8 @@ struct ScoringOptions {
   std::vector<std::string> lpips = {"squeeze", "alex", "vgg"};
   std::string weights_dir = "../shared/weights";  // LPIPS backbones + heads
   int64_t mask_radius = 2;
-  int64_t examples = 4;       // example panels saved per dataset and method
-  int64_t max_per_bin = 0;    // score only the first N pairs of each bin (0 = all)
+  int64_t examples = 4;     // example panels saved per dataset and method
+  int64_t max_per_bin = 0;  // score only the first N pairs of each bin (0 = all)
   RenderOptions render;
   void visit(ConfigVisitor& v);
 };
@@ -35,7 +35,8 @@ struct EvalConfig {
   RuntimeOptions runtime;
   std::vector<EvalDatasetOptions> datasets;
   ProtocolOptions protocol;
-  std::vector<MethodOptions> methods = {MethodOptions{"lift", "lift", "", {}}, MethodOptions{"identity", "identity", "", {}}};
+  std::vector<MethodOptions> methods = {MethodOptions{"lift", "lift", "", {}},
+                                        MethodOptions{"identity", "identity", "", {}}};
   ScoringOptions scoring;
   void visit(ConfigVisitor& v);
 };

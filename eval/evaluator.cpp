@@ -54,10 +54,15 @@ Manifest Evaluator::manifest(size_t d, const std::vector<Sequence>& sequences) {
 
 namespace {
 nlohmann::json result_json(const PairResult& r) {
-  nlohmann::json j = {{"index", r.index}, {"bin", r.bin}, {"baseline", r.baseline},
+  nlohmann::json j = {{"index", r.index},
+                      {"bin", r.bin},
+                      {"baseline", r.baseline},
                       {"psnr", std::isfinite(r.psnr) ? nlohmann::json(r.psnr) : nlohmann::json(nullptr)},
-                      {"ssim", r.ssim}, {"infer_ms", r.infer_ms}, {"render_ms", r.render_ms},
-                      {"gaussians", r.gaussians}, {"mask_fraction", r.mask_fraction}};
+                      {"ssim", r.ssim},
+                      {"infer_ms", r.infer_ms},
+                      {"render_ms", r.render_ms},
+                      {"gaussians", r.gaussians},
+                      {"mask_fraction", r.mask_fraction}};
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
   return j;
 }
@@ -75,7 +80,8 @@ PairResult result_from_json(const nlohmann::json& j) {
   r.gaussians = j.at("gaussians").get<int64_t>();
   r.mask_fraction = j.at("mask_fraction").get<double>();
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key().rfind("lpips_", 0) == 0) r.lpips[it.key().substr(6)] = it.value().is_null() ? nan : it.value().get<double>();
+    if (it.key().rfind("lpips_", 0) == 0)
+      r.lpips[it.key().substr(6)] = it.value().is_null() ? nan : it.value().get<double>();
   return r;
 }
 
@@ -116,7 +122,8 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     std::map<int, int64_t> per_bin;
     for (int64_t i = 0; i < n; ++i) wanted[i] = per_bin[m.pairs[i].bin]++ < config_.scoring.max_per_bin;
   }
-  results.erase(std::remove_if(results.begin(), results.end(), [&](const PairResult& r) { return r.index >= n || !wanted[r.index]; }),
+  results.erase(std::remove_if(results.begin(), results.end(),
+                               [&](const PairResult& r) { return r.index >= n || !wanted[r.index]; }),
                 results.end());
   int64_t todo = 0;
   for (int64_t i = 0; i < n; ++i) todo += wanted[i] && !done.count(i);
@@ -169,7 +176,8 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     r.ssim = ssim(o.image, tgt.image, mask);
     for (const auto& net : config_.scoring.lpips) {
       auto it = lpips_.find(net);
-      r.lpips[net] = it == lpips_.end() ? std::numeric_limits<double>::quiet_NaN() : (*it->second)(o.image, tgt.image, mask);
+      r.lpips[net] =
+          it == lpips_.end() ? std::numeric_limits<double>::quiet_NaN() : (*it->second)(o.image, tgt.image, mask);
     }
     r.infer_ms = o.infer_ms;
     r.render_ms = o.render_ms;
@@ -199,7 +207,8 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   std::vector<ReportRow> rows;
   std::vector<std::string> notes = notes_;
   if (config_.scoring.max_per_bin > 0)
-    notes.push_back(cat("only the first ", config_.scoring.max_per_bin, " pairs of each bin were scored "
+    notes.push_back(cat("only the first ", config_.scoring.max_per_bin,
+                        " pairs of each bin were scored "
                         "(scoring.max_per_bin); the full protocol scores every pair of the manifest"));
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto sequences = load_eval_dataset(config_.datasets[d]);
@@ -215,7 +224,8 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     if (pairs_only) continue;
     std::vector<int64_t> requested(m.bin_counts.size(), config_.protocol.pairs_per_bin);
     const auto& ds = config_.datasets[d];
-    const std::vector<ColmapModel> points = ds.prompts == "points3d" ? load_eval_points3d(ds) : std::vector<ColmapModel>{};
+    const std::vector<ColmapModel> points =
+        ds.prompts == "points3d" ? load_eval_points3d(ds) : std::vector<ColmapModel>{};
     for (const auto& mo : config_.methods) {
       const auto results = score(d, sequences, m, mo, points);
       auto r = summarize(config_.datasets[d].name, mo.name, labels, requested, results, nets);

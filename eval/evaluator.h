@@ -22,8 +22,8 @@ class Evaluator {
   Manifest manifest(size_t d, const std::vector<Sequence>& sequences);
   // Scores one method on a manifest, appending to results_<method>.jsonl and skipping pairs already there.
   // `points` holds each sequence's COLMAP model when the dataset's prompts are points3D, else nothing.
-  std::vector<PairResult> score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, const MethodOptions& mo,
-                                const std::vector<ColmapModel>& points = {});
+  std::vector<PairResult> score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
+                                const MethodOptions& mo, const std::vector<ColmapModel>& points = {});
 
  private:
   EvalConfig config_;

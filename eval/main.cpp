@@ -12,9 +12,10 @@ int main(int argc, char** argv) {
     EvalConfig config;
     CommonArgs common;
     bool pairs_only = false;
-    ArgParser args("infinisplat-eval", "Draw the baseline-binned pair manifests (512 pairs per dataset) and score every "
-                                       "configured method on them: masked PSNR, SSIM and LPIPS, timings, reports. "
-                                       "Re-running resumes where the last run stopped.");
+    ArgParser args("infinisplat-eval",
+                   "Draw the baseline-binned pair manifests (512 pairs per dataset) and score every "
+                   "configured method on them: masked PSNR, SSIM and LPIPS, timings, reports. "
+                   "Re-running resumes where the last run stopped.");
     common.add_to(args);
     args.flag("--pairs-only", pairs_only, "write the manifests and stop");
     args.epilog("example: infinisplat-eval --config configs/eval_synthetic.json --set scoring.max_per_bin=8");

@@ -28,7 +28,8 @@ class ModelMethod final : public Method {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
   }
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed, const torch::Tensor& prompts) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed,
+                       const torch::Tensor& prompts) override {
     torch::NoGradGuard g;
     PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
     auto t0 = Clock::now();
@@ -61,7 +62,8 @@ class LiftMethod final : public Method {
     px.mode = "pixel";
     const Supports s = sample_supports(src.depth, src.valid, src.camera.K, src.image, px);
     const BaseGaussians base = make_base_gaussians(s);
-    const Gaussians gs = compose(base, torch::zeros({s.count(), kDeltaDim}), src.camera.K, src.camera.T_cw, ComposerOptions{});
+    const Gaussians gs =
+        compose(base, torch::zeros({s.count(), kDeltaDim}), src.camera.K, src.camera.T_cw, ComposerOptions{});
     MethodOutput out;
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();

@@ -10,9 +10,9 @@
 namespace isplat {
 
 struct MethodOutput {
-  torch::Tensor image;     // [3,H,W] sRGB in [0,1], the target view
-  double infer_ms = 0;     // one image -> Gaussians (prior included)
-  double render_ms = 0;    // Gaussians -> target view
+  torch::Tensor image;   // [3,H,W] sRGB in [0,1], the target view
+  double infer_ms = 0;   // one image -> Gaussians (prior included)
+  double render_ms = 0;  // Gaussians -> target view
   int64_t gaussians = 0;
 };
 

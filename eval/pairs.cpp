@@ -16,8 +16,10 @@ namespace isplat {
 void ProtocolOptions::visit(ConfigVisitor& v) {
   v.field("window", window, "pairs come from windows of this many consecutive views (paper: 10)", Range::at_least(2));
   v.field("min_overlap", min_overlap, "keep pairs whose frustum overlap exceeds this (paper: 0.6)", Range::unit());
-  v.field("max_rotation_deg", max_rotation_deg, "largest angle between the optical axes (backward-facing pairs are "
-                                                "always dropped)", Range::between(0, 180));
+  v.field("max_rotation_deg", max_rotation_deg,
+          "largest angle between the optical axes (backward-facing pairs are "
+          "always dropped)",
+          Range::between(0, 180));
   v.field("bin_edges", bin_edges, "baseline bin lower edges in metres; the last bin is open (paper: 0, 0.5, 1, 2)",
           Range::at_least(0));
   v.field("pairs_per_bin", pairs_per_bin, "pairs drawn per bin (paper: 128, so 512 per dataset)", Range::at_least(1));
@@ -32,7 +34,8 @@ std::string Manifest::bin_label(int b) const {
     os << x;
     return os.str();
   };
-  return b + 1 < static_cast<int>(e.size()) ? cat("[", num(e[b]), ",", num(e[b + 1]), ")") : cat("[", num(e[b]), ",inf)");
+  return b + 1 < static_cast<int>(e.size()) ? cat("[", num(e[b]), ",", num(e[b + 1]), ")")
+                                            : cat("[", num(e[b]), ",inf)");
 }
 
 namespace {
@@ -84,7 +87,9 @@ Manifest select_pairs(const std::string& dataset, const std::vector<Sequence>& s
         p.baseline = baseline(src.view, tv);
         p.overlap = ov;
         p.rotation_deg = rot;
-        p.bin = static_cast<int>(std::upper_bound(o.bin_edges.begin(), o.bin_edges.end(), p.baseline) - o.bin_edges.begin()) - 1;
+        p.bin = static_cast<int>(std::upper_bound(o.bin_edges.begin(), o.bin_edges.end(), p.baseline) -
+                                 o.bin_edges.begin()) -
+                1;
         if (p.bin >= 0) candidates[static_cast<size_t>(p.bin)].push_back(p);
       }
     }
@@ -119,14 +124,25 @@ nlohmann::ordered_json Manifest::to_json() const {
   j["protocol"] = config_to_json(protocol);
   j["bins"] = nlohmann::ordered_json::array();
   for (size_t b = 0; b < bin_counts.size(); ++b)
-    j["bins"].push_back({{"bin", bin_label(static_cast<int>(b))}, {"requested", protocol.pairs_per_bin},
-                         {"filled", bin_counts[b]}, {"candidates", bin_candidates[b]}});
+    j["bins"].push_back({{"bin", bin_label(static_cast<int>(b))},
+                         {"requested", protocol.pairs_per_bin},
+                         {"filled", bin_counts[b]},
+                         {"candidates", bin_candidates[b]}});
   j["pairs"] = nlohmann::ordered_json::array();
   for (const auto& p : pairs)
-    j["pairs"].push_back({{"dataset", p.dataset}, {"scene", p.scene}, {"sequence", p.sequence},
-                          {"sequence_index", p.sequence_index}, {"source", p.source_name}, {"target", p.target_name},
-                          {"source_index", p.source}, {"target_index", p.target}, {"baseline", p.baseline},
-                          {"overlap", p.overlap}, {"rotation_deg", p.rotation_deg}, {"bin", p.bin}, {"seed", protocol.seed}});
+    j["pairs"].push_back({{"dataset", p.dataset},
+                          {"scene", p.scene},
+                          {"sequence", p.sequence},
+                          {"sequence_index", p.sequence_index},
+                          {"source", p.source_name},
+                          {"target", p.target_name},
+                          {"source_index", p.source},
+                          {"target_index", p.target},
+                          {"baseline", p.baseline},
+                          {"overlap", p.overlap},
+                          {"rotation_deg", p.rotation_deg},
+                          {"bin", p.bin},
+                          {"seed", protocol.seed}});
   return j;
 }
 
@@ -161,7 +177,9 @@ Manifest Manifest::from_json(const nlohmann::json& j, const std::string& source)
   return m;
 }
 
-void write_manifest(const std::string& path, const Manifest& m) { write_file_atomic(path, m.to_json().dump(2) + "\n"); }
+void write_manifest(const std::string& path, const Manifest& m) {
+  write_file_atomic(path, m.to_json().dump(2) + "\n");
+}
 
 Manifest read_manifest(const std::string& path) {
   return Manifest::from_json(read_json_file(path), path);

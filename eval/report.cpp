@@ -87,8 +87,9 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     md << "---|---|---|\n";
     for (const auto& r : rows) {
       if (r.dataset != d) continue;
-      md << "| " << r.method << " | " << r.bin << " | " << r.pairs << (r.pairs < r.requested ? cat(" of ", r.requested) : "")
-         << " | " << fmt(r.psnr, 2) << " | " << fmt(r.ssim, 4) << " |";
+      md << "| " << r.method << " | " << r.bin << " | " << r.pairs
+         << (r.pairs < r.requested ? cat(" of ", r.requested) : "") << " | " << fmt(r.psnr, 2) << " | "
+         << fmt(r.ssim, 4) << " |";
       for (const auto& n : nets) md << " " << fmt(r.lpips.at(n), 4) << " |";
       md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 0) << " | " << fmt(r.gaussians, 0) << " |\n";
     }
@@ -106,15 +107,17 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   for (const char* h : {"infer_ms", "render_ms", "gaussians"}) csv.header.push_back(h);
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& r : rows) {
-    std::vector<std::string> row = {r.dataset, r.method, r.bin, std::to_string(r.pairs), std::to_string(r.requested),
-                                    fmt(r.psnr, 4), fmt(r.ssim, 5)};
-    nlohmann::ordered_json j = {{"dataset", r.dataset}, {"method", r.method}, {"bin", r.bin}, {"pairs", r.pairs},
-                                {"requested", r.requested}};
+    std::vector<std::string> row = {
+        r.dataset,      r.method,      r.bin, std::to_string(r.pairs), std::to_string(r.requested),
+        fmt(r.psnr, 4), fmt(r.ssim, 5)};
+    nlohmann::ordered_json j = {
+        {"dataset", r.dataset}, {"method", r.method}, {"bin", r.bin}, {"pairs", r.pairs}, {"requested", r.requested}};
     j["psnr"] = std::isfinite(r.psnr) ? nlohmann::ordered_json(r.psnr) : nlohmann::ordered_json(nullptr);
     j["ssim"] = std::isfinite(r.ssim) ? nlohmann::ordered_json(r.ssim) : nlohmann::ordered_json(nullptr);
     for (const auto& n : nets) {
       row.push_back(fmt(r.lpips.at(n), 5));
-      j["lpips_" + n] = std::isfinite(r.lpips.at(n)) ? nlohmann::ordered_json(r.lpips.at(n)) : nlohmann::ordered_json("n/a");
+      j["lpips_" + n] =
+          std::isfinite(r.lpips.at(n)) ? nlohmann::ordered_json(r.lpips.at(n)) : nlohmann::ordered_json("n/a");
     }
     row.push_back(fmt(r.infer_ms, 2));
     row.push_back(fmt(r.render_ms, 2));
@@ -168,18 +171,23 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     text("time per pair (inference + render), log scale", {L + 150, H - 15}, 0.5);
     text("masked PSNR (dB), average over pairs", {10, T - 15}, 0.5);
     // RGB (write_image takes RGB): the matplotlib "tab10" palette.
-    static const cv::Scalar colors[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44}, {214, 39, 40},
-                                        {148, 103, 189}, {140, 86, 75}, {227, 119, 194}, {127, 127, 127}};
+    static const cv::Scalar colors[] = {{31, 119, 180},  {255, 127, 14}, {44, 160, 44},   {214, 39, 40},
+                                        {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127}};
     auto marker = [&](size_t kind, cv::Point p, const cv::Scalar& c) {
       switch (kind % 4) {
-        case 0: cv::circle(img, p, 7, c, cv::FILLED, cv::LINE_AA); break;
-        case 1: cv::rectangle(img, {p.x - 6, p.y - 6}, {p.x + 6, p.y + 6}, c, cv::FILLED); break;
+        case 0:
+          cv::circle(img, p, 7, c, cv::FILLED, cv::LINE_AA);
+          break;
+        case 1:
+          cv::rectangle(img, {p.x - 6, p.y - 6}, {p.x + 6, p.y + 6}, c, cv::FILLED);
+          break;
         case 2: {
           std::vector<cv::Point> tri = {{p.x, p.y - 8}, {p.x - 7, p.y + 6}, {p.x + 7, p.y + 6}};
           cv::fillConvexPoly(img, tri, c, cv::LINE_AA);
           break;
         }
-        default: cv::drawMarker(img, p, c, cv::MARKER_TILTED_CROSS, 14, 3, cv::LINE_AA);
+        default:
+          cv::drawMarker(img, p, c, cv::MARKER_TILTED_CROSS, 14, 3, cv::LINE_AA);
       }
     };
     auto index = [](const std::vector<std::string>& v, const std::string& s) {

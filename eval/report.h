@@ -8,7 +8,7 @@
 namespace isplat {
 
 struct PairResult {
-  int64_t index = 0;       // position in the manifest
+  int64_t index = 0;  // position in the manifest
   int bin = 0;
   double baseline = 0;
   double psnr = 0, ssim = 0;
@@ -32,7 +32,7 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets);
 
 // Writes report.md, report.csv, report.json and speed_quality.png into `out`.
-void write_reports(const std::string& out, const std::vector<ReportRow>& rows, const std::vector<std::string>& lpips_nets,
-                   const std::vector<std::string>& notes);
+void write_reports(const std::string& out, const std::vector<ReportRow>& rows,
+                   const std::vector<std::string>& lpips_nets, const std::vector<std::string>& notes);
 
 }  // namespace isplat

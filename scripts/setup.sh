@@ -7,7 +7,7 @@ PACKAGES=(
   libtorch-dev libopencv-dev libeigen3-dev nlohmann-json3-dev
   libopenexr-dev libimath-dev catch2 libhdf5-dev
   libonnx-dev libprotobuf-dev protobuf-compiler
-  libbenchmark-dev libopenblas0-pthread
+  libbenchmark-dev libopenblas0-pthread clang-format
 )
 
 need_root() {

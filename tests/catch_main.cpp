@@ -7,7 +7,7 @@ int main(int argc, char* argv[]) {
   Catch::Session session;
   if (int rc = session.applyCommandLine(argc, argv)) return rc;
   auto& config = session.configData();
-  config.warnings = static_cast<Catch::WarnAbout::What>(config.warnings | Catch::WarnAbout::NoAssertions |
-                                                        Catch::WarnAbout::NoTests);
+  config.warnings =
+      static_cast<Catch::WarnAbout::What>(config.warnings | Catch::WarnAbout::NoAssertions | Catch::WarnAbout::NoTests);
   return session.run();
 }

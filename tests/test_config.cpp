@@ -46,7 +46,6 @@ std::string write_json(const std::string& dir, const std::string& name, const st
   return path;
 }
 
-
 }  // namespace
 
 TEST_CASE("config: defaults come from the struct", "[config]") {
@@ -61,7 +60,8 @@ TEST_CASE("config: defaults come from the struct", "[config]") {
 TEST_CASE("config: file values, base chain and overrides merge in order", "[config]") {
   const auto dir = test::temp_dir("config_merge");
   write_json(dir, "base.json", R"({"threads": 2, "inner": {"budget": 50, "scale": 0.25}})");
-  const auto path = write_json(dir, "child.json", R"({"base": "base.json", "inner": {"budget": 70}, "hidden": [8, 4]})");
+  const auto path =
+      write_json(dir, "child.json", R"({"base": "base.json", "inner": {"budget": 70}, "hidden": [8, 4]})");
   auto o = load_config<RootOptions>(path, {"inner.mode=pixel", "flag=true", "lr=1e-3", "inner.budget=1.5e3"});
   CHECK(o.threads == 2);           // from base
   CHECK(o.inner.scale == 0.25);    // from base, not overridden
@@ -155,7 +155,8 @@ TEST_CASE("config: lists of sections read, write, validate and document", "[conf
   const auto bad = write_json(dir, "b.json", R"({"items": [{"name": "a", "cnt": 3}]})");
   CHECK_THAT(error_of([&] { load_config<WithList>(bad); }), Catch::Contains("unknown key 'items[0].cnt'"));
   const auto neg = write_json(dir, "n.json", R"({"items": [{"count": -1}]})");
-  CHECK_THAT(error_of([&] { load_config<WithList>(neg); }), Catch::Contains("'items[0].count' must be an integer >= 0"));
+  CHECK_THAT(error_of([&] { load_config<WithList>(neg); }),
+             Catch::Contains("'items[0].count' must be an integer >= 0"));
   CHECK_THAT(error_of([&] { load_config<WithList>("", {"items=3"}); }), Catch::Contains("must be a list of sections"));
   CHECK_THAT(config_reference(WithList{}), Catch::Contains("items[].count  (int >= 0, default 1)"));
 }

@@ -24,7 +24,8 @@ TEST_CASE("args: options, flags, repeated values and errors", "[core]") {
   p.flag("--verbose", verbose, "talk");
   p.repeated("--set", sets, "override");
   p.positional("input", input, "input file");
-  const char* argv[] = {"prog", "in.png", "--config", "a.json", "--n=7", "--set", "a=1", "--set", "b=2", "--verbose", "--x", "0.5"};
+  const char* argv[] = {"prog", "in.png", "--config", "a.json",    "--n=7", "--set",
+                        "a=1",  "--set",  "b=2",      "--verbose", "--x",   "0.5"};
   REQUIRE(p.parse(12, const_cast<char**>(argv)));
   CHECK(input == "in.png");
   CHECK(config == "a.json");

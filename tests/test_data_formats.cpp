@@ -17,8 +17,12 @@ using test::error_of;
 namespace fs = std::filesystem;
 
 namespace {
-std::string colmap_scene(const GenerateOptions& g) { return generated_eval_root(g.out, "courtyard_colmap") + "/scene_0"; }
-std::string ns_scene(const GenerateOptions& g) { return generated_eval_root(g.out, "atrium_nerfstudio") + "/scene_0"; }
+std::string colmap_scene(const GenerateOptions& g) {
+  return generated_eval_root(g.out, "courtyard_colmap") + "/scene_0";
+}
+std::string ns_scene(const GenerateOptions& g) {
+  return generated_eval_root(g.out, "atrium_nerfstudio") + "/scene_0";
+}
 }  // namespace
 
 TEST_CASE("colmap: text and binary models are identical", "[data][colmap]") {
@@ -138,7 +142,8 @@ TEST_CASE("colmap: bad input names the problem", "[data][colmap]") {
   cams.replace(cams.find("\n1 PINHOLE"), 10, "\n7 PINHOLE");
   test::write_bytes(sparse + "/cameras.txt", cams);
   fs::remove(sparse + "/images.bin");
-  CHECK_THAT(error_of([&] { read_colmap(sparse); }), Catch::Contains("refers to camera 1, which cameras does not define"));
+  CHECK_THAT(error_of([&] { read_colmap(sparse); }),
+             Catch::Contains("refers to camera 1, which cameras does not define"));
   // Truncated binary.
   const auto dir2 = test::temp_dir("colmap_trunc");
   ColmapModel m;
@@ -150,7 +155,8 @@ TEST_CASE("colmap: bad input names the problem", "[data][colmap]") {
   // An empty sequence.
   const auto dir3 = test::temp_dir("colmap_empty");
   write_colmap_text(dir3 + "/sparse/0", m);
-  CHECK_THAT(error_of([&] { colmap_sequence(dir3, "x", ColmapSceneLayout{}); }), Catch::Contains("no images (empty sequence)"));
+  CHECK_THAT(error_of([&] { colmap_sequence(dir3, "x", ColmapSceneLayout{}); }),
+             Catch::Contains("no images (empty sequence)"));
 }
 
 TEST_CASE("nerfstudio: transforms.json with applied_transform and 16-bit depth is consistent", "[data][nerfstudio]") {

@@ -55,8 +55,8 @@ TEST_CASE("hypersim: depth and poses agree across views, with and without tilt-s
     const auto c = test::depth_consistency(a, b, 0.02, 1);
     INFO(split << ": checked " << c.checked << ", agree " << c.agree << ", median " << c.median_rel);
     CHECK(c.checked > 200);
-    CHECK(c.agree > 0.9);          // the rest are occlusions
-    CHECK(c.median_rel < 0.002);   // float16 depth is good to ~0.05 %
+    CHECK(c.agree > 0.9);         // the rest are occlusions
+    CHECK(c.median_rel < 0.002);  // float16 depth is good to ~0.05 %
   }
 }
 

@@ -2,8 +2,8 @@
 // intrinsics, skipped unreadable frames, and prefetching workers giving the same batches.
 #include <catch2/catch.hpp>
 
-#include <filesystem>
 #include <torch/torch.h>
+#include <filesystem>
 
 #include "data/hypersim.h"
 #include "data/loader.h"

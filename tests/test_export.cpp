@@ -83,7 +83,8 @@ TEST_CASE("onnx: unsupported layers and sizes are named", "[export][onnx]") {
   CHECK_THROWS_WITH(export_onnx(m, {60, 48, 17}), Catch::Contains("must be multiples of 16"));
   CHECK_THROWS_WITH(export_onnx(m, {64, 48, 13}), Catch::Contains("opset 13 is too old"));
   m->register_module("extra", torch::nn::Dropout(0.1));
-  CHECK_THROWS_WITH(export_onnx(m, {64, 48, 17}), Catch::Contains("no export rule for layer 'torch::nn::DropoutImpl' (at model.extra)"));
+  CHECK_THROWS_WITH(export_onnx(m, {64, 48, 17}),
+                    Catch::Contains("no export rule for layer 'torch::nn::DropoutImpl' (at model.extra)"));
   ModelOptions none = test::tiny_model_options(600, 2);
   none.decoder.mode = "none";
   InfiniSplat n(none);

@@ -2,9 +2,9 @@
 // and image/intrinsics resizing.
 #include <catch2/catch.hpp>
 
+#include <torch/torch.h>
 #include <Eigen/Dense>
 #include <opencv2/core.hpp>
-#include <torch/torch.h>
 
 #include "geometry/camera.h"
 #include "geometry/camera_torch.h"
@@ -42,12 +42,14 @@ TEST_CASE("geometry: batched torch projection matches Eigen and round-trips", "[
   auto z = torch::rand({2, 50}, torch::kFloat64) * 10.0 + 0.5;
   auto X = backproject_points(uv, z, Kt.expand({2, 3, 3}));
   CHECK(torch::allclose(project_points(X, Kt), uv, 1e-9, 1e-9));
-  const Eigen::Vector3d Xe = K.backproject(uv[1][7][0].item<double>(), uv[1][7][1].item<double>(), z[1][7].item<double>());
+  const Eigen::Vector3d Xe =
+      K.backproject(uv[1][7][0].item<double>(), uv[1][7][1].item<double>(), z[1][7].item<double>());
   CHECK(X[1][7][0].item<double>() == Approx(Xe.x()));
   CHECK(X[1][7][1].item<double>() == Approx(Xe.y()));
 
   auto T = torch::eye(4, torch::kFloat64);
-  T.narrow(0, 0, 3).narrow(1, 0, 3).copy_(torch::tensor({0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0}, torch::kFloat64).reshape({3, 3}));
+  T.narrow(0, 0, 3).narrow(1, 0, 3).copy_(
+      torch::tensor({0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0}, torch::kFloat64).reshape({3, 3}));
   T.narrow(0, 0, 3).select(1, 3).copy_(torch::tensor({1.0, 2.0, 3.0}, torch::kFloat64));
   auto p = torch::tensor({{1.0, 0.0, 0.0}}, torch::kFloat64);
   CHECK(torch::allclose(transform_points(T, p), torch::tensor({{1.0, 3.0, 3.0}}, torch::kFloat64)));

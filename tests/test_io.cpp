@@ -2,11 +2,11 @@
 #include <catch2/catch.hpp>
 
 #include <Imath/half.h>
+#include <torch/torch.h>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <opencv2/core.hpp>
-#include <torch/torch.h>
 
 #include "core/error.h"
 #include "io/atomic_file.h"
@@ -24,7 +24,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 void truncate_file(const std::string& path, double keep_fraction) {
   const std::string bytes = test::read_bytes(path);
   test::write_bytes(path, bytes.substr(0, static_cast<size_t>(bytes.size() * keep_fraction)));
@@ -33,7 +32,8 @@ void truncate_file(const std::string& path, double keep_fraction) {
 cv::Mat gradient_image(int h, int w) {
   cv::Mat img(h, w, CV_32FC3);
   for (int i = 0; i < h; ++i)
-    for (int j = 0; j < w; ++j) img.at<cv::Vec3f>(i, j) = cv::Vec3f(j / float(w), i / float(h), ((i * 7 + j * 3) % 256) / 255.0f);
+    for (int j = 0; j < w; ++j)
+      img.at<cv::Vec3f>(i, j) = cv::Vec3f(j / float(w), i / float(h), ((i * 7 + j * 3) % 256) / 255.0f);
   return img;
 }
 
@@ -116,8 +116,8 @@ TEST_CASE("io: EXR depth round trip is bit-exact and invalid depth is masked", "
 
 TEST_CASE("io: HDF5 round trips for every stored type, float16 converted by us", "[io][hdf5]") {
   const auto dir = test::temp_dir("io_hdf5");
-  std::vector<float> values = {3.9999998f, 1.0f, -2.5f, 0.0f, 65504.0f, 1e-3f, 7.0f / 3.0f, 0.99999994f,
-                               1.9999999f, 100.1f, -0.333f, 8.0f};
+  std::vector<float> values = {3.9999998f,  1.0f,        -2.5f,      0.0f,   65504.0f, 1e-3f,
+                               7.0f / 3.0f, 0.99999994f, 1.9999999f, 100.1f, -0.333f,  8.0f};
   write_hdf5(dir + "/h.hdf5", {3, 4}, values.data(), H5Type::Float16);
   auto h = read_hdf5_float(dir + "/h.hdf5");
   CHECK(h.stored == H5Type::Float16);
@@ -247,7 +247,7 @@ TEST_CASE("io: atomic writes leave the old file when the writer fails", "[io][at
   CHECK(test::read_bytes(path) == "old contents");
   size_t files = 0;
   for (const auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();
-  CHECK(files == 1);  // no temporary left behind
+  CHECK(files == 1);                                          // no temporary left behind
   write_file_atomic(dir + "/sub/new.txt", std::string("x"));  // parent folders are created
   CHECK(test::read_bytes(dir + "/sub/new.txt") == "x");
   {

@@ -33,8 +33,10 @@ TEST_CASE("losses: scale hinge is zero inside the bounds and linear outside", "[
   auto depth = torch::tensor({2.0, 2.0, 2.0}, torch::kFloat64);
   auto scales = torch::tensor({{2 * std::exp(-5.0), 2 * std::exp(-5.0), 2 * std::exp(-5.0)},
                                {2 * std::exp(-9.0), 2 * std::exp(-5.0), 2 * std::exp(-5.0)},
-                               {2 * std::exp(-1.0), 2 * std::exp(-5.0), 2 * std::exp(-5.0)}}, torch::kFloat64);
-  CHECK(scale_range_loss(scales.narrow(0, 0, 1), depth.narrow(0, 0, 1), -8, -3).item<double>() == Approx(0.0).margin(1e-12));
+                               {2 * std::exp(-1.0), 2 * std::exp(-5.0), 2 * std::exp(-5.0)}},
+                              torch::kFloat64);
+  CHECK(scale_range_loss(scales.narrow(0, 0, 1), depth.narrow(0, 0, 1), -8, -3).item<double>() ==
+        Approx(0.0).margin(1e-12));
   // Below by 1 and above by 2, over 9 entries.
   CHECK(scale_range_loss(scales, depth, -8, -3).item<double>() == Approx(3.0 / 9.0));
 }

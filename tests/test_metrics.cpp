@@ -28,11 +28,13 @@ double reference_ssim(const torch::Tensor& a, const torch::Tensor& b) {
         double mx = 0, my = 0, xx = 0, yy = 0, xy = 0;
         for (int y = -R; y <= R; ++y)
           for (int x = -R; x <= R; ++x) {
-            const double wt = w[y + R][x + R] / sum, u = pa[(c * H + i + y) * W + j + x], v = pb[(c * H + i + y) * W + j + x];
+            const double wt = w[y + R][x + R] / sum, u = pa[(c * H + i + y) * W + j + x],
+                         v = pb[(c * H + i + y) * W + j + x];
             mx += wt * u, my += wt * v, xx += wt * u * u, yy += wt * v * v, xy += wt * u * v;
           }
         const double C1 = 1e-4, C2 = 9e-4;
-        s += ((2 * mx * my + C1) * (2 * (xy - mx * my) + C2)) / ((mx * mx + my * my + C1) * (xx - mx * mx + yy - my * my + C2));
+        s += ((2 * mx * my + C1) * (2 * (xy - mx * my) + C2)) /
+             ((mx * mx + my * my + C1) * (xx - mx * mx + yy - my * my + C2));
       }
       total += s / C;
       ++n;

@@ -38,7 +38,8 @@ TEST_CASE("model: zero updates render exactly like the directly lifted base Gaus
   const BaseGaussians base = make_base_gaussians(s);
   const Gaussians composed = compose(base, torch::zeros({s.count(), kDeltaDim}), cam.K, cam.T_cw, ComposerOptions{});
   // Directly: back-project each support, isotropic sqrt(area), linear colour, opacity 0.5.
-  Gaussians direct{backproject_points(s.uv, s.depth, cam.K), torch::sqrt(s.area).unsqueeze(1).expand({-1, 3}).contiguous(),
+  Gaussians direct{backproject_points(s.uv, s.depth, cam.K),
+                   torch::sqrt(s.area).unsqueeze(1).expand({-1, 3}).contiguous(),
                    torch::tensor({1.0f, 0.0f, 0.0f, 0.0f}).expand({s.count(), 4}).contiguous(),
                    srgb_to_linear(torch::clamp(s.color, 0.01, 0.99)), torch::full({s.count()}, 0.5f)};
   const Camera novel = camera(0.3);
@@ -89,7 +90,11 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
   };
   const std::vector<Case> cases = {
       {"w/o learned updates", [](ModelOptions& o) { o.decoder.mode = "none"; }},
-      {"w/o implicit decoder", [](ModelOptions& o) { o.decoder.mode = "dense"; o.sampler.mode = "pixel"; }},
+      {"w/o implicit decoder",
+       [](ModelOptions& o) {
+         o.decoder.mode = "dense";
+         o.sampler.mode = "pixel";
+       }},
       {"w/o DINO", [](ModelOptions& o) { o.encoder.dino = false; }},
       {"w/o CNN", [](ModelOptions& o) { o.encoder.cnn = false; }},
       {"pixel-aligned supports", [](ModelOptions& o) { o.sampler.mode = "pixel"; }},
@@ -119,6 +124,7 @@ TEST_CASE("model: NaN depth holes are masked, all-invalid depth and tiny images 
   CHECK_THROWS_WITH(m->predict(torch::rand({3, H, W}), cam.K, cam.T_cw, nan_depth, torch::ones({H, W})),
                     Catch::Contains("no valid triangle"));
   const Camera small{make_K(10, 10, 5, 4), torch::eye(4), 10, 8};
-  CHECK_THROWS_WITH(m->predict(torch::rand({3, 8, 10}), small.K, small.T_cw, torch::ones({8, 10}), torch::ones({8, 10})),
-                    Catch::Contains("smaller than one 16x16 ViT patch"));
+  CHECK_THROWS_WITH(
+      m->predict(torch::rand({3, 8, 10}), small.K, small.T_cw, torch::ones({8, 10}), torch::ones({8, 10})),
+      Catch::Contains("smaller than one 16x16 ViT patch"));
 }

@@ -78,12 +78,12 @@ TEST_CASE("encoder: parameters carry the official DINOv3 names and a checkpoint 
 TEST_CASE("decoder: grid_sample query matches hand-computed bilinear values", "[decoder]") {
   // A 4x4 map over a 16x16 image: texel (i, j) covers pixels [4j, 4j+4) x [4i, 4i+4), centre at 4j+2.
   auto f = torch::arange(16, torch::kFloat32).view({1, 1, 4, 4});
-  auto uv = torch::tensor({{2.0f, 2.0f},     // centre of texel (0,0)
-                           {10.0f, 6.0f},    // centre of texel (1,2)
-                           {4.0f, 2.0f},     // halfway between texels (0,0) and (0,1)
-                           {0.0f, 0.0f},     // image corner: clamped to the border texel
-                           {16.0f, 16.0f},   // opposite corner
-                           {4.0f, 4.0f}});   // centre of texels (0,0),(0,1),(1,0),(1,1)
+  auto uv = torch::tensor({{2.0f, 2.0f},    // centre of texel (0,0)
+                           {10.0f, 6.0f},   // centre of texel (1,2)
+                           {4.0f, 2.0f},    // halfway between texels (0,0) and (0,1)
+                           {0.0f, 0.0f},    // image corner: clamped to the border texel
+                           {16.0f, 16.0f},  // opposite corner
+                           {4.0f, 4.0f}});  // centre of texels (0,0),(0,1),(1,0),(1,1)
   auto q = query_features(f, uv, 16, 16).squeeze(1);
   CHECK(q[0].item<float>() == Approx(0.0f));
   CHECK(q[1].item<float>() == Approx(6.0f));
@@ -158,8 +158,10 @@ TEST_CASE("composer: world transform moves means and rotates quaternions", "[com
               torch::full({1, 3}, 0.5), torch::full({1}, 0.5)};
   // Camera at world (1, 0, 0) rotated 90 degrees about y.
   auto T_cw = torch::eye(4, torch::kFloat64);
-  T_cw.narrow(0, 0, 3).narrow(1, 0, 3).copy_(torch::tensor({0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0}, torch::kFloat64).view({3, 3}));
-  T_cw.narrow(0, 0, 3).select(1, 3).copy_(-torch::matmul(T_cw.narrow(0, 0, 3).narrow(1, 0, 3), torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64)));
+  T_cw.narrow(0, 0, 3).narrow(1, 0, 3).copy_(
+      torch::tensor({0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0}, torch::kFloat64).view({3, 3}));
+  T_cw.narrow(0, 0, 3).select(1, 3).copy_(
+      -torch::matmul(T_cw.narrow(0, 0, 3).narrow(1, 0, 3), torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64)));
   auto w = camera_to_world(g.to(torch::kFloat64), T_cw);
   auto back = transform_points(T_cw, w.means);
   CHECK(torch::allclose(back, g.means.to(torch::kFloat64), 1e-9, 1e-12));
@@ -169,7 +171,8 @@ TEST_CASE("composer: world transform moves means and rotates quaternions", "[com
 TEST_CASE("decoder: the fast feature sampler equals grid_sample, with exact gradients", "[decoder]") {
   torch::manual_seed(2);
   auto f = torch::randn({1, 5, 6, 7}, torch::kFloat64).requires_grad_(true);
-  auto uv = torch::rand({300, 2}, torch::kFloat64) * torch::tensor({70.0, 60.0}, torch::kFloat64) - 2.0;  // some outside
+  auto uv =
+      torch::rand({300, 2}, torch::kFloat64) * torch::tensor({70.0, 60.0}, torch::kFloat64) - 2.0;  // some outside
   uv[0][0] = 0.0;
   uv[1][1] = 60.0;
   auto ours = sample_features(f, uv, 70, 60), ref = query_features(f, uv, 70, 60);
@@ -196,5 +199,6 @@ TEST_CASE("decoder: the fused gated query equals the unfused ops, values and gra
   auto ga = torch::autograd::grad({(fused * w).sum()}, {d, gd, cp, gc});
   auto gb = torch::autograd::grad({(ref * w).sum()}, {d, gd, cp, gc});
   for (int k = 0; k < 4; ++k) CHECK(torch::allclose(ga[k], gb[k], 1e-10, 1e-12));
-  CHECK_THROWS_WITH(gated_sample(d, gd, cp.narrow(1, 0, 5), gc.narrow(1, 0, 5), uv, 64, 48), Catch::Contains("dino's C"));
+  CHECK_THROWS_WITH(gated_sample(d, gd, cp.narrow(1, 0, 5), gc.narrow(1, 0, 5), uv, 64, 48),
+                    Catch::Contains("dino's C"));
 }

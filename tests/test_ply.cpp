@@ -13,8 +13,8 @@ using namespace isplat;
 TEST_CASE("ply: write then read returns the same Gaussians", "[ply]") {
   torch::manual_seed(0);
   const int64_t N = 50;
-  Gaussians g{torch::randn({N, 3}), torch::rand({N, 3}) * 0.1 + 1e-3, torch::randn({N, 4}), torch::rand({N, 3}) * 0.9 + 0.05,
-              torch::rand({N}) * 0.9 + 0.05};
+  Gaussians g{torch::randn({N, 3}), torch::rand({N, 3}) * 0.1 + 1e-3, torch::randn({N, 4}),
+              torch::rand({N, 3}) * 0.9 + 0.05, torch::rand({N}) * 0.9 + 0.05};
   const auto dir = test::temp_dir("ply");
   write_ply(dir + "/s.ply", g, true);
   const Gaussians b = read_ply(dir + "/s.ply", true);
@@ -34,12 +34,46 @@ TEST_CASE("ply: write then read returns the same Gaussians", "[ply]") {
 TEST_CASE("ply: a fixture in the exact 3DGS header order, with extra properties, reads correctly", "[ply]") {
   // Two vertices, in the order 3DGS writes (including f_rest_0 that we skip).
   std::string h = "ply\nformat binary_little_endian 1.0\nelement vertex 2\n";
-  const char* names[] = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "f_rest_0", "opacity",
-                         "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+  const char* names[] = {"x",        "y",       "z",       "nx",      "ny",      "nz",    "f_dc_0", "f_dc_1", "f_dc_2",
+                         "f_rest_0", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1",  "rot_2",  "rot_3"};
   for (const char* n : names) h += std::string("property float ") + n + "\n";
   h += "end_header\n";
-  std::vector<float> v = {1, 2, 3, 0, 0, 1, 0, 0, 0, 9, 0, -2, -3, -4, 1, 0, 0, 0,
-                          -1, 0, 5, 0, 0, 0, float(0.5 / kShC0), float(-0.5 / kShC0), 0, 9, 2, 0, 0, 0, 0, 0, 1, 0};
+  std::vector<float> v = {1,
+                          2,
+                          3,
+                          0,
+                          0,
+                          1,
+                          0,
+                          0,
+                          0,
+                          9,
+                          0,
+                          -2,
+                          -3,
+                          -4,
+                          1,
+                          0,
+                          0,
+                          0,
+                          -1,
+                          0,
+                          5,
+                          0,
+                          0,
+                          0,
+                          float(0.5 / kShC0),
+                          float(-0.5 / kShC0),
+                          0,
+                          9,
+                          2,
+                          0,
+                          0,
+                          0,
+                          0,
+                          0,
+                          1,
+                          0};
   const auto dir = test::temp_dir("ply_fixture");
   test::write_bytes(dir + "/f.ply", h + std::string(reinterpret_cast<const char*>(v.data()), v.size() * 4));
   const Gaussians g = read_ply(dir + "/f.ply", false);

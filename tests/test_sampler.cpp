@@ -14,9 +14,15 @@ namespace {
 // 48 x 64 quads, so 8x8 blocks and 4 column strips align with whole quads.
 constexpr int64_t H = 49, W = 65;
 const double fx = 60.0, fy = 60.0, cx = 32.0, cy = 24.0;
-torch::Tensor K() { return make_K(fx, fy, cx, cy); }
-torch::Tensor image() { return torch::rand({3, H, W}); }
-torch::Tensor ones() { return torch::ones({H, W}); }
+torch::Tensor K() {
+  return make_K(fx, fy, cx, cy);
+}
+torch::Tensor image() {
+  return torch::rand({3, H, W});
+}
+torch::Tensor ones() {
+  return torch::ones({H, W});
+}
 SamplerOptions fixed(int64_t n) {
   SamplerOptions o;
   o.budget = n;
@@ -70,7 +76,8 @@ TEST_CASE("sampler: a slanted plane gets density proportional to its 3D area", "
     double col = 0;
     for (int64_t i = 0; i + 1 < H; ++i) {
       auto a = P[i][j], b = P[i][j + 1], c = P[i + 1][j], d = P[i + 1][j + 1];
-      col += 0.5 * torch::cross(b - a, c - a).norm().item<double>() + 0.5 * torch::cross(d - b, c - b).norm().item<double>();
+      col += 0.5 * torch::cross(b - a, c - a).norm().item<double>() +
+             0.5 * torch::cross(d - b, c - b).norm().item<double>();
     }
     area[std::min<int64_t>(3, j * 4 / (W - 1))] += col;
   }

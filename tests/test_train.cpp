@@ -117,7 +117,7 @@ TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoin
   for (const char* f : {"init.safetensors", "last.safetensors", "best.safetensors", "step_000003.safetensors",
                         "step_000004.safetensors"})
     CHECK(fs::exists(ck / f));
-  CHECK_FALSE(fs::exists(ck / "step_000002.safetensors"));  // only the last 2 periodic ones stay
+  CHECK_FALSE(fs::exists(ck / "step_000002.safetensors"));          // only the last 2 periodic ones stay
   CHECK(fs::hard_link_count(ck / "step_000004.safetensors") >= 2);  // last is a link, not a copy
   CHECK(load_checkpoint((ck / "last.safetensors").string()).step() == 4);
   CHECK(load_checkpoint((ck / "init.safetensors").string()).tensors.count("optim/state") == 0);

@@ -23,22 +23,26 @@ namespace {
 std::string exif_jpeg(bool little_endian, uint16_t f35, uint32_t num, uint32_t den) {
   std::string t;
   auto u16 = [&](uint16_t v) {
-    if (little_endian) t += char(v & 0xFF), t += char(v >> 8);
-    else t += char(v >> 8), t += char(v & 0xFF);
+    if (little_endian)
+      t += char(v & 0xFF), t += char(v >> 8);
+    else
+      t += char(v >> 8), t += char(v & 0xFF);
   };
   auto u32 = [&](uint32_t v) {
-    if (little_endian) for (int i = 0; i < 4; ++i) t += char((v >> (8 * i)) & 0xFF);
-    else for (int i = 3; i >= 0; --i) t += char((v >> (8 * i)) & 0xFF);
+    if (little_endian)
+      for (int i = 0; i < 4; ++i) t += char((v >> (8 * i)) & 0xFF);
+    else
+      for (int i = 3; i >= 0; --i) t += char((v >> (8 * i)) & 0xFF);
   };
   t += little_endian ? "II" : "MM";
   u16(42);
-  u32(8);                                       // IFD0 at 8
-  u16(1);                                       // one entry: ExifIFD pointer
-  u16(0x8769), u16(4), u32(1), u32(26);         // Exif IFD at 26
+  u32(8);                                // IFD0 at 8
+  u16(1);                                // one entry: ExifIFD pointer
+  u16(0x8769), u16(4), u32(1), u32(26);  // Exif IFD at 26
   u32(0);
-  u16(2);                                       // Exif IFD: two entries
+  u16(2);  // Exif IFD: two entries
   u16(0xA405), u16(3), u32(1), u16(f35), u16(0);
-  u16(0x920A), u16(5), u32(1), u32(56);         // rational at 56
+  u16(0x920A), u16(5), u32(1), u32(56);  // rational at 56
   u32(0);
   u32(num), u32(den);
   std::string app1 = std::string("Exif\0\0", 6) + t;
@@ -113,8 +117,9 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const Gaussians g = read_ply(out + "/scene.ply");
   CHECK(g.count() > 1000);
   CHECK(fs::exists(out + "/scene.camera.json"));
-  const std::string render = tool + " render --ply " + out + "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " +
-                             out + "/orbit > " + out + "/render.txt 2>&1";
+  const std::string render = tool + " render --ply " + out +
+                             "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " + out + "/orbit > " +
+                             out + "/render.txt 2>&1";
   REQUIRE(std::system(render.c_str()) == 0);
   for (const char* f : {"frame_0000.png", "frame_0004.png", "depth_0002.png", "normal_0003.png"})
     CHECK(fs::exists(fs::path(out) / "orbit" / f));
@@ -122,8 +127,8 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   REQUIRE(video.isOpened());
   CHECK(static_cast<int>(video.get(cv::CAP_PROP_FRAME_COUNT)) == 5);
   // Bad input is named.
-  const std::string bad = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + out + "/none.jpg --out " + out +
-                          "/x.ply > " + out + "/bad.txt 2>&1";
+  const std::string bad = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + out +
+                          "/none.jpg --out " + out + "/x.ply > " + out + "/bad.txt 2>&1";
   CHECK(std::system(bad.c_str()) != 0);
   CHECK_THAT(test::read_bytes(out + "/bad.txt"), Catch::Contains("none.jpg: no such file"));
 }

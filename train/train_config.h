@@ -25,7 +25,7 @@ struct DataOptions {
 };
 
 struct OptimOptions {
-  double lr = 5e-5;           // paper
+  double lr = 5e-5;  // paper
   double weight_decay = 0.01;
   double beta1 = 0.9, beta2 = 0.999;
   int64_t warmup = 100;       // linear warm-up steps, then cosine decay

@@ -2,9 +2,9 @@
 #include "train/trainer.h"
 
 #include <ATen/core/Generator.h>
+#include <torch/torch.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <torch/torch.h>
 
 #include <atomic>
 #include <chrono>
@@ -14,8 +14,8 @@
 
 #include "core/config.h"
 #include "core/error.h"
-#include "core/parse.h"
 #include "core/log.h"
+#include "core/parse.h"
 #include "core/progress.h"
 #include "geometry/camera_torch.h"
 #include "io/atomic_file.h"
@@ -42,10 +42,14 @@ std::vector<Sequence> read_split(const HypersimOptions& base, const std::string&
   return read_hypersim(h).sequences;
 }
 
-bool finite(const torch::Tensor& t) { return torch::isfinite(t).all().item<bool>(); }
+bool finite(const torch::Tensor& t) {
+  return torch::isfinite(t).all().item<bool>();
+}
 }  // namespace
 
-void Trainer::request_stop() { g_stop = true; }
+void Trainer::request_stop() {
+  g_stop = true;
+}
 
 Trainer::Trainer(const TrainConfig& config) : config_(config), run_dir_(config.train.out) {
   torch::manual_seed(static_cast<uint64_t>(config.runtime.seed));
@@ -85,10 +89,9 @@ Trainer::Trainer(const TrainConfig& config) : config_(config), run_dir_(config.t
   log_info("train: task ", config.task, ", ", count, " trainable parameters, ", config.train.steps, " steps, batch ",
            config.data.batch_size, " x (1 context + ", config.data.tuples.targets, " targets) at ",
            config.data.tuples.width, "x", config.data.tuples.height);
-  optimizer_ = std::make_unique<torch::optim::AdamW>(
-      params, torch::optim::AdamWOptions(config.optim.lr)
-                  .betas({config.optim.beta1, config.optim.beta2})
-                  .weight_decay(config.optim.weight_decay));
+  optimizer_ = std::make_unique<torch::optim::AdamW>(params, torch::optim::AdamWOptions(config.optim.lr)
+                                                                 .betas({config.optim.beta1, config.optim.beta2})
+                                                                 .weight_decay(config.optim.weight_decay));
 }
 
 Trainer::~Trainer() = default;
@@ -98,7 +101,9 @@ torch::nn::Module& Trainer::trainable() {
   return *depth_net_;
 }
 
-const torch::nn::Module& Trainer::trainable() const { return const_cast<Trainer*>(this)->trainable(); }
+const torch::nn::Module& Trainer::trainable() const {
+  return const_cast<Trainer*>(this)->trainable();
+}
 
 std::map<std::string, torch::Tensor> Trainer::gaussian_losses(const Batch& batch, StepStats& stats, bool train,
                                                               std::vector<torch::Tensor>* predictions) {
@@ -159,7 +164,8 @@ std::map<std::string, torch::Tensor> Trainer::gaussian_losses(const Batch& batch
     auto composite = pred * mask + target * (1 - mask);
     if (predictions) predictions->push_back(composite.detach());
     acc["l1"] = acc["l1"] + ((pred - target).abs() * mask).sum() / (3.0 * mask.sum() + 1e-6);
-    if (perceptual_ && perceptual_->enabled()) acc["perceptual"] = acc["perceptual"] + (*perceptual_)(composite, target);
+    if (perceptual_ && perceptual_->enabled())
+      acc["perceptual"] = acc["perceptual"] + (*perceptual_)(composite, target);
     auto z = transform_points(batch.context_T[b].to(p.gaussians.means.scalar_type()), p.gaussians.means).select(1, 2);
     acc["scale"] = acc["scale"] + scale_range_loss(p.gaussians.scales, z, lo.scale_bounds.at(0), lo.scale_bounds.at(1));
     if (lo.smooth > 0) {
@@ -217,12 +223,14 @@ StepStats Trainer::train_step() {
     log_warn("train: step ", step_, " has a non-finite loss or gradient (", s.losses["total"], "); skipped (",
              bad_steps_, " in a row)");
     if (bad_steps_ >= config_.train.max_bad_steps)
-      fail("train: ", bad_steps_, " consecutive non-finite steps (train.max_bad_steps); stopping. Lower optim.lr, "
+      fail("train: ", bad_steps_,
+           " consecutive non-finite steps (train.max_bad_steps); stopping. Lower optim.lr, "
            "check the data for broken depth, or raise train.max_bad_steps.");
   } else {
     bad_steps_ = 0;
     t0 = Clock::now();
-    if (config_.optim.grad_clip > 0) torch::nn::utils::clip_grad_norm_(trainable().parameters(), config_.optim.grad_clip);
+    if (config_.optim.grad_clip > 0)
+      torch::nn::utils::clip_grad_norm_(trainable().parameters(), config_.optim.grad_clip);
     optimizer_->step();
     s.timings_ms["optim"] = ms_since(t0);
   }
@@ -255,7 +263,8 @@ double Trainer::validate(bool write_images) {
   nlohmann::json j = {{"step", step_}, {"val_loss", mean}};
   if (psnr_n) j["val_psnr_masked"] = psnr_sum / psnr_n;
   log << j.dump() << "\n";
-  log_info("validation at step ", step_, ": loss ", mean, psnr_n ? cat(", masked PSNR ", psnr_sum / psnr_n, " dB") : "");
+  log_info("validation at step ", step_, ": loss ", mean,
+           psnr_n ? cat(", masked PSNR ", psnr_sum / psnr_n, " dB") : "");
   return mean;
 }
 
@@ -274,7 +283,8 @@ void Trainer::write_val_images(const Batch& batch, const std::vector<torch::Tens
   cv::Mat panel;
   cv::vconcat(rows, panel);
   char name[64];
-  std::snprintf(name, sizeof name, "step_%06lld_tuple%lld.png", static_cast<long long>(step_), static_cast<long long>(index));
+  std::snprintf(name, sizeof name, "step_%06lld_tuple%lld.png", static_cast<long long>(step_),
+                static_cast<long long>(index));
   write_image((fs::path(run_dir_) / "val" / name).string(), panel);
 }
 
@@ -295,7 +305,8 @@ void Trainer::save(const std::string& path, bool with_optimizer) const {
   ck.metadata["config"] = config_to_json(config_).dump();
   // Carry the learned depth prior's weights, so the checkpoint alone predicts from a photo.
   if (pipeline_)
-    if (const torch::nn::Module* prior_net = pipeline_->prior().embeddable_weights()) put_module(ck, *prior_net, "prior/");
+    if (const torch::nn::Module* prior_net = pipeline_->prior().embeddable_weights())
+      put_module(ck, *prior_net, "prior/");
   save_checkpoint(path, ck);
 }
 
@@ -361,7 +372,7 @@ void Trainer::checkpoint(bool periodic) {
 }
 
 void Trainer::write_log(const StepStats& s) {
-  nlohmann::json j = {{"step", step_}, {"lr", s.lr}, {"loss", s.losses}, {"time_ms", s.timings_ms},
+  nlohmann::json j = {{"step", step_},          {"lr", s.lr},          {"loss", s.losses}, {"time_ms", s.timings_ms},
                       {"supports", s.supports}, {"skipped", s.skipped}};
   std::ofstream log(log_path_, std::ios::app);
   log << j.dump() << "\n";
@@ -402,7 +413,8 @@ int Trainer::run() {
     if (g_stop) {
       bar.finish();
       checkpoint(false);
-      log_warn("train: interrupted; checkpoint written to ", (ckdir / "last.safetensors").string(), " (resume with --resume auto)");
+      log_warn("train: interrupted; checkpoint written to ", (ckdir / "last.safetensors").string(),
+               " (resume with --resume auto)");
       return 130;
     }
   }
@@ -416,7 +428,8 @@ int Trainer::run() {
   for (auto& [k, v] : time_sum) summary["mean_step_time_ms"][k] = v / std::max<int64_t>(1, timed);
   write_file_atomic((fs::path(run_dir_) / "summary.json").string(), summary.dump(2) + "\n");
   std::string breakdown;
-  for (auto& [k, v] : time_sum) breakdown += cat(" ", k, " ", std::fixed, std::setprecision(0), v / std::max<int64_t>(1, timed));
+  for (auto& [k, v] : time_sum)
+    breakdown += cat(" ", k, " ", std::fixed, std::setprecision(0), v / std::max<int64_t>(1, timed));
   log_info("train: done, ", step_, " steps; mean ms per step:", breakdown, "; run folder ", run_dir_);
   return 0;
 }

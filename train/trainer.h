@@ -17,8 +17,9 @@
 namespace isplat {
 
 struct StepStats {
-  std::map<std::string, double> losses;      // total, l1, perceptual, scale, smooth (or depth terms)
-  std::map<std::string, double> timings_ms;  // data, prior, sampler, encoder, decoder, composer, render_fwd, losses, backward, render_bwd, optim
+  std::map<std::string, double> losses;  // total, l1, perceptual, scale, smooth (or depth terms)
+  std::map<std::string, double>
+      timings_ms;  // data, prior, sampler, encoder, decoder, composer, render_fwd, losses, backward, render_bwd, optim
   double lr = 0;
   int64_t supports = 0;
   bool skipped = false;
@@ -34,8 +35,8 @@ class Trainer {
   // Trains to config.train.steps. Returns 0, or 130 when stopped by Ctrl-C (after saving a checkpoint).
   int run();
 
-  StepStats train_step();                       // one optimizer step on the next batch
-  double validate(bool write_images);           // mean validation loss (also logs PSNR)
+  StepStats train_step();                                                // one optimizer step on the next batch
+  double validate(bool write_images);                                    // mean validation loss (also logs PSNR)
   void save(const std::string& path, bool with_optimizer = true) const;  // atomic
   int64_t step() const { return step_; }
   torch::nn::Module& trainable();
@@ -52,8 +53,8 @@ class Trainer {
   void checkpoint(bool periodic);
 
   TrainConfig config_;
-  std::unique_ptr<Pipeline> pipeline_;   // task gaussians
-  LearnedDepthNet depth_net_{nullptr};   // task depth
+  std::unique_ptr<Pipeline> pipeline_;  // task gaussians
+  LearnedDepthNet depth_net_{nullptr};  // task depth
   std::unique_ptr<PerceptualLoss> perceptual_;
   std::unique_ptr<TupleSampler> train_sampler_, val_sampler_;
   std::unique_ptr<BatchLoader> loader_;

@@ -2,8 +2,8 @@
 #include "data/synth/builder.h"
 
 #include <Eigen/Geometry>
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 
@@ -18,10 +18,14 @@ struct Rng {
   bool chance(double p) { return uniform(0, 1) < p; }
   Vec3 color(double lo, double hi) { return Vec3(uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)); }
   template <class T>
-  const T& pick(const std::vector<T>& v) { return v[static_cast<size_t>(integer(0, static_cast<int>(v.size()) - 1))]; }
+  const T& pick(const std::vector<T>& v) {
+    return v[static_cast<size_t>(integer(0, static_cast<int>(v.size()) - 1))];
+  }
 };
 
-Mat3 yaw(double a) { return Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix(); }
+Mat3 yaw(double a) {
+  return Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix();
+}
 
 Primitive quad(const Vec3& p0, const Vec3& e1, const Vec3& e2, int mat) {
   Primitive p;
@@ -110,7 +114,8 @@ void table(Scene& s, const Vec3& c, double yaw_angle, int top_mat, int leg_mat, 
 void shelf(Scene& s, const Vec3& c, double yaw_angle, int mat, Rng& rng) {
   const double w = rng.uniform(0.4, 0.7), d = 0.18, h = rng.uniform(1.4, 2.0);
   const Mat3 R = yaw(yaw_angle);
-  for (int sx : {-1, 1}) s.add(box(c + R * Vec3(sx * w, 0, 0) + Vec3(0, 0, h / 2), Vec3(0.02, d, h / 2), yaw_angle, mat));
+  for (int sx : {-1, 1})
+    s.add(box(c + R * Vec3(sx * w, 0, 0) + Vec3(0, 0, h / 2), Vec3(0.02, d, h / 2), yaw_angle, mat));
   const int boards = rng.integer(3, 5);
   for (int b = 0; b <= boards; ++b)
     s.add(box(c + Vec3(0, 0, 0.05 + b * (h - 0.1) / boards), Vec3(w, d, 0.015), yaw_angle, mat));
@@ -135,8 +140,9 @@ Scene build_room(uint64_t seed) {
   Scene s;
   s.style = "room";
   const double W = rng.uniform(5.0, 7.5), D = rng.uniform(7.5, 11.0), H = rng.uniform(2.6, 3.2);
-  const int floor_m = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Tiles, Pattern::Checker, Pattern::Marble}),
-                                         rng.uniform(0.4, 1.0), 0.35, 0.8, 0.1));
+  const int floor_m = s.add_material(
+      mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Tiles, Pattern::Checker, Pattern::Marble}),
+          rng.uniform(0.4, 1.0), 0.35, 0.8, 0.1));
   const int ceil_m = s.add_material(mat(rng, Pattern::Noise, 2.0, 0.75, 0.9));
   const std::vector<Pattern> wall_patterns = {Pattern::Bricks, Pattern::Stripes, Pattern::Noise, Pattern::Grid};
   int wall_m[4];
@@ -154,10 +160,12 @@ Scene build_room(uint64_t seed) {
 
   const int wood = s.add_material(mat(rng, Pattern::Wood, rng.uniform(0.3, 0.7), 0.35, 0.7, 0.05));
   const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.15, 0.4, 0.4));
-  const int fabric = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Checker, Pattern::Stripes, Pattern::Dots}),
-                                        rng.uniform(0.08, 0.2), 0.3, 0.9));
-  const int decor = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Marble, Pattern::Dots, Pattern::Noise}),
-                                       rng.uniform(0.05, 0.2), 0.3, 0.95, 0.3));
+  const int fabric =
+      s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Checker, Pattern::Stripes, Pattern::Dots}),
+                         rng.uniform(0.08, 0.2), 0.3, 0.9));
+  const int decor =
+      s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Marble, Pattern::Dots, Pattern::Noise}),
+                         rng.uniform(0.05, 0.2), 0.3, 0.95, 0.3));
   // Furniture stands along the side walls, leaving the central walkway free for the cameras.
   auto side_x = [&](bool left) { return left ? rng.uniform(0.5, W * 0.27) : rng.uniform(W * 0.73, W - 0.5); };
   const int pieces = rng.integer(5, 8);
@@ -165,16 +173,24 @@ Scene build_room(uint64_t seed) {
     const bool left = k % 2 == 0;
     const Vec3 c(side_x(left), rng.uniform(0.8, D - 0.8), 0);
     switch (rng.integer(0, 5)) {
-      case 0: table(s, c, rng.uniform(-0.4, 0.4), wood, metal, rng); break;
-      case 1: shelf(s, Vec3(left ? 0.25 : W - 0.25, c.y(), 0), kPi / 2, wood, rng); break;
+      case 0:
+        table(s, c, rng.uniform(-0.4, 0.4), wood, metal, rng);
+        break;
+      case 1:
+        shelf(s, Vec3(left ? 0.25 : W - 0.25, c.y(), 0), kPi / 2, wood, rng);
+        break;
       case 2: {
         const Vec3 half(rng.uniform(0.25, 0.5), rng.uniform(0.2, 0.45), rng.uniform(0.4, 0.9));
         s.add(box(c + Vec3(0, 0, half.z()), half, rng.uniform(-0.5, 0.5), rng.chance(0.5) ? fabric : wood));
         s.add(sphere(c + Vec3(0, 0, 2 * half.z() + 0.12), 0.12, decor));
         break;
       }
-      case 3: lamp(s, c, metal, decor, rng); break;
-      case 4: s.add(cylinder(c, Vec3::UnitZ(), rng.uniform(0.15, 0.3), H, rng.chance(0.5) ? decor : wall_m[0])); break;
+      case 3:
+        lamp(s, c, metal, decor, rng);
+        break;
+      case 4:
+        s.add(cylinder(c, Vec3::UnitZ(), rng.uniform(0.15, 0.3), H, rng.chance(0.5) ? decor : wall_m[0]));
+        break;
       default: {  // a board leaning against the wall: a slanted plane
         const double len = rng.uniform(1.2, 2.0), width = rng.uniform(0.5, 1.0), lean = rng.uniform(0.25, 0.6);
         const double x_wall = left ? 0.02 : W - 0.02, sgn = left ? 1.0 : -1.0;
@@ -185,14 +201,16 @@ Scene build_room(uint64_t seed) {
   }
   // Pictures on the walls (thin boxes with high-frequency patterns) and a thin rail.
   for (int k = 0; k < rng.integer(2, 4); ++k) {
-    const int pm = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Dots, Pattern::Checker, Pattern::Stripes, Pattern::Marble}),
-                                      rng.uniform(0.04, 0.12), 0.1, 0.95));
+    const int pm = s.add_material(
+        mat(rng, rng.pick(std::vector<Pattern>{Pattern::Dots, Pattern::Checker, Pattern::Stripes, Pattern::Marble}),
+            rng.uniform(0.04, 0.12), 0.1, 0.95));
     const bool on_end = rng.chance(0.5);
     const Vec3 half(rng.uniform(0.25, 0.6), 0.015, rng.uniform(0.2, 0.45));
     if (on_end)
       s.add(box(Vec3(rng.uniform(1.0, W - 1.0), D - 0.02, rng.uniform(1.3, H - 0.6)), half, 0.0, pm));
     else
-      s.add(box(Vec3(rng.chance(0.5) ? 0.02 : W - 0.02, rng.uniform(1.0, D - 1.0), rng.uniform(1.3, H - 0.6)), half, kPi / 2, pm));
+      s.add(box(Vec3(rng.chance(0.5) ? 0.02 : W - 0.02, rng.uniform(1.0, D - 1.0), rng.uniform(1.3, H - 0.6)), half,
+                kPi / 2, pm));
   }
   s.add(cylinder(Vec3(0.05, 0.3, H - 0.35), Vec3::UnitY(), 0.012, D - 0.6, metal));
   // A free-standing pillar near one end gives a strong depth discontinuity and disocclusions.
@@ -218,7 +236,8 @@ Scene build_courtyard(uint64_t seed) {
   Scene s;
   s.style = "courtyard";
   const double X = rng.uniform(14.0, 20.0), Y = rng.uniform(16.0, 22.0);
-  const int ground = s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Tiles, Pattern::Bricks}), rng.uniform(0.5, 1.0), 0.4, 0.75));
+  const int ground = s.add_material(
+      mat(rng, rng.pick(std::vector<Pattern>{Pattern::Tiles, Pattern::Bricks}), rng.uniform(0.5, 1.0), 0.4, 0.75));
   s.add(quad(Vec3(-15, -15, 0), Vec3(X + 30, 0, 0), Vec3(0, Y + 30, 0), ground));
   // Facades around the yard: big boxes with window grids.
   for (int side = 0; side < 4; ++side) {
@@ -237,7 +256,8 @@ Scene build_courtyard(uint64_t seed) {
   // An arcade: columns with a beam along one side.
   const int stone = s.add_material(mat(rng, Pattern::Marble, rng.uniform(0.3, 0.8), 0.6, 0.9, 0.1));
   const double ax = rng.chance(0.5) ? 2.0 : X - 2.0;
-  for (double y = 2.0; y < Y - 1.5; y += rng.uniform(2.5, 3.5)) s.add(cylinder(Vec3(ax, y, 0), Vec3::UnitZ(), 0.28, 4.0, stone));
+  for (double y = 2.0; y < Y - 1.5; y += rng.uniform(2.5, 3.5))
+    s.add(cylinder(Vec3(ax, y, 0), Vec3::UnitZ(), 0.28, 4.0, stone));
   s.add(box(Vec3(ax, Y / 2, 4.25), Vec3(0.35, Y / 2 - 1.0, 0.25), 0.0, stone));
   // Fountain, trees, benches with thin legs, a sculpture.
   const int water = s.add_material(mat(rng, Pattern::Noise, 0.3, 0.2, 0.5, 0.5));
@@ -251,7 +271,8 @@ Scene build_courtyard(uint64_t seed) {
     return m;
   }());
   for (int k = 0; k < rng.integer(2, 4); ++k) {
-    const Vec3 base(rng.chance(0.5) ? rng.uniform(1.0, 3.5) : rng.uniform(X - 3.5, X - 1.0), rng.uniform(2.0, Y - 2.0), 0);
+    const Vec3 base(rng.chance(0.5) ? rng.uniform(1.0, 3.5) : rng.uniform(X - 3.5, X - 1.0), rng.uniform(2.0, Y - 2.0),
+                    0);
     tree(s, base, trunk, leaves, rng);
   }
   const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.1, 0.3, 0.5));
@@ -310,7 +331,8 @@ Scene build_atrium(uint64_t seed) {
     return m;
   }());
   for (int k = 0; k < rng.integer(3, 5); ++k) {
-    const Vec3 c(rng.chance(0.5) ? rng.uniform(4.2, W * 0.35) : rng.uniform(W * 0.65, W - 4.2), rng.uniform(2.0, D - 2.0), 0);
+    const Vec3 c(rng.chance(0.5) ? rng.uniform(4.2, W * 0.35) : rng.uniform(W * 0.65, W - 4.2),
+                 rng.uniform(2.0, D - 2.0), 0);
     s.add(box(c + Vec3(0, 0, 0.35), Vec3(0.5, 0.5, 0.35), rng.uniform(0, kPi), concrete));
     s.add(sphere(c + Vec3(0, 0, 1.2), rng.uniform(0.45, 0.7), plant));
   }
@@ -347,7 +369,8 @@ Mat3 look_rotation(const Vec3& center, const Vec3& target) {
   return R;
 }
 
-std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t seed, double min_step, double max_step) {
+std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t seed, double min_step,
+                                        double max_step) {
   Rng rng(seed);
   const Vec3 lo = scene.walk_min, hi = scene.walk_max;
   // Walk back and forth along the long axis (y) while looking towards one end.
@@ -355,7 +378,8 @@ std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t
   const Vec3 focus = towards_a ? scene.focus_a : scene.focus_b;
   auto free_point = [&](double y_frac) {
     for (int attempt = 0; attempt < 200; ++attempt) {
-      Vec3 p(rng.uniform(lo.x(), hi.x()), lo.y() + (hi.y() - lo.y()) * std::clamp(y_frac + rng.uniform(-0.1, 0.1), 0.0, 1.0),
+      Vec3 p(rng.uniform(lo.x(), hi.x()),
+             lo.y() + (hi.y() - lo.y()) * std::clamp(y_frac + rng.uniform(-0.1, 0.1), 0.0, 1.0),
              rng.uniform(lo.z(), hi.z()));
       if (!scene.blocked(p, 0.35)) return p;
     }
@@ -387,7 +411,8 @@ std::vector<CameraPose> make_trajectory(const Scene& scene, int frames, uint64_t
   double look_phase = rng.uniform(0, 2 * kPi);
   for (int i = 0; i < frames; ++i) {
     // Gaze drifts smoothly around the focus point.
-    const Vec3 target = focus + Vec3(2.0 * std::sin(look_phase + 0.23 * i), 0, 0.6 * std::sin(0.7 * look_phase + 0.17 * i));
+    const Vec3 target =
+        focus + Vec3(2.0 * std::sin(look_phase + 0.23 * i), 0, 0.6 * std::sin(0.7 * look_phase + 0.17 * i));
     out.push_back({pos, look_rotation(pos, target)});
     if ((i + 1) % kBlock == 0) step = next_step();
     // Advance along the waypoint polyline by `step`.

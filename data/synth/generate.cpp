@@ -43,8 +43,9 @@ void GenerateOptions::visit(ConfigVisitor& v) {
   v.field("tilt_shift_every", tilt_shift_every, "every k-th training scene uses a tilt-shift camera (0 = none)",
           Range::at_least(0));
   v.field("hdf5_color", hdf5_color, "also write linear HDR final_hdf5 colour (float16) besides tonemap JPGs");
-  v.field("eval_datasets", eval_datasets, "evaluation sets: <style>_<layout>, style courtyard|atrium|room, "
-                                          "layout colmap|nerfstudio");
+  v.field("eval_datasets", eval_datasets,
+          "evaluation sets: <style>_<layout>, style courtyard|atrium|room, "
+          "layout colmap|nerfstudio");
   v.field("eval_scenes", eval_scenes, "scenes per evaluation set", Range::at_least(0));
   v.field("eval_frames", eval_frames, "frames per evaluation sequence", Range::at_least(2));
   v.field("eval_width", eval_width, "evaluation image width", Range::at_least(16));
@@ -56,7 +57,9 @@ void GenerateConfig::visit(ConfigVisitor& v) {
   v.section("generate", "the procedural dataset", generate);
 }
 
-std::string generated_hypersim_root(const std::string& out) { return (fs::path(out) / "hypersim").string(); }
+std::string generated_hypersim_root(const std::string& out) {
+  return (fs::path(out) / "hypersim").string();
+}
 std::string generated_eval_root(const std::string& out, const std::string& dataset) {
   return (fs::path(out) / "eval" / dataset).string();
 }
@@ -80,7 +83,9 @@ Intrinsics eval_intrinsics(const GenerateOptions& o, double hfov) {
   return Intrinsics::from_hfov(hfov, static_cast<int>(o.eval_width), static_cast<int>(o.eval_height));
 }
 
-Pose pose_of(const CameraPose& c) { return invert_pose(make_pose(c.R_wc, c.center)); }
+Pose pose_of(const CameraPose& c) {
+  return invert_pose(make_pose(c.R_wc, c.center));
+}
 
 // ---------------------------------------------------------------- Hypersim layout
 struct HypersimScenePlan {
@@ -118,8 +123,8 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
                      o.tilt_shift_every > 0 && k % o.tilt_shift_every == o.tilt_shift_every - 1, units[k % 3]});
   }
   CsvTable split_csv;
-  split_csv.header = {"scene_name", "camera_name", "frame_id", "included_in_public_release", "exclude_reason",
-                      "split_partition_name"};
+  split_csv.header = {"scene_name",     "camera_name",         "frame_id", "included_in_public_release",
+                      "exclude_reason", "split_partition_name"};
   CsvTable camera_csv;
   camera_csv.header = {"scene_name", "settings_output_img_height", "settings_output_img_width",
                        "settings_units_info_meters_scale", "use_camera_physical"};
@@ -167,8 +172,8 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
           bar.tick();
           continue;
         }
-        const auto frame = synth::render_frame(scene, synth::hypersim_ray_camera(poses[f], M, W, H),
-                                               static_cast<int>(o.supersample));
+        const auto frame =
+            synth::render_frame(scene, synth::hypersim_ray_camera(poses[f], M, W, H), static_cast<int>(o.supersample));
         if (exposure < 0) exposure = hypersim_exposure(frame.radiance, frame.hit);  // one exposure per scene
         const std::string stem = L::frame_stem(static_cast<int>(f));
         write_image((fs::path(L::preview_dir(scene_dir, cam)) / (stem + ".tonemap.jpg")).string(),
@@ -182,13 +187,17 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
       }
       const std::string cam_dir = L::detail_camera_dir(scene_dir, cam);
       const int64_t n = static_cast<int64_t>(poses.size());
-      write_hdf5((fs::path(cam_dir) / "camera_keyframe_orientations.hdf5").string(), {n, 3, 3}, orient.data(), H5Type::Float64, 0);
-      write_hdf5((fs::path(cam_dir) / "camera_keyframe_positions.hdf5").string(), {n, 3}, pos.data(), H5Type::Float64, 0);
-      write_hdf5((fs::path(cam_dir) / "camera_keyframe_frame_indices.hdf5").string(), {n}, frame_ids.data(), H5Type::Int64, 0);
+      write_hdf5((fs::path(cam_dir) / "camera_keyframe_orientations.hdf5").string(), {n, 3, 3}, orient.data(),
+                 H5Type::Float64, 0);
+      write_hdf5((fs::path(cam_dir) / "camera_keyframe_positions.hdf5").string(), {n, 3}, pos.data(), H5Type::Float64,
+                 0);
+      write_hdf5((fs::path(cam_dir) / "camera_keyframe_frame_indices.hdf5").string(), {n}, frame_ids.data(),
+                 H5Type::Int64, 0);
     }
   }
   // A scene listed in the metadata but absent from disk, as for scenes without public images.
-  for (int f = 0; f < 3; ++f) split_csv.rows.push_back({"ai_099_001", "cam_00", std::to_string(f), "True", "", "train"});
+  for (int f = 0; f < 3; ++f)
+    split_csv.rows.push_back({"ai_099_001", "cam_00", std::to_string(f), "True", "", "train"});
   add_camera_row("ai_099_001", 0.0254, false, camera_matrix(false, W, H, rng));
   write_csv((fs::path(root) / "metadata_images_split_scene_v1.csv").string(), split_csv);
   write_csv((fs::path(root) / "metadata_camera_parameters.csv").string(), camera_csv);
@@ -230,7 +239,8 @@ ColmapModel colmap_model(const Intrinsics& intr, const std::vector<EvalFrame>& f
       p.id = next_id;
       p.xyz = X;
       const cv::Vec3f c = frames[i].frame.radiance.at<cv::Vec3f>(y, x);
-      for (int k = 0; k < 3; ++k) p.rgb[k] = static_cast<uint8_t>(std::clamp(std::pow(c[k], 1 / 2.2) * 255.0, 0.0, 255.0));
+      for (int k = 0; k < 3; ++k)
+        p.rgb[k] = static_cast<uint8_t>(std::clamp(std::pow(c[k], 1 / 2.2) * 255.0, 0.0, 255.0));
       p.error = 0.5;
       for (size_t j = 0; j < frames.size(); ++j) {
         Eigen::Vector2d uv;
@@ -257,7 +267,8 @@ ColmapModel colmap_model(const Intrinsics& intr, const std::vector<EvalFrame>& f
 
 void write_eval_scene(const GenerateOptions& o, const std::string& dataset, const std::string& style,
                       const std::string& layout, int64_t index, ProgressBar& bar) {
-  const uint64_t seed = mix_seed(static_cast<uint64_t>(o.seed) + 5000, static_cast<uint64_t>(index) + 31 * dataset.size());
+  const uint64_t seed =
+      mix_seed(static_cast<uint64_t>(o.seed) + 5000, static_cast<uint64_t>(index) + 31 * dataset.size());
   const Scene scene = synth::build_scene(style, seed);
   const std::string dir = (fs::path(generated_eval_root(o.out, dataset)) / cat("scene_", index)).string();
   const Intrinsics intr = eval_intrinsics(o, style == "courtyard" ? 70.0 * kPi / 180 : 65.0 * kPi / 180);
@@ -277,7 +288,8 @@ void write_eval_scene(const GenerateOptions& o, const std::string& dataset, cons
       std::snprintf(name, sizeof name, "IMG_%04d.jpg", static_cast<int>(f));
       ef.name = name;
       write_image((fs::path(dir) / "images" / ef.name).string(), rgb, 95);
-      write_depth_exr((fs::path(dir) / "depth" / fs::path(ef.name).replace_extension(".exr")).string(), ef.frame.planar);
+      write_depth_exr((fs::path(dir) / "depth" / fs::path(ef.name).replace_extension(".exr")).string(),
+                      ef.frame.planar);
     } else {
       std::snprintf(name, sizeof name, "frame_%05d.png", static_cast<int>(f) + 1);
       ef.name = name;
@@ -286,7 +298,8 @@ void write_eval_scene(const GenerateOptions& o, const std::string& dataset, cons
       for (int i = 0; i < mm.rows; ++i)
         for (int j = 0; j < mm.cols; ++j) {
           const float z = ef.frame.planar.at<float>(i, j);
-          mm.at<uint16_t>(i, j) = std::isfinite(z) ? static_cast<uint16_t>(std::clamp(std::lround(z * 1000.0), 1L, 65535L)) : 0;
+          mm.at<uint16_t>(i, j) =
+              std::isfinite(z) ? static_cast<uint16_t>(std::clamp(std::lround(z * 1000.0), 1L, 65535L)) : 0;
         }
       write_png16((fs::path(dir) / "depths" / ef.name).string(), mm);
       ns_frames.push_back({"images/" + ef.name, "depths/" + ef.name, pose_of(poses[f])});
@@ -316,7 +329,8 @@ void generate_datasets(const GenerateOptions& o) {
   for (const auto& d : o.eval_datasets) {
     const auto us = d.find('_');
     const std::string style = d.substr(0, us), layout = us == std::string::npos ? "" : d.substr(us + 1);
-    if ((style != "courtyard" && style != "atrium" && style != "room") || (layout != "colmap" && layout != "nerfstudio"))
+    if ((style != "courtyard" && style != "atrium" && style != "room") ||
+        (layout != "colmap" && layout != "nerfstudio"))
       fail("generate.eval_datasets: '", d, "' must be <courtyard|atrium|room>_<colmap|nerfstudio>");
     eval_sets.push_back({d, style, layout});
   }

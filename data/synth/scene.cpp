@@ -52,7 +52,8 @@ Vec3 Material::albedo(double s, double t, const Vec3& p) const {
   const double x = s / scale, y = t / scale;
   auto mix = [&](double w) { return (a * (1.0 - w) + b * w).eval(); };
   switch (pattern) {
-    case Pattern::Solid: return mix(0.15 * fbm(p * 4.0 / scale, 3, 11));
+    case Pattern::Solid:
+      return mix(0.15 * fbm(p * 4.0 / scale, 3, 11));
     case Pattern::Checker: {
       const int c = (static_cast<int>(std::floor(x)) + static_cast<int>(std::floor(y))) & 1;
       return mix(c ? 0.9 : 0.1 + 0.1 * fbm(p * 8.0, 2, 3));
@@ -61,7 +62,8 @@ Vec3 Material::albedo(double s, double t, const Vec3& p) const {
       const double v = 0.5 + 0.5 * std::sin(2 * kPi * x + 2.0 * fbm(p * 3.0, 2, 5));
       return mix(v > 0.5 ? 0.85 : 0.15);
     }
-    case Pattern::Noise: return mix(fbm(Vec3(x, y, p.z() / scale) * 4.0, 5, 7));
+    case Pattern::Noise:
+      return mix(fbm(Vec3(x, y, p.z() / scale) * 4.0, 5, 7));
     case Pattern::Bricks: {
       const double row = std::floor(y * 3.0);
       const double xx = x * 1.5 + 0.5 * (static_cast<int64_t>(row) & 1);
@@ -257,10 +259,14 @@ bool hit_cylinder(const Primitive& c, const Vec3& o, const Vec3& d, double tmax,
 
 bool hit_primitive(const Primitive& p, const Vec3& o, const Vec3& d, double tmax, Hit& h) {
   switch (p.shape) {
-    case Shape::Quad: return hit_quad(p, o, d, tmax, h);
-    case Shape::Box: return hit_box(p, o, d, tmax, h);
-    case Shape::Sphere: return hit_sphere(p, o, d, tmax, h);
-    case Shape::Cylinder: return hit_cylinder(p, o, d, tmax, h);
+    case Shape::Quad:
+      return hit_quad(p, o, d, tmax, h);
+    case Shape::Box:
+      return hit_box(p, o, d, tmax, h);
+    case Shape::Sphere:
+      return hit_sphere(p, o, d, tmax, h);
+    case Shape::Cylinder:
+      return hit_cylinder(p, o, d, tmax, h);
   }
   return false;
 }
@@ -357,7 +363,9 @@ bool Scene::intersect(const Vec3& o, const Vec3& d, double tmax, Hit& hit) const
   return true;
 }
 
-bool Scene::occluded(const Vec3& o, const Vec3& d, double tmax) const { return traverse<true>(o, d, tmax, nullptr); }
+bool Scene::occluded(const Vec3& o, const Vec3& d, double tmax) const {
+  return traverse<true>(o, d, tmax, nullptr);
+}
 
 Vec3 Scene::sky(const Vec3& d) const {
   const double e = std::clamp(d.z(), -0.2, 1.0);
@@ -383,14 +391,16 @@ Vec3 Scene::shade(const Vec3& d, const Hit& h) const {
     if (cosine <= 0 || occluded(origin, to, dist)) continue;
     const Vec3 e = L.power * (cosine / (4.0 * kPi * dist2));
     light += e;
-    if (m.specular > 0) spec += L.power * (m.specular * std::pow(std::max(0.0, h.n.dot((to - d).normalized())), 40.0) /
-                                           (4.0 * kPi * dist2));
+    if (m.specular > 0)
+      spec +=
+          L.power * (m.specular * std::pow(std::max(0.0, h.n.dot((to - d).normalized())), 40.0) / (4.0 * kPi * dist2));
   }
   if (sun_radiance.squaredNorm() > 0) {
     const double cosine = h.n.dot(sun_dir);
     if (cosine > 0 && !occluded(origin, sun_dir, 1e9)) {
       light += sun_radiance * cosine;
-      if (m.specular > 0) spec += sun_radiance * m.specular * std::pow(std::max(0.0, h.n.dot((sun_dir - d).normalized())), 40.0);
+      if (m.specular > 0)
+        spec += sun_radiance * m.specular * std::pow(std::max(0.0, h.n.dot((sun_dir - d).normalized())), 40.0);
     }
   }
   return albedo.cwiseProduct(light) + spec;

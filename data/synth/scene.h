@@ -19,8 +19,8 @@ enum class Pattern { Solid, Checker, Stripes, Noise, Bricks, Wood, Tiles, Marble
 struct Material {
   Vec3 a = Vec3(0.7, 0.7, 0.7), b = Vec3(0.3, 0.3, 0.3);
   Pattern pattern = Pattern::Solid;
-  double scale = 1.0;     // pattern period in metres
-  double specular = 0.0;  // Blinn-Phong weight
+  double scale = 1.0;                                    // pattern period in metres
+  double specular = 0.0;                                 // Blinn-Phong weight
   Vec3 albedo(double s, double t, const Vec3& p) const;  // (s, t): surface coordinates in metres
 };
 
@@ -29,10 +29,10 @@ enum class Shape { Quad, Box, Sphere, Cylinder };
 struct Primitive {
   Shape shape = Shape::Quad;
   int material = 0;
-  Vec3 p0 = Vec3::Zero();             // quad corner | box/sphere centre | cylinder base centre
+  Vec3 p0 = Vec3::Zero();                     // quad corner | box/sphere centre | cylinder base centre
   Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();  // quad edges
-  Vec3 half = Vec3::Zero();           // box half extents (local axes)
-  Mat3 R = Mat3::Identity();          // box/cylinder: world-from-local rotation (cylinder axis = local z)
+  Vec3 half = Vec3::Zero();                   // box half extents (local axes)
+  Mat3 R = Mat3::Identity();                  // box/cylinder: world-from-local rotation (cylinder axis = local z)
   double radius = 0, height = 0;
   Vec3 bmin = Vec3::Zero(), bmax = Vec3::Zero();  // world bounds, filled by finalize()
   void finalize();
@@ -45,7 +45,7 @@ struct PointLight {
 
 struct Hit {
   double t = 0;
-  Vec3 p, n;       // position and geometric normal (facing the ray)
+  Vec3 p, n;  // position and geometric normal (facing the ray)
   double s = 0, u = 0;
   int material = -1;
 };
@@ -69,8 +69,8 @@ struct Scene {
   bool intersect(const Vec3& o, const Vec3& d, double tmax, Hit& hit) const;  // d unit length
   bool occluded(const Vec3& o, const Vec3& d, double tmax) const;
   Vec3 sky(const Vec3& d) const;
-  Vec3 shade(const Vec3& d, const Hit& hit) const;  // outgoing linear radiance towards -d
-  bool blocked(const Vec3& p, double margin) const; // p lies inside (or near) a solid
+  Vec3 shade(const Vec3& d, const Hit& hit) const;   // outgoing linear radiance towards -d
+  bool blocked(const Vec3& p, double margin) const;  // p lies inside (or near) a solid
 
  private:
   struct Node {

@@ -13,7 +13,8 @@ namespace isplat {
 ArgParser::ArgParser(std::string program, std::string summary)
     : program_(std::move(program)), summary_(std::move(summary)) {}
 
-void ArgParser::option(const std::string& name, std::string& target, const std::string& help, const std::string& metavar) {
+void ArgParser::option(const std::string& name, std::string& target, const std::string& help,
+                       const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target](const std::string& v) { target = v; }});
 }
 
@@ -39,7 +40,8 @@ void ArgParser::flag(const std::string& name, bool& target, const std::string& h
 
 void ArgParser::repeated(const std::string& name, std::vector<std::string>& target, const std::string& help,
                          const std::string& metavar) {
-  specs_.push_back({name, help + " (repeatable)", metavar, true, [&target](const std::string& v) { target.push_back(v); }});
+  specs_.push_back(
+      {name, help + " (repeatable)", metavar, true, [&target](const std::string& v) { target.push_back(v); }});
 }
 
 void ArgParser::positional(const std::string& name, std::string& target, const std::string& help, bool required) {
@@ -106,7 +108,8 @@ std::string ArgParser::help() const {
     if (left.size() >= 28) os << "\n  " << std::string(28, ' ');
     os << s.help << "\n";
   }
-  os << "  " << std::left << std::setw(28) << "--help" << "show this help\n";
+  os << "  " << std::left << std::setw(28) << "--help"
+     << "show this help\n";
   if (!epilog_.empty()) os << "\n" << epilog_ << "\n";
   return os.str();
 }

@@ -11,7 +11,8 @@ class ArgParser {
  public:
   ArgParser(std::string program, std::string summary);
 
-  void option(const std::string& name, std::string& target, const std::string& help, const std::string& metavar = "VALUE");
+  void option(const std::string& name, std::string& target, const std::string& help,
+              const std::string& metavar = "VALUE");
   void option(const std::string& name, int64_t& target, const std::string& help, const std::string& metavar = "N");
   void option(const std::string& name, double& target, const std::string& help, const std::string& metavar = "X");
   void flag(const std::string& name, bool& target, const std::string& help);

@@ -22,7 +22,9 @@ bool Range::contains(double v) const {
   return true;
 }
 
-bool Range::bounded() const { return std::isfinite(lo) || std::isfinite(hi); }
+bool Range::bounded() const {
+  return std::isfinite(lo) || std::isfinite(hi);
+}
 
 static std::string num(double v) {
   std::ostringstream os;
@@ -140,7 +142,8 @@ void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overri
       if (!parsed || *parsed < 0) fail(source, ": bad index in '", name, "'");
       const size_t index = static_cast<size_t>(*parsed);
       if (!child->is_array() || index >= child->size())
-        fail(source, ": '", prefix, "' has no element ", index, " (lists are extended in the config file, not by --set)");
+        fail(source, ": '", prefix, "' has no element ", index,
+             " (lists are extended in the config file, not by --set)");
       prefix += cat("[", index, "]");
       return &(*child)[index];
     };
@@ -150,7 +153,8 @@ void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overri
       if (!child.is_object()) fail(source, ": '", prefix, "' is a value, not a section");
       node = &child;
     }
-    if (names.back().find('[') != std::string::npos) fail(source, ": the last component of '", key, "' cannot be an index");
+    if (names.back().find('[') != std::string::npos)
+      fail(source, ": the last component of '", key, "' cannot be an index");
     (*node)[names.back()] = value;
     record_origins(value, key, source, doc.origin);
   }
@@ -247,9 +251,7 @@ class JsonReader final : public ConfigVisitor {
     }
   }
 
-  void finish() {
-    check_unknown(stack_.back());
-  }
+  void finish() { check_unknown(stack_.back()); }
 
  protected:
   void enter(const char* key, const char* doc) override {
@@ -280,7 +282,8 @@ class JsonReader final : public ConfigVisitor {
     const auto& l = lists_.back();
     const json& e = (*l.array)[static_cast<size_t>(index)];
     const std::string name = cat(l.prefix, "[", index, "]");
-    if (!e.is_object()) fail(doc_.source_of(l.prefix), ": '", name, "' must be a section (JSON object); got ", short_json(e));
+    if (!e.is_object())
+      fail(doc_.source_of(l.prefix), ": '", name, "' must be a section (JSON object); got ", short_json(e));
     stack_.push_back({&e, name, {}});
   }
   void end_element() override {

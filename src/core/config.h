@@ -36,8 +36,7 @@ class ConfigVisitor {
   virtual void field(const char* key, bool& value, const char* doc) = 0;
   virtual void field(const char* key, int64_t& value, const char* doc, Range range = {}) = 0;
   virtual void field(const char* key, double& value, const char* doc, Range range = {}) = 0;
-  virtual void field(const char* key, std::string& value, const char* doc,
-                     std::vector<std::string> choices = {}) = 0;
+  virtual void field(const char* key, std::string& value, const char* doc, std::vector<std::string> choices = {}) = 0;
   virtual void field(const char* key, std::vector<int64_t>& value, const char* doc, Range range = {}) = 0;
   virtual void field(const char* key, std::vector<double>& value, const char* doc, Range range = {}) = 0;
   virtual void field(const char* key, std::vector<std::string>& value, const char* doc) = 0;

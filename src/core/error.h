@@ -26,9 +26,9 @@ template <class... Args>
   throw Error(cat(args...));
 }
 
-#define ISPLAT_CHECK(cond, ...)                 \
-  do {                                          \
-    if (!(cond)) ::isplat::fail(__VA_ARGS__);   \
+#define ISPLAT_CHECK(cond, ...)               \
+  do {                                        \
+    if (!(cond)) ::isplat::fail(__VA_ARGS__); \
   } while (0)
 
 }  // namespace isplat

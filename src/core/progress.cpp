@@ -13,19 +13,29 @@
 namespace isplat {
 
 ProgressBar::ProgressBar(std::string label, int64_t total, std::string unit)
-    : label_(std::move(label)), unit_(std::move(unit)), total_(std::max<int64_t>(0, total)),
-      tty_(isatty(fileno(stderr)) != 0), start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+    : label_(std::move(label)),
+      unit_(std::move(unit)),
+      total_(std::max<int64_t>(0, total)),
+      tty_(isatty(fileno(stderr)) != 0),
+      start_(std::chrono::steady_clock::now()),
+      last_draw_(start_) {}
 
-ProgressBar::~ProgressBar() { finish(); }
+ProgressBar::~ProgressBar() {
+  finish();
+}
 
-void ProgressBar::tick(int64_t n) { set(done_ + n); }
+void ProgressBar::tick(int64_t n) {
+  set(done_ + n);
+}
 
 void ProgressBar::set(int64_t done) {
   done_ = done;
   maybe_draw(false);
 }
 
-void ProgressBar::postfix(const std::string& text) { postfix_ = text; }
+void ProgressBar::postfix(const std::string& text) {
+  postfix_ = text;
+}
 
 double ProgressBar::elapsed_seconds() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -36,7 +46,8 @@ std::string ProgressBar::format_duration(double seconds) {
   auto s = static_cast<int64_t>(std::llround(seconds));
   char buf[32];
   if (s >= 3600)
-    std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", (long long)(s / 3600), (long long)(s / 60 % 60), (long long)(s % 60));
+    std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", (long long)(s / 3600), (long long)(s / 60 % 60),
+                  (long long)(s % 60));
   else
     std::snprintf(buf, sizeof buf, "%lld:%02lld", (long long)(s / 60), (long long)(s % 60));
   return buf;
@@ -68,7 +79,7 @@ std::string ProgressBar::status_line() const {
 
 void ProgressBar::maybe_draw(bool force) {
   if (finished_ || log_level() > LogLevel::Info) return;  // quiet runs (and tests) get no bar
-  if (force && done_ == last_drawn_done_) return;  // the final state is already on screen
+  if (force && done_ == last_drawn_done_) return;         // the final state is already on screen
   const auto now = std::chrono::steady_clock::now();
   const double since = std::chrono::duration<double>(now - last_draw_).count();
   if (tty_) {

@@ -31,8 +31,10 @@ int configure_threads(int64_t requested) {
 }
 
 void apply_runtime(const RuntimeOptions& options) {
-  static const std::map<std::string, LogLevel> levels = {{"debug", LogLevel::Debug}, {"info", LogLevel::Info},
-                                                         {"warn", LogLevel::Warn},   {"error", LogLevel::Error},
+  static const std::map<std::string, LogLevel> levels = {{"debug", LogLevel::Debug},
+                                                         {"info", LogLevel::Info},
+                                                         {"warn", LogLevel::Warn},
+                                                         {"error", LogLevel::Error},
                                                          {"quiet", LogLevel::Quiet}};
   set_log_level(levels.at(options.log_level));
   configure_threads(options.threads);

@@ -18,10 +18,18 @@ namespace fs = std::filesystem;
 namespace {
 
 const ColmapModelInfo kModels[] = {
-    {0, "SIMPLE_PINHOLE", 3}, {1, "PINHOLE", 4},          {2, "SIMPLE_RADIAL", 4},
-    {3, "RADIAL", 5},         {4, "OPENCV", 8},           {5, "OPENCV_FISHEYE", 8},
-    {6, "FULL_OPENCV", 12},   {7, "FOV", 5},              {8, "SIMPLE_RADIAL_FISHEYE", 4},
-    {9, "RADIAL_FISHEYE", 5}, {10, "THIN_PRISM_FISHEYE", 12}, {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16},
+    {0, "SIMPLE_PINHOLE", 3},
+    {1, "PINHOLE", 4},
+    {2, "SIMPLE_RADIAL", 4},
+    {3, "RADIAL", 5},
+    {4, "OPENCV", 8},
+    {5, "OPENCV_FISHEYE", 8},
+    {6, "FULL_OPENCV", 12},
+    {7, "FOV", 5},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4},
+    {9, "RADIAL_FISHEYE", 5},
+    {10, "THIN_PRISM_FISHEYE", 12},
+    {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16},
 };
 
 // ---- text helpers
@@ -105,12 +113,15 @@ void put(std::ostream& os, T v) {
   os.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 
-std::string model_dir_file(const std::string& dir, const std::string& name) { return (fs::path(dir) / name).string(); }
+std::string model_dir_file(const std::string& dir, const std::string& name) {
+  return (fs::path(dir) / name).string();
+}
 
 void check_references(const ColmapModel& m, const std::string& dir) {
   for (const auto& [id, img] : m.images)
     if (!m.cameras.count(img.camera_id))
-      fail(dir, ": image ", id, " (", img.name, ") refers to camera ", img.camera_id, ", which cameras does not define");
+      fail(dir, ": image ", id, " (", img.name, ") refers to camera ", img.camera_id,
+           ", which cameras does not define");
 }
 
 }  // namespace
@@ -368,10 +379,18 @@ Intrinsics colmap_intrinsics(const ColmapCamera& c, std::vector<double>& distort
   const std::vector<double> extra(p.begin() + first_extra, p.end());
   distortion.clear();
   switch (c.model_id) {  // the models OpenCV can undistort, in its coefficient order
-    case 2: distortion = {extra[0], 0, 0, 0}; break;
-    case 3: distortion = {extra[0], extra[1], 0, 0}; break;
-    case 4: distortion = extra; break;
-    case 6: distortion = extra; break;
+    case 2:
+      distortion = {extra[0], 0, 0, 0};
+      break;
+    case 3:
+      distortion = {extra[0], extra[1], 0, 0};
+      break;
+    case 4:
+      distortion = extra;
+      break;
+    case 6:
+      distortion = extra;
+      break;
     default:
       for (double x : extra)
         if (x != 0.0)
@@ -394,8 +413,8 @@ Sequence colmap_sequence(const std::string& scene_dir, const std::string& datase
   seq.dataset = dataset;
   seq.scene = fs::path(scene_dir).filename().string();
   seq.name = "colmap";
-  const DepthSource depth_kind = layout.depth_format == "exr"          ? DepthSource::PlanarExr
-                                 : layout.depth_format == "png16_mm"   ? DepthSource::Png16Millimetres
+  const DepthSource depth_kind = layout.depth_format == "exr"           ? DepthSource::PlanarExr
+                                 : layout.depth_format == "png16_mm"    ? DepthSource::Png16Millimetres
                                  : layout.depth_format == "raw_float32" ? DepthSource::RawFloat32
                                                                         : DepthSource::None;
   if (depth_kind == DepthSource::None && layout.depth_format != "none")
@@ -418,10 +437,10 @@ Sequence colmap_sequence(const std::string& scene_dir, const std::string& datase
         const auto pos = name.find(layout.depth_replace_from);
         if (pos != std::string::npos) name.replace(pos, layout.depth_replace_from.size(), layout.depth_replace_to);
       }
-      const fs::path dpath = fs::path(scene_dir) / layout.depth_dir /
-                             (depth_kind == DepthSource::RawFloat32 ? name + layout.depth_suffix
-                                                                    : fs::path(name).replace_extension("").string() +
-                                                                          layout.depth_suffix);
+      const fs::path dpath =
+          fs::path(scene_dir) / layout.depth_dir /
+          (depth_kind == DepthSource::RawFloat32 ? name + layout.depth_suffix
+                                                 : fs::path(name).replace_extension("").string() + layout.depth_suffix);
       if (fs::exists(dpath)) {
         f.depth_path = dpath.string();
         f.depth = depth_kind;

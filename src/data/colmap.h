@@ -69,12 +69,12 @@ Intrinsics colmap_intrinsics(const ColmapCamera& camera, std::vector<double>& di
 // Options for turning a COLMAP scene folder into a sequence.
 struct ColmapSceneLayout {
   std::string images_dir = "images";
-  std::string sparse_dir = "sparse/0";         // falls back to "sparse" when absent
-  std::string depth_dir = "depth";             // relative to the scene; may be absent
-  std::string depth_format = "exr";            // exr | png16_mm | raw_float32
-  std::string depth_suffix = ".exr";           // appended to the image name's stem (raw: to the full name)
+  std::string sparse_dir = "sparse/0";               // falls back to "sparse" when absent
+  std::string depth_dir = "depth";                   // relative to the scene; may be absent
+  std::string depth_format = "exr";                  // exr | png16_mm | raw_float32
+  std::string depth_suffix = ".exr";                 // appended to the image name's stem (raw: to the full name)
   std::string depth_replace_from, depth_replace_to;  // rewrite of the image name for its depth file (ETH3D)
-  bool allow_undistort = true;                 // undistort OpenCV-model images, else reject them
+  bool allow_undistort = true;                       // undistort OpenCV-model images, else reject them
 };
 
 // Images sorted by name form the sequence; a missing image file, an unknown camera id or a parameter

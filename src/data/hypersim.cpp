@@ -128,7 +128,8 @@ Keyframes read_keyframes(const std::string& cam_dir) {
 
 HypersimIndex read_hypersim(const HypersimOptions& opt) {
   namespace L = hypersim_layout;
-  if (!fs::is_directory(opt.root)) fail(opt.root, ": Hypersim root folder does not exist (config key data.hypersim.root)");
+  if (!fs::is_directory(opt.root))
+    fail(opt.root, ": Hypersim root folder does not exist (config key data.hypersim.root)");
   const std::string split_path = (fs::path(opt.root) / opt.split_csv).string();
   const CsvTable split = read_csv(split_path);
   const std::string camera_path = (fs::path(opt.root) / opt.camera_csv).string();
@@ -176,8 +177,8 @@ HypersimIndex read_hypersim(const HypersimOptions& opt) {
       continue;
     }
     const double mpau = read_meters_per_asset_unit(meta);
-    auto model = std::make_shared<HypersimCamera>(hypersim_camera(cam_it->second.M, cam_it->second.width,
-                                                                  cam_it->second.height));
+    auto model = std::make_shared<HypersimCamera>(
+        hypersim_camera(cam_it->second.M, cam_it->second.width, cam_it->second.height));
     for (const auto& [camera, frame_ids] : cams) {
       const std::string cam_dir = L::detail_camera_dir(scene_dir, camera);
       if (!fs::exists(fs::path(cam_dir) / "camera_keyframe_orientations.hdf5")) {
@@ -201,10 +202,12 @@ HypersimIndex read_hypersim(const HypersimOptions& opt) {
         if (opt.color == "jpg") {
           f.image_path = (fs::path(L::preview_dir(scene_dir, camera)) / (L::frame_stem(fid) + ".tonemap.jpg")).string();
         } else {
-          f.image_path = (fs::path(L::hdf5_color_dir(scene_dir, camera)) / (L::frame_stem(fid) + ".color.hdf5")).string();
+          f.image_path =
+              (fs::path(L::hdf5_color_dir(scene_dir, camera)) / (L::frame_stem(fid) + ".color.hdf5")).string();
           f.color = ColorSource::HypersimHdf5;
         }
-        f.depth_path = (fs::path(L::geometry_dir(scene_dir, camera)) / (L::frame_stem(fid) + ".depth_meters.hdf5")).string();
+        f.depth_path =
+            (fs::path(L::geometry_dir(scene_dir, camera)) / (L::frame_stem(fid) + ".depth_meters.hdf5")).string();
         f.depth = DepthSource::HypersimRayHdf5;
         if (!fs::exists(f.image_path) || !fs::exists(f.depth_path)) {
           ++index.skipped["frames with missing image or depth files"];
@@ -215,7 +218,8 @@ HypersimIndex read_hypersim(const HypersimOptions& opt) {
         seq.frames.push_back(std::move(f));
       }
       if (static_cast<int64_t>(seq.frames.size()) < opt.min_frames) {
-        index.skipped[cat("frames of trajectories shorter than ", opt.min_frames)] += static_cast<int64_t>(seq.frames.size());
+        index.skipped[cat("frames of trajectories shorter than ", opt.min_frames)] +=
+            static_cast<int64_t>(seq.frames.size());
         continue;
       }
       index.frames += static_cast<int64_t>(seq.frames.size());

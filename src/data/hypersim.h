@@ -38,7 +38,8 @@ HypersimIndex read_hypersim(const HypersimOptions& options);
 // Folder and file names of the release, shared by the reader and the synthetic writer.
 namespace hypersim_layout {
 std::string frame_stem(int frame_id);  // "frame.0007"
-std::string preview_dir(const std::string& scene_dir, const std::string& camera);   // .../images/scene_cam_00_final_preview
+std::string preview_dir(const std::string& scene_dir,
+                        const std::string& camera);  // .../images/scene_cam_00_final_preview
 std::string hdf5_color_dir(const std::string& scene_dir, const std::string& camera);  // .../scene_cam_00_final_hdf5
 std::string geometry_dir(const std::string& scene_dir, const std::string& camera);    // .../scene_cam_00_geometry_hdf5
 std::string detail_camera_dir(const std::string& scene_dir, const std::string& camera);  // .../_detail/cam_00

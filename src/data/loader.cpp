@@ -9,8 +9,11 @@ namespace isplat {
 
 BatchLoader::BatchLoader(const TupleSampler& sampler, int64_t batch_size, int64_t workers, int64_t prefetch,
                          int64_t first_batch)
-    : sampler_(sampler), batch_size_(batch_size), prefetch_(std::max<int64_t>(1, prefetch)),
-      consumer_(first_batch), dispatched_(first_batch) {
+    : sampler_(sampler),
+      batch_size_(batch_size),
+      prefetch_(std::max<int64_t>(1, prefetch)),
+      consumer_(first_batch),
+      dispatched_(first_batch) {
   ISPLAT_CHECK(batch_size > 0, "batch loader: batch size must be positive");
   for (int64_t i = 0; i < workers; ++i) threads_.emplace_back([this] { worker_loop(); });
 }

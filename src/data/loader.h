@@ -31,8 +31,8 @@ class BatchLoader {
 
   const TupleSampler& sampler_;
   int64_t batch_size_, prefetch_;
-  int64_t consumer_;     // next batch handed out
-  int64_t dispatched_;   // next batch a worker will build
+  int64_t consumer_;    // next batch handed out
+  int64_t dispatched_;  // next batch a worker will build
   std::map<int64_t, Batch> ready_;
   std::map<int64_t, std::string> errors_;
   std::mutex mutex_;

@@ -62,7 +62,8 @@ Intrinsics intrinsics(const json& global, const json& frame, const std::string& 
 
 }  // namespace
 
-Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset, const std::string& transforms_name) {
+Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset,
+                             const std::string& transforms_name) {
   const std::string path = (fs::path(scene_dir) / transforms_name).string();
   json j = read_json_file(path);
   if (!j.is_object() || !j.contains("frames") || !j["frames"].is_array()) fail(path, ": missing 'frames' list");
@@ -106,8 +107,8 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
   return seq;
 }
 
-void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr, const std::vector<NerfstudioFrameOut>& frames,
-                      const Eigen::Matrix4d& applied_transform) {
+void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr,
+                      const std::vector<NerfstudioFrameOut>& frames, const Eigen::Matrix4d& applied_transform) {
   json j;
   j["camera_model"] = "OPENCV";
   j["fl_x"] = intr.fx;
@@ -118,7 +119,8 @@ void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr, cons
   j["h"] = intr.height;
   for (const char* k : {"k1", "k2", "p1", "p2"}) j[k] = 0.0;
   json at = json::array();
-  for (int r = 0; r < 3; ++r) at.push_back({applied_transform(r, 0), applied_transform(r, 1), applied_transform(r, 2), applied_transform(r, 3)});
+  for (int r = 0; r < 3; ++r)
+    at.push_back({applied_transform(r, 0), applied_transform(r, 1), applied_transform(r, 2), applied_transform(r, 3)});
   j["applied_transform"] = at;
   j["frames"] = json::array();
   for (const auto& f : frames) {

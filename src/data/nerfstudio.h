@@ -24,7 +24,8 @@ struct NerfstudioFrameOut {
   std::string depth_file_path;
   Pose T_cw;
 };
-void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr, const std::vector<NerfstudioFrameOut>& frames,
+void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr,
+                      const std::vector<NerfstudioFrameOut>& frames,
                       const Eigen::Matrix4d& applied_transform = Eigen::Matrix4d::Identity());
 
 }  // namespace isplat

@@ -19,8 +19,7 @@ namespace isplat {
 namespace {
 
 cv::Mat hdf5_to_mat(const H5Array<float>& a, int channels, const std::string& path) {
-  const bool ok = (channels == 1 && a.shape.size() == 2) ||
-                  (channels == 3 && a.shape.size() == 3 && a.shape[2] == 3);
+  const bool ok = (channels == 1 && a.shape.size() == 2) || (channels == 3 && a.shape.size() == 3 && a.shape[2] == 3);
   if (!ok) {
     std::string s;
     for (auto d : a.shape) s += (s.empty() ? "" : "x") + std::to_string(d);
@@ -46,7 +45,8 @@ cv::Mat load_color(const FrameRecord& f, const cv::Mat& geometry) {
 
 cv::Mat load_raw_depth(const Sequence& seq, const FrameRecord& f) {
   switch (f.depth) {
-    case DepthSource::None: return cv::Mat();
+    case DepthSource::None:
+      return cv::Mat();
     case DepthSource::HypersimRayHdf5: {
       ISPLAT_CHECK(seq.hypersim, f.depth_path, ": Hypersim depth needs the scene's camera model");
       cv::Mat dist = hdf5_to_mat(read_hdf5_float(f.depth_path), 1, f.depth_path);
@@ -57,7 +57,8 @@ cv::Mat load_raw_depth(const Sequence& seq, const FrameRecord& f) {
       }
       return dist;
     }
-    case DepthSource::PlanarExr: return read_exr_channel(f.depth_path);
+    case DepthSource::PlanarExr:
+      return read_exr_channel(f.depth_path);
     case DepthSource::Png16Millimetres: {
       cv::Mat mm = read_png16(f.depth_path), m;
       mm.convertTo(m, CV_32F, 1e-3);
@@ -137,7 +138,6 @@ LoadedFrame load_frame(const Sequence& sequence, size_t index, bool with_depth) 
   return out;
 }
 
-
 double hypersim_exposure(const cv::Mat& linear_rgb, const cv::Mat& valid) {
   ISPLAT_CHECK(linear_rgb.type() == CV_32FC3, "hypersim_exposure expects CV_32FC3");
   constexpr double kGamma = 1.0 / 2.2, kPercentile = 0.90, kTarget = 0.8, kEps = 1e-4;
@@ -205,6 +205,8 @@ double frustum_overlap(const View& source, const DepthMap& source_depth, const V
   return valid ? static_cast<double>(inside) / valid : 0.0;
 }
 
-double baseline(const View& a, const View& b) { return (camera_center(a.T_cw) - camera_center(b.T_cw)).norm(); }
+double baseline(const View& a, const View& b) {
+  return (camera_center(a.T_cw) - camera_center(b.T_cw)).norm();
+}
 
 }  // namespace isplat

@@ -127,7 +127,8 @@ TupleSample TupleSampler::sample(int64_t index) const {
   for (int64_t attempt = 0; attempt < options_.max_attempts; ++attempt) {
     // Context: uniform over all frames.
     const int64_t g = std::uniform_int_distribution<int64_t>(0, total_frames_ - 1)(rng);
-    const size_t s = static_cast<size_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), g) - cumulative_.begin() - 1);
+    const size_t s =
+        static_cast<size_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), g) - cumulative_.begin() - 1);
     const Sequence& seq = sequences_[s];
     const int64_t c = g - cumulative_[s];
     LoadedFrame context;
@@ -142,9 +143,11 @@ TupleSample TupleSampler::sample(int64_t index) const {
       continue;
     }
     const auto pixels = static_cast<int64_t>(context.depth.valid.total());
-    const double valid_fraction = static_cast<double>(pixels - context.depth.invalid_count) / static_cast<double>(pixels);
+    const double valid_fraction =
+        static_cast<double>(pixels - context.depth.invalid_count) / static_cast<double>(pixels);
     if (valid_fraction < options_.min_valid_depth) {
-      count_skip(cat("skipping context with ", static_cast<int>(valid_fraction * 100), "% valid depth: ", seq.frames[c].name));
+      count_skip(
+          cat("skipping context with ", static_cast<int>(valid_fraction * 100), "% valid depth: ", seq.frames[c].name));
       continue;
     }
     // Candidates within the window with enough overlap, sorted by baseline.

@@ -19,9 +19,9 @@ class ConfigVisitor;
 struct TupleOptions {
   int64_t targets = 3;
   int64_t width = 256, height = 192;
-  int64_t window = 10;          // targets come from frames within +-window of the context
-  double min_overlap = 0.3;     // minimum frustum overlap of the context with each target
-  double min_valid_depth = 0.5; // contexts with less valid depth are resampled
+  int64_t window = 10;           // targets come from frames within +-window of the context
+  double min_overlap = 0.3;      // minimum frustum overlap of the context with each target
+  double min_valid_depth = 0.5;  // contexts with less valid depth are resampled
   int64_t max_attempts = 32;
   void visit(ConfigVisitor& v);
 };
@@ -45,10 +45,10 @@ struct TupleSample {
 // A collated batch of B tuples (all with T targets).
 struct Batch {
   torch::Tensor context_image, context_depth, context_valid;  // [B,3,H,W], [B,H,W], [B,H,W]
-  torch::Tensor context_K, context_T;                          // [B,3,3], [B,4,4]
-  torch::Tensor target_image, target_depth, target_valid;      // [B,T,3,H,W], [B,T,H,W], [B,T,H,W]
-  torch::Tensor target_K, target_T;                            // [B,T,3,3], [B,T,4,4]
-  std::vector<std::string> names;                              // context frame names
+  torch::Tensor context_K, context_T;                         // [B,3,3], [B,4,4]
+  torch::Tensor target_image, target_depth, target_valid;     // [B,T,3,H,W], [B,T,H,W], [B,T,H,W]
+  torch::Tensor target_K, target_T;                           // [B,T,3,3], [B,T,4,4]
+  std::vector<std::string> names;                             // context frame names
   int64_t size() const { return context_image.size(0); }
   int64_t targets() const { return target_image.size(1); }
 };

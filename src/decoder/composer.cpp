@@ -15,7 +15,8 @@
 namespace isplat {
 
 void ComposerOptions::visit(ConfigVisitor& v) {
-  v.field("lambda_xy", lambda_xy, "position update step in pixels (release: 1e-3 NDC at 1536 px = 0.77 px)", Range::at_least(0));
+  v.field("lambda_xy", lambda_xy, "position update step in pixels (release: 1e-3 NDC at 1536 px = 0.77 px)",
+          Range::at_least(0));
   v.field("lambda_z", lambda_z, "inverse-depth update step", Range::at_least(0));
   v.field("color_step", color_step, "colour logit update step", Range::at_least(0));
   v.field("scale_min", scale_min, "lower bound of the scale multiplier", Range::between(0, 1));
@@ -58,8 +59,8 @@ torch::Tensor quaternion_from_matrix(const torch::Tensor& R) {
 Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
                          const ComposerOptions& o) {
   const int64_t N = base.count();
-  ISPLAT_CHECK(delta.dim() == 2 && delta.size(0) == N && delta.size(1) == kDeltaDim, "composer: delta must be [", N, ", ",
-               kDeltaDim, "], got ", delta.sizes());
+  ISPLAT_CHECK(delta.dim() == 2 && delta.size(0) == N && delta.size(1) == kDeltaDim, "composer: delta must be [", N,
+               ", ", kDeltaDim, "], got ", delta.sizes());
   const auto dt = delta.scalar_type();
   auto uv = base.uv.to(dt), z_n = base.z_n.to(dt), s_n = base.scale_n.to(dt), color = base.color.to(dt);
   auto d_uv = delta.narrow(1, 0, 2), dz = delta.select(1, 2), ds = delta.narrow(1, 3, 3), dq = delta.narrow(1, 6, 4),
@@ -95,8 +96,8 @@ Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw) {
           g.opacities};
 }
 
-Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K, const torch::Tensor& T_cw,
-                  const ComposerOptions& o) {
+Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
+                  const torch::Tensor& T_cw, const ComposerOptions& o) {
   return camera_to_world(compose_camera(base, delta, K, o), T_cw);
 }
 

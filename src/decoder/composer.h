@@ -13,11 +13,11 @@ class ConfigVisitor;
 constexpr int64_t kDeltaDim = 14;
 
 struct ComposerOptions {
-  double lambda_xy = 0.77;    // pixels per unit du/dv (release: 1e-3 NDC at 1536 px)
-  double lambda_z = 1e-3;     // inverse-depth step per unit dz
-  double color_step = 0.1;    // logit colour step per unit dc
+  double lambda_xy = 0.77;  // pixels per unit du/dv (release: 1e-3 NDC at 1536 px)
+  double lambda_z = 1e-3;   // inverse-depth step per unit dz
+  double color_step = 0.1;  // logit colour step per unit dc
   double scale_min = 0.0, scale_max = 4.0;
-  bool linear_rgb = true;     // convert colours sRGB -> linear for compositing (release behaviour)
+  bool linear_rgb = true;  // convert colours sRGB -> linear for compositing (release behaviour)
   void visit(ConfigVisitor& v);
 };
 
@@ -25,14 +25,14 @@ struct ComposerOptions {
 Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
                          const ComposerOptions& options);
 // The same, moved to the world frame with the source pose T_cw [4,4].
-Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K, const torch::Tensor& T_cw,
-                  const ComposerOptions& options);
+Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
+                  const torch::Tensor& T_cw, const ComposerOptions& options);
 Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
 
 torch::Tensor srgb_to_linear(const torch::Tensor& x);
 torch::Tensor linear_to_srgb(const torch::Tensor& x);
-torch::Tensor inverse_softplus(const torch::Tensor& y);  // overflow-safe for large y
+torch::Tensor inverse_softplus(const torch::Tensor& y);                             // overflow-safe for large y
 torch::Tensor quaternion_multiply(const torch::Tensor& a, const torch::Tensor& b);  // [...,4] wxyz
-torch::Tensor quaternion_from_matrix(const torch::Tensor& R);  // [3,3] -> [4] wxyz
+torch::Tensor quaternion_from_matrix(const torch::Tensor& R);                       // [3,3] -> [4] wxyz
 
 }  // namespace isplat

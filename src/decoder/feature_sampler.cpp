@@ -19,7 +19,8 @@ void corners(T u, T v, int64_t width, int64_t height, int64_t h, int64_t w, int6
   const T lim = T(1) - T(1e-6);
   const T xn = std::clamp(u * (T(2) / width) - T(1), -lim, lim), yn = std::clamp(v * (T(2) / height) - T(1), -lim, lim);
   // align_corners = false: source coordinate = ((x + 1) * size - 1) / 2, then border padding clamps it.
-  const T x = std::clamp(((xn + 1) * w - 1) / 2, T(0), T(w - 1)), y = std::clamp(((yn + 1) * h - 1) / 2, T(0), T(h - 1));
+  const T x = std::clamp(((xn + 1) * w - 1) / 2, T(0), T(w - 1)),
+          y = std::clamp(((yn + 1) * h - 1) / 2, T(0), T(h - 1));
   const int64_t x0 = static_cast<int64_t>(std::floor(x)), y0 = static_cast<int64_t>(std::floor(y));
   const int64_t x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
   const T fx = x - x0, fy = y - y0;
@@ -28,7 +29,8 @@ void corners(T u, T v, int64_t width, int64_t height, int64_t h, int64_t w, int6
 }
 
 template <class T>
-void forward_kernel(const T* fmap, const T* uv, T* out, int64_t N, int64_t C, int64_t h, int64_t w, int64_t W, int64_t H) {
+void forward_kernel(const T* fmap, const T* uv, T* out, int64_t N, int64_t C, int64_t h, int64_t w, int64_t W,
+                    int64_t H) {
   at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
     for (int64_t n = b; n < e; ++n) {
       int64_t idx[4];
@@ -93,15 +95,15 @@ void backward_kernel(const T* grad_out, const T* uv, T* grad_map, int64_t N, int
 
 class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
  public:
-  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& features, const torch::Tensor& uv,
-                               int64_t width, int64_t height) {
+  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& features,
+                               const torch::Tensor& uv, int64_t width, int64_t height) {
     const int64_t C = features.size(1), h = features.size(2), w = features.size(3), N = uv.size(0);
     auto fmap = features[0].permute({1, 2, 0}).contiguous();  // [h,w,C]
     auto points = uv.to(features.scalar_type()).contiguous();
     auto out = torch::empty({N, C}, features.options());
     AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "sample_features", [&] {
-      forward_kernel<scalar_t>(fmap.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C, h, w,
-                               width, height);
+      forward_kernel<scalar_t>(fmap.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C,
+                               h, w, width, height);
     });
     ctx->save_for_backward({points});
     ctx->saved_data["shape"] = std::vector<int64_t>{C, h, w, width, height};
@@ -123,13 +125,12 @@ class SampleFeatures : public torch::autograd::Function<SampleFeatures> {
   }
 };
 
-
 // ---- gated fusion fused with its four queries
 // For each support n and channel c: the four bilinear queries and the gate, handed to visit(n, c, fd, fc, g).
 // The forward and the backward share it, so the backward recomputes exactly the forward's values.
 template <class T, class Visit>
-void for_each_gated_query(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, int64_t N, int64_t C, int64_t hd,
-                          int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H, const Visit& visit) {
+void for_each_gated_query(const T* d, const T* gd, const T* cp, const T* gc, const T* uv, int64_t N, int64_t C,
+                          int64_t hd, int64_t wd, int64_t hc, int64_t wc, int64_t W, int64_t H, const Visit& visit) {
   at::parallel_for(0, N, 256, [&](int64_t b, int64_t e) {
     for (int64_t n = b; n < e; ++n) {
       int64_t id[4], ic[4];
@@ -172,25 +173,27 @@ void gated_backward_rows(const T* d, const T* gd, const T* cp, const T* gc, cons
 
 class GatedSample : public torch::autograd::Function<GatedSample> {
  public:
-  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& dino, const torch::Tensor& gate_dino,
-                               const torch::Tensor& cnn_proj, const torch::Tensor& gate_cnn, const torch::Tensor& uv,
-                               int64_t width, int64_t height) {
+  static torch::Tensor forward(torch::autograd::AutogradContext* ctx, const torch::Tensor& dino,
+                               const torch::Tensor& gate_dino, const torch::Tensor& cnn_proj,
+                               const torch::Tensor& gate_cnn, const torch::Tensor& uv, int64_t width, int64_t height) {
     const int64_t C = dino.size(1), N = uv.size(0);
     auto last = [](const torch::Tensor& m) { return m[0].permute({1, 2, 0}).contiguous(); };
     auto d = last(dino), gd = last(gate_dino), cp = last(cnn_proj), gc = last(gate_cnn);
     auto points = uv.to(dino.scalar_type()).contiguous();
     auto out = torch::empty({N, C}, dino.options());
     AT_DISPATCH_FLOATING_TYPES(dino.scalar_type(), "gated_sample", [&] {
-      gated_forward<scalar_t>(d.data_ptr<scalar_t>(), gd.data_ptr<scalar_t>(), cp.data_ptr<scalar_t>(), gc.data_ptr<scalar_t>(),
-                              points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C, dino.size(2), dino.size(3),
-                              cnn_proj.size(2), cnn_proj.size(3), width, height);
+      gated_forward<scalar_t>(d.data_ptr<scalar_t>(), gd.data_ptr<scalar_t>(), cp.data_ptr<scalar_t>(),
+                              gc.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), N, C,
+                              dino.size(2), dino.size(3), cnn_proj.size(2), cnn_proj.size(3), width, height);
     });
     ctx->save_for_backward({d, gd, cp, gc, points});
-    ctx->saved_data["shape"] = std::vector<int64_t>{C, dino.size(2), dino.size(3), cnn_proj.size(2), cnn_proj.size(3), width, height};
+    ctx->saved_data["shape"] =
+        std::vector<int64_t>{C, dino.size(2), dino.size(3), cnn_proj.size(2), cnn_proj.size(3), width, height};
     return out;
   }
 
-  static torch::autograd::variable_list backward(torch::autograd::AutogradContext* ctx, torch::autograd::variable_list grads) {
+  static torch::autograd::variable_list backward(torch::autograd::AutogradContext* ctx,
+                                                 torch::autograd::variable_list grads) {
     const auto saved = ctx->get_saved_variables();
     const auto& d = saved[0];
     const auto& gd = saved[1];
@@ -200,15 +203,17 @@ class GatedSample : public torch::autograd::Function<GatedSample> {
     const auto sh = ctx->saved_data["shape"].toIntVector();
     const int64_t C = sh[0], hd = sh[1], wd = sh[2], hc = sh[3], wc = sh[4], W = sh[5], H = sh[6], N = points.size(0);
     auto go = grads[0].contiguous();
-    auto r_d = torch::empty({N, C}, go.options()), r_c = torch::empty({N, C}, go.options()), r_g = torch::empty({N, C}, go.options());
+    auto r_d = torch::empty({N, C}, go.options()), r_c = torch::empty({N, C}, go.options()),
+         r_g = torch::empty({N, C}, go.options());
     auto g_d = torch::empty({hd, wd, C}, go.options()), g_gd = torch::empty({hd, wd, C}, go.options());
     auto g_c = torch::empty({hc, wc, C}, go.options()), g_gc = torch::empty({hc, wc, C}, go.options());
     AT_DISPATCH_FLOATING_TYPES(go.scalar_type(), "gated_sample_backward", [&] {
       gated_backward_rows<scalar_t>(d.data_ptr<scalar_t>(), gd.data_ptr<scalar_t>(), cp.data_ptr<scalar_t>(),
                                     gc.data_ptr<scalar_t>(), points.data_ptr<scalar_t>(), go.data_ptr<scalar_t>(),
-                                    r_d.data_ptr<scalar_t>(), r_c.data_ptr<scalar_t>(), r_g.data_ptr<scalar_t>(), N, C, hd, wd,
-                                    hc, wc, W, H);
-      const TexelScatter<scalar_t> sd(points.data_ptr<scalar_t>(), N, hd, wd, W, H), sc(points.data_ptr<scalar_t>(), N, hc, wc, W, H);
+                                    r_d.data_ptr<scalar_t>(), r_c.data_ptr<scalar_t>(), r_g.data_ptr<scalar_t>(), N, C,
+                                    hd, wd, hc, wc, W, H);
+      const TexelScatter<scalar_t> sd(points.data_ptr<scalar_t>(), N, hd, wd, W, H),
+          sc(points.data_ptr<scalar_t>(), N, hc, wc, W, H);
       sd.apply(r_d.data_ptr<scalar_t>(), g_d.data_ptr<scalar_t>(), C);
       sd.apply(r_g.data_ptr<scalar_t>(), g_gd.data_ptr<scalar_t>(), C);
       sc.apply(r_c.data_ptr<scalar_t>(), g_c.data_ptr<scalar_t>(), C);
@@ -232,11 +237,12 @@ torch::Tensor sample_features(const torch::Tensor& features, const torch::Tensor
 torch::Tensor gated_sample(const torch::Tensor& dino, const torch::Tensor& gate_dino, const torch::Tensor& cnn_proj,
                            const torch::Tensor& gate_cnn, const torch::Tensor& uv, int64_t width, int64_t height) {
   ISPLAT_CHECK(dino.dim() == 4 && dino.size(0) == 1 && gate_dino.sizes() == dino.sizes(),
-               "gated_sample: dino and gate_dino must be equal [1,C,h,w] maps, got ", dino.sizes(), " and ", gate_dino.sizes());
+               "gated_sample: dino and gate_dino must be equal [1,C,h,w] maps, got ", dino.sizes(), " and ",
+               gate_dino.sizes());
   ISPLAT_CHECK(cnn_proj.dim() == 4 && cnn_proj.size(0) == 1 && gate_cnn.sizes() == cnn_proj.sizes() &&
                    cnn_proj.size(1) == dino.size(1),
-               "gated_sample: cnn_proj and gate_cnn must be equal [1,C,h,w] maps with the dino's C, got ", cnn_proj.sizes(),
-               " and ", gate_cnn.sizes());
+               "gated_sample: cnn_proj and gate_cnn must be equal [1,C,h,w] maps with the dino's C, got ",
+               cnn_proj.sizes(), " and ", gate_cnn.sizes());
   ISPLAT_CHECK(uv.dim() == 2 && uv.size(1) == 2, "gated_sample: uv must be [N,2], got ", uv.sizes());
   return GatedSample::apply(dino, gate_dino, cnn_proj, gate_cnn, uv.detach(), width, height);
 }

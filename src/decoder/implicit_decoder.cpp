@@ -16,8 +16,9 @@ namespace nn = torch::nn;
 namespace F = torch::nn::functional;
 
 void DecoderOptions::visit(ConfigVisitor& v) {
-  v.field("mode", mode, "implicit (paper), dense (pixel-aligned conv head: 'w/o implicit decoder'), none "
-                        "(base Gaussians only: 'w/o learned updates')",
+  v.field("mode", mode,
+          "implicit (paper), dense (pixel-aligned conv head: 'w/o implicit decoder'), none "
+          "(base Gaussians only: 'w/o learned updates')",
           {"implicit", "dense", "none"});
   v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C", Range::at_least(1));
   v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
@@ -30,7 +31,9 @@ torch::Tensor query_features(const torch::Tensor& features, const torch::Tensor&
   auto x = torch::clamp(uv.select(1, 0) * (2.0 / width) - 1.0, -lim, lim);
   auto y = torch::clamp(uv.select(1, 1) * (2.0 / height) - 1.0, -lim, lim);
   auto grid = torch::stack({x, y}, -1).view({1, 1, -1, 2}).to(features.dtype());
-  auto out = F::grid_sample(features, grid, F::GridSampleFuncOptions().mode(torch::kBilinear).padding_mode(torch::kBorder).align_corners(false));
+  auto out = F::grid_sample(
+      features, grid,
+      F::GridSampleFuncOptions().mode(torch::kBilinear).padding_mode(torch::kBorder).align_corners(false));
   return out.view({features.size(1), -1}).t();  // [N,C]
 }
 
@@ -109,9 +112,7 @@ DenseHeadImpl::DenseHeadImpl(int64_t dd, int64_t cd, int64_t width) : dino_dim(d
 }
 
 torch::Tensor DenseHeadImpl::forward(const EncoderFeatures& f, int64_t width, int64_t height) {
-  auto up = [](const torch::Tensor& x, int64_t h, int64_t w) {
-    return resize_bilinear(x, h, w);
-  };
+  auto up = [](const torch::Tensor& x, int64_t h, int64_t w) { return resize_bilinear(x, h, w); };
   const int64_t h4 = (height + 3) / 4, w4 = (width + 3) / 4;
   std::vector<torch::Tensor> parts;
   if (dino_dim > 0) parts.push_back(up(f.dino.narrow(0, 0, 1), h4, w4));

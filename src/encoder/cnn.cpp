@@ -22,7 +22,8 @@ torch::Tensor instance_norm(const torch::Tensor& x) {
 ResidualBlockImpl::ResidualBlockImpl(int64_t in, int64_t out, int64_t stride) {
   conv1 = register_module("conv1", nn::Conv2d(nn::Conv2dOptions(in, out, 3).stride(stride).padding(1)));
   conv2 = register_module("conv2", nn::Conv2d(nn::Conv2dOptions(out, out, 3).padding(1)));
-  if (stride != 1 || in != out) down = register_module("down", nn::Conv2d(nn::Conv2dOptions(in, out, 1).stride(stride)));
+  if (stride != 1 || in != out)
+    down = register_module("down", nn::Conv2d(nn::Conv2dOptions(in, out, 1).stride(stride)));
 }
 
 torch::Tensor ResidualBlockImpl::forward(const torch::Tensor& x) {

@@ -12,7 +12,7 @@ namespace isplat {
 class ConfigVisitor;
 
 struct CNNOptions {
-  int64_t width = 32;        // stage widths are width x (1, 2, 3, 4)
+  int64_t width = 32;  // stage widths are width x (1, 2, 3, 4)
   int64_t out_channels = 128;
   void visit(ConfigVisitor& v);
 };

@@ -22,7 +22,8 @@ DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
   if (o.dino) {
     vit = register_module("vit", DinoViT(o.vit));
     if (o.vit.weights.empty()) {
-      log_info("encoder: ViT-", o.vit.size, " starts from random weights (no DINOv3 checkpoint given in "
+      log_info("encoder: ViT-", o.vit.size,
+               " starts from random weights (no DINOv3 checkpoint given in "
                "encoder.vit.weights; none ships with this project)");
     } else {
       load_dinov3_safetensors(vit, o.vit.weights);
@@ -32,16 +33,18 @@ DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
   if (o.cnn) cnn = register_module("cnn", CNNEncoder(o.cnn_options));
 }
 
-int64_t DualEncoderImpl::dino_dim() const { return vit ? vit->dim() : 0; }
+int64_t DualEncoderImpl::dino_dim() const {
+  return vit ? vit->dim() : 0;
+}
 
 EncoderFeatures DualEncoderImpl::forward(const torch::Tensor& image) {
   ISPLAT_CHECK(image.dim() == 4 && image.size(1) == 3, "encoder: image must be [B, 3, H, W], got ", image.sizes());
   ISPLAT_CHECK(image.size(2) >= 16 && image.size(3) >= 16, "encoder: image ", image.size(3), "x", image.size(2),
                " is smaller than one 16x16 ViT patch");
-  const int64_t H = std::max<int64_t>(16, (image.size(2) + 8) / 16 * 16), W = std::max<int64_t>(16, (image.size(3) + 8) / 16 * 16);
+  const int64_t H = std::max<int64_t>(16, (image.size(2) + 8) / 16 * 16),
+                W = std::max<int64_t>(16, (image.size(3) + 8) / 16 * 16);
   torch::Tensor x = image;
-  if (H != image.size(2) || W != image.size(3))
-    x = resize_bilinear(image, H, W);
+  if (H != image.size(2) || W != image.size(3)) x = resize_bilinear(image, H, W);
   EncoderFeatures f;
   if (vit) f.dino = vit->forward(x);
   if (cnn) f.cnn = cnn->forward(x);

@@ -15,22 +15,28 @@
 namespace isplat {
 namespace nn = torch::nn;
 
-torch::Tensor imagenet_mean() { return torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]}).view({1, 3, 1, 1}); }
-torch::Tensor imagenet_std() { return torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]}).view({1, 3, 1, 1}); }
+torch::Tensor imagenet_mean() {
+  return torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]}).view({1, 3, 1, 1});
+}
+torch::Tensor imagenet_std() {
+  return torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]}).view({1, 3, 1, 1});
+}
 torch::Tensor imagenet_normalize(const torch::Tensor& x) {
   return (x - imagenet_mean().to(x.dtype())) / imagenet_std().to(x.dtype());
 }
 
 void ViTOptions::visit(ConfigVisitor& v) {
-  v.field("size", size, "ViT size: S (384-d, 12 blocks), B (768, 12), L (1024, 24; paper), or custom", {"S", "B", "L", "custom"});
+  v.field("size", size, "ViT size: S (384-d, 12 blocks), B (768, 12), L (1024, 24; paper), or custom",
+          {"S", "B", "L", "custom"});
   v.field("embed_dim", embed_dim, "custom size: token width (multiple of 4 x heads)", Range::at_least(0));
   v.field("depth", depth, "custom size: number of blocks", Range::at_least(0));
   v.field("heads", heads, "custom size: attention heads", Range::at_least(0));
   v.field("registers", registers, "register (storage) tokens; DINOv3 uses 4", Range::at_least(0));
   v.field("layerscale_init", layerscale_init, "LayerScale initial gamma", Range::above(0));
   v.field("rope_base", rope_base, "RoPE period base", Range::above(1));
-  v.field("weights", weights, "DINOv3 safetensors checkpoint (official names); empty = train from scratch "
-                              "(no pretrained DINO weights ship with this project)");
+  v.field("weights", weights,
+          "DINOv3 safetensors checkpoint (official names); empty = train from scratch "
+          "(no pretrained DINO weights ship with this project)");
 }
 
 namespace {
@@ -105,7 +111,9 @@ MlpImpl::MlpImpl(int64_t dim, int64_t hidden) {
   fc2 = register_module("fc2", nn::Linear(hidden, dim));
 }
 
-torch::Tensor MlpImpl::forward(const torch::Tensor& x) { return fc2->forward(torch::gelu(fc1->forward(x))); }
+torch::Tensor MlpImpl::forward(const torch::Tensor& x) {
+  return fc2->forward(torch::gelu(fc1->forward(x)));
+}
 
 ViTBlockImpl::ViTBlockImpl(int64_t dim, int64_t heads, double ls) {
   norm1 = register_module("norm1", nn::LayerNorm(nn::LayerNormOptions({dim}).eps(1e-5)));
@@ -135,9 +143,9 @@ std::pair<torch::Tensor, torch::Tensor> RopeEmbedImpl::forward(int64_t H, int64_
   auto ch = (torch::arange(H, torch::kFloat32) + 0.5) / H;
   auto cw = (torch::arange(W, torch::kFloat32) + 0.5) / W;
   auto grid = torch::meshgrid({ch, cw}, "ij");
-  auto coords = torch::stack({grid[0], grid[1]}, -1).reshape({H * W, 2}) * 2.0 - 1.0;        // [P,2]
-  auto angles = 2.0 * M_PI * coords.unsqueeze(-1) / periods.view({1, 1, -1});                 // [P,2,D/4]
-  angles = angles.flatten(1, 2).repeat({1, 2});                                               // [P,D]
+  auto coords = torch::stack({grid[0], grid[1]}, -1).reshape({H * W, 2}) * 2.0 - 1.0;  // [P,2]
+  auto angles = 2.0 * M_PI * coords.unsqueeze(-1) / periods.view({1, 1, -1});          // [P,2,D/4]
+  angles = angles.flatten(1, 2).repeat({1, 2});                                        // [P,D]
   return {torch::sin(angles), torch::cos(angles)};
 }
 
@@ -182,9 +190,12 @@ torch::Tensor DinoViTImpl::forward(const torch::Tensor& image) {
 
 void load_dinov3_safetensors(DinoViT& vit, const std::string& path) {
   // Present in some official checkpoints but unused at inference (untied cls norms).
-  auto ignorable = [](const std::string& k) { return k.rfind("local_cls_norm.", 0) == 0 || k.rfind("cls_norm.", 0) == 0; };
+  auto ignorable = [](const std::string& k) {
+    return k.rfind("local_cls_norm.", 0) == 0 || k.rfind("cls_norm.", 0) == 0;
+  };
   load_named_tensors(*vit, read_safetensors(path).tensors, "",
-                     path + ": does not fit this ViT (encoder.vit.size/registers must match the checkpoint).", ignorable);
+                     path + ": does not fit this ViT (encoder.vit.size/registers must match the checkpoint).",
+                     ignorable);
 }
 
 }  // namespace isplat

@@ -15,14 +15,14 @@ namespace isplat {
 class ConfigVisitor;
 
 struct ViTOptions {
-  std::string size = "S";      // S | B | L | custom
-  int64_t embed_dim = 0;       // custom only (0 = from size)
+  std::string size = "S";  // S | B | L | custom
+  int64_t embed_dim = 0;   // custom only (0 = from size)
   int64_t depth = 0;
   int64_t heads = 0;
-  int64_t registers = 4;       // DINOv3 "storage tokens"
+  int64_t registers = 4;  // DINOv3 "storage tokens"
   double layerscale_init = 1e-5;
   double rope_base = 100.0;
-  std::string weights;         // safetensors checkpoint under official DINOv3 names; empty = train from scratch
+  std::string weights;  // safetensors checkpoint under official DINOv3 names; empty = train from scratch
   void visit(ConfigVisitor& v);
   // Resolved architecture.
   int64_t dim() const;

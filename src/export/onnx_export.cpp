@@ -71,13 +71,19 @@ class Graph {
       auto* ap = n->add_attribute();
       ap->set_name(a.name);
       switch (a.kind) {
-        case Attr::Int: ap->set_type(onnx::AttributeProto::INT), ap->set_i(a.i); break;
+        case Attr::Int:
+          ap->set_type(onnx::AttributeProto::INT), ap->set_i(a.i);
+          break;
         case Attr::Ints:
           ap->set_type(onnx::AttributeProto::INTS);
           for (int64_t v : a.is) ap->add_ints(v);
           break;
-        case Attr::Float: ap->set_type(onnx::AttributeProto::FLOAT), ap->set_f(a.f); break;
-        case Attr::String: ap->set_type(onnx::AttributeProto::STRING), ap->set_s(a.s); break;
+        case Attr::Float:
+          ap->set_type(onnx::AttributeProto::FLOAT), ap->set_f(a.f);
+          break;
+        case Attr::String:
+          ap->set_type(onnx::AttributeProto::STRING), ap->set_s(a.s);
+          break;
       }
     }
     return out;
@@ -95,15 +101,17 @@ class Graph {
   std::string conv(const std::string& x, const torch::Tensor& w, const torch::Tensor& b, int64_t stride, int64_t pad) {
     std::vector<std::string> in = {x, init("w", w)};
     if (b.defined()) in.push_back(init("b", b));
-    return op("Conv", in, {a_ints("kernel_shape", {w.size(2), w.size(3)}), a_ints("strides", {stride, stride}),
-                           a_ints("pads", {pad, pad, pad, pad})});
+    return op("Conv", in,
+              {a_ints("kernel_shape", {w.size(2), w.size(3)}), a_ints("strides", {stride, stride}),
+               a_ints("pads", {pad, pad, pad, pad})});
   }
   std::string conv(const std::string& x, const torch::nn::Conv2d& c) {
     const auto& o = c->options;
     return conv(x, c->weight, c->bias, o.stride()->at(0), c10::get<torch::ExpandingArray<2>>(o.padding())->at(0));
   }
   std::string instance_norm(const std::string& x, int64_t channels) {
-    return op("InstanceNormalization", {x, init("ones", torch::ones({channels})), init("zeros", torch::zeros({channels}))},
+    return op("InstanceNormalization",
+              {x, init("ones", torch::ones({channels})), init("zeros", torch::zeros({channels}))},
               {a_float("epsilon", 1e-5f)});
   }
   std::string layer_norm(const std::string& x, const torch::nn::LayerNorm& ln) {
@@ -117,7 +125,9 @@ class Graph {
   std::string slice(const std::string& x, int64_t axis, int64_t start, int64_t end) {
     return op("Slice", {x, ints({start}), ints({end}), ints({axis})});
   }
-  std::string reshape(const std::string& x, const std::vector<int64_t>& shape) { return op("Reshape", {x, ints(shape)}); }
+  std::string reshape(const std::string& x, const std::vector<int64_t>& shape) {
+    return op("Reshape", {x, ints(shape)});
+  }
   std::string transpose(const std::string& x, const std::vector<int64_t>& perm) {
     return op("Transpose", {x}, {a_ints("perm", perm)});
   }
@@ -164,7 +174,8 @@ std::string export_vit(Graph& G, DinoViTImpl& vit, const std::string& image, int
       return G.op("Concat", {pre_t, rotated}, {Graph::a_int("axis", 2)});
     };
     auto q = rope(qkvs[0]), k = rope(qkvs[1]);
-    auto scores = G.op("Mul", {G.op("MatMul", {q, G.transpose(k, {0, 1, 3, 2})}), G.scalar(1.0 / std::sqrt(double(dh)))});
+    auto scores =
+        G.op("Mul", {G.op("MatMul", {q, G.transpose(k, {0, 1, 3, 2})}), G.scalar(1.0 / std::sqrt(double(dh)))});
     auto attn = G.op("MatMul", {G.op("Softmax", {scores}, {Graph::a_int("axis", -1)}), qkvs[2]});
     attn = G.reshape(G.transpose(attn, {0, 2, 1, 3}), {1, N, C});
     attn = G.op("Mul", {G.linear(attn, *blk->attn->proj), G.init("ls1", blk->ls1->gamma)});
@@ -196,14 +207,16 @@ std::string export_cnn(Graph& G, CNNEncoderImpl& cnn, const std::string& image, 
     x = export_residual(G, *r, x);
     if (b % 2 == 1) scales.push_back(G.resize(x, {1, r->conv2->weight.size(0), H4, W4}));
   }
-  auto fused = G.op("Relu", {G.instance_norm(G.conv(G.op("Concat", scales, {Graph::a_int("axis", 1)}), cnn.fuse), cnn.out_channels)});
+  auto fused = G.op(
+      "Relu", {G.instance_norm(G.conv(G.op("Concat", scales, {Graph::a_int("axis", 1)}), cnn.fuse), cnn.out_channels)});
   return G.conv(fused, cnn.project);
 }
 
 // ---- decoder
 std::string sample(Graph& G, const std::string& map, int64_t channels, const std::string& grid) {
-  auto s = G.op("GridSample", {map, grid},
-                {Graph::a_int("align_corners", 0), Graph::a_str("mode", "bilinear"), Graph::a_str("padding_mode", "border")});
+  auto s = G.op(
+      "GridSample", {map, grid},
+      {Graph::a_int("align_corners", 0), Graph::a_str("mode", "bilinear"), Graph::a_str("padding_mode", "border")});
   return G.transpose(G.reshape(s, {channels, -1}), {1, 0});  // [N,C]
 }
 
@@ -227,8 +240,8 @@ std::string export_decoder(Graph& G, ImplicitDecoderImpl& d, const std::string& 
   return G.linear(h, *d.head);
 }
 
-std::string export_dense(Graph& G, DenseHeadImpl& d, const std::string& dino, const std::string& cnn, int64_t H, int64_t W,
-                         const std::string& grid) {
+std::string export_dense(Graph& G, DenseHeadImpl& d, const std::string& dino, const std::string& cnn, int64_t H,
+                         int64_t W, const std::string& grid) {
   const int64_t h4 = (H + 3) / 4, w4 = (W + 3) / 4;
   std::vector<std::string> parts;
   if (d.dino_dim > 0) parts.push_back(G.resize(dino, {1, d.dino_dim, h4, w4}));
@@ -242,10 +255,10 @@ std::string export_dense(Graph& G, DenseHeadImpl& d, const std::string& dino, co
 
 void check_rules(InfiniSplat& model) {
   static const std::set<std::string> supported = {
-      "isplat::InfiniSplatImpl", "isplat::DualEncoderImpl", "isplat::DinoViTImpl",  "isplat::PatchEmbedImpl",
-      "isplat::RopeEmbedImpl",   "isplat::ViTBlockImpl",    "isplat::AttentionImpl", "isplat::LayerScaleImpl",
-      "isplat::MlpImpl",         "isplat::CNNEncoderImpl",  "isplat::ResidualBlockImpl", "isplat::ImplicitDecoderImpl",
-      "isplat::DenseHeadImpl",   "torch::nn::LinearImpl",   "torch::nn::Conv2dImpl", "torch::nn::LayerNormImpl",
+      "isplat::InfiniSplatImpl",  "isplat::DualEncoderImpl", "isplat::DinoViTImpl",       "isplat::PatchEmbedImpl",
+      "isplat::RopeEmbedImpl",    "isplat::ViTBlockImpl",    "isplat::AttentionImpl",     "isplat::LayerScaleImpl",
+      "isplat::MlpImpl",          "isplat::CNNEncoderImpl",  "isplat::ResidualBlockImpl", "isplat::ImplicitDecoderImpl",
+      "isplat::DenseHeadImpl",    "torch::nn::LinearImpl",   "torch::nn::Conv2dImpl",     "torch::nn::LayerNormImpl",
       "torch::nn::ModuleListImpl"};
   for (const auto& m : model->named_modules("model", true))
     if (!supported.count(m.value()->name()))
@@ -279,8 +292,10 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
     t->set_elem_type(onnx::TensorProto::FLOAT);
     for (const auto& d : dims) {
       auto* dim = t->mutable_shape()->add_dim();
-      if (std::holds_alternative<int64_t>(d)) dim->set_dim_value(std::get<int64_t>(d));
-      else dim->set_dim_param(std::get<std::string>(d));
+      if (std::holds_alternative<int64_t>(d))
+        dim->set_dim_value(std::get<int64_t>(d));
+      else
+        dim->set_dim_param(std::get<std::string>(d));
     }
   };
   add_io(g->mutable_input(), "image", {int64_t{1}, int64_t{3}, o.height, o.width});
@@ -291,12 +306,16 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
   if (model->encoder->cnn) cnn = export_cnn(G, *model->encoder->cnn, "image", o.height, o.width);
   // grid = clamp(uv * (2/W, 2/H) - 1, +-(1 - 1e-6)) as [1,1,N,2]
   const double lim = 1.0 - 1e-6;
-  auto grid = G.op("Sub", {G.op("Mul", {"uv", G.init("uv_scale", torch::tensor({2.0f / o.width, 2.0f / o.height}))}), G.scalar(1.0)});
-  grid = G.reshape(G.op("Clip", {grid, G.init("lo", torch::tensor(-lim, torch::kFloat32)), G.init("hi", torch::tensor(lim, torch::kFloat32))}),
+  auto grid = G.op("Sub", {G.op("Mul", {"uv", G.init("uv_scale", torch::tensor({2.0f / o.width, 2.0f / o.height}))}),
+                           G.scalar(1.0)});
+  grid = G.reshape(G.op("Clip", {grid, G.init("lo", torch::tensor(-lim, torch::kFloat32)),
+                                 G.init("hi", torch::tensor(lim, torch::kFloat32))}),
                    {1, 1, -1, 2});
   std::string delta;
-  if (model->decoder) delta = export_decoder(G, *model->decoder, dino, cnn, grid);
-  else delta = export_dense(G, *model->dense, dino, cnn, o.height, o.width, grid);
+  if (model->decoder)
+    delta = export_decoder(G, *model->decoder, dino, cnn, grid);
+  else
+    delta = export_dense(G, *model->dense, dino, cnn, o.height, o.width, grid);
   G.op("Identity", {delta});
   g->mutable_node(g->node_size() - 1)->set_output(0, "delta");  // the graph output under its public name
   add_io(g->mutable_output(), "delta", {std::string("num_supports"), int64_t{kDeltaDim}});

@@ -38,18 +38,20 @@ std::optional<torch::Tensor> run_onnxruntime(const std::string& onnx_path, const
   const fs::path root(ISPLAT_SOURCE_DIR);
   const fs::path script = root / "scripts" / "ort_run.js";
   const char* env = std::getenv("ISPLAT_ORT_NODE");
-  const fs::path package = env ? fs::path(env) : root / "third_party" / "onnxruntime-node" / "node_modules" / "onnxruntime-node";
+  const fs::path package =
+      env ? fs::path(env) : root / "third_party" / "onnxruntime-node" / "node_modules" / "onnxruntime-node";
   if (!fs::exists(package / "package.json")) {
     why = "onnxruntime-node is not installed at " + package.string() + " (scripts/setup.sh installs it)";
     return std::nullopt;
   }
   const fs::path dir = fs::temp_directory_path() / ("isplat_ort_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  const std::string img = (dir / "image.bin").string(), pts = (dir / "uv.bin").string(), out = (dir / "out.bin").string();
+  const std::string img = (dir / "image.bin").string(), pts = (dir / "uv.bin").string(),
+                    out = (dir / "out.bin").string();
   write_raw(img, image);
   write_raw(pts, uv);
-  const std::string cmd = cat("node '", script.string(), "' '", onnx_path, "' '", out, "' image=", dims(image), "='", img,
-                              "' uv=", dims(uv), "='", pts, "' 2>&1");
+  const std::string cmd = cat("node '", script.string(), "' '", onnx_path, "' '", out, "' image=", dims(image), "='",
+                              img, "' uv=", dims(uv), "='", pts, "' 2>&1");
   std::string log;
   FILE* p = popen(cmd.c_str(), "r");
   ISPLAT_CHECK(p, "cannot start node");

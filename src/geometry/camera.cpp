@@ -25,7 +25,9 @@ Eigen::Vector2d Intrinsics::project(const Eigen::Vector3d& X) const {
   return {(fx * X.x() + skew * X.y()) / X.z() + cx, fy * X.y() / X.z() + cy};
 }
 
-Eigen::Vector3d Intrinsics::backproject(double u, double v, double z) const { return ray(u, v) * z; }
+Eigen::Vector3d Intrinsics::backproject(double u, double v, double z) const {
+  return ray(u, v) * z;
+}
 
 Eigen::Vector3d Intrinsics::ray(double u, double v) const {
   const double y = (v - cy) / fy;
@@ -42,7 +44,9 @@ Intrinsics Intrinsics::cropped(int x0, int y0, int crop_width, int crop_height) 
   return {fx, fy, cx - x0, cy - y0, crop_width, crop_height, skew};
 }
 
-double Intrinsics::hfov() const { return 2.0 * std::atan(0.5 * width / fx); }
+double Intrinsics::hfov() const {
+  return 2.0 * std::atan(0.5 * width / fx);
+}
 
 bool Intrinsics::operator==(const Intrinsics& o) const {
   return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height &&

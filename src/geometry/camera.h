@@ -18,9 +18,9 @@ struct Intrinsics {
   // A pinhole camera with the given horizontal field of view (radians), principal point at the centre.
   static Intrinsics from_hfov(double hfov, int width, int height);
 
-  Eigen::Vector2d project(const Eigen::Vector3d& X_cam) const;  // requires X_cam.z() > 0
+  Eigen::Vector2d project(const Eigen::Vector3d& X_cam) const;      // requires X_cam.z() > 0
   Eigen::Vector3d backproject(double u, double v, double z) const;  // planar depth z
-  Eigen::Vector3d ray(double u, double v) const;  // direction with z = 1
+  Eigen::Vector3d ray(double u, double v) const;                    // direction with z = 1
 
   // Intrinsics after resizing the image to (new_width, new_height) (independent x/y scale).
   Intrinsics resized(int new_width, int new_height) const;

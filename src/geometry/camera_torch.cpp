@@ -13,7 +13,9 @@ Camera Camera::select(int64_t b) const {
   return {K[b], T_cw[b], width, height};
 }
 
-Camera Camera::to(torch::Dtype dtype) const { return {K.to(dtype), T_cw.to(dtype), width, height}; }
+Camera Camera::to(torch::Dtype dtype) const {
+  return {K.to(dtype), T_cw.to(dtype), width, height};
+}
 
 Camera to_camera(const View& view, torch::Dtype dtype) {
   auto K = torch::empty({3, 3}, torch::kFloat64);
@@ -63,7 +65,7 @@ torch::Tensor project_points(const torch::Tensor& points, const torch::Tensor& K
 
 torch::Tensor backproject_points(const torch::Tensor& uv, const torch::Tensor& z, const torch::Tensor& K) {
   auto ones = torch::ones_like(uv.narrow(-1, 0, 1));
-  auto h = torch::cat({uv, ones}, -1);                            // [..., N, 3]
+  auto h = torch::cat({uv, ones}, -1);                                // [..., N, 3]
   auto rays = torch::matmul(h, torch::inverse(K).transpose(-1, -2));  // z = 1 rays
   return rays * z.unsqueeze(-1);
 }
@@ -100,19 +102,23 @@ torch::Tensor usable_depth(const torch::Tensor& depth, const torch::Tensor& vali
 torch::Tensor backproject_depth(const torch::Tensor& depth, const torch::Tensor& K) {
   ISPLAT_CHECK(depth.dim() == 2, "backproject_depth: depth must be [H, W], got ", depth.sizes());
   auto uv = pixel_centers(depth.size(0), depth.size(1), depth.scalar_type()).reshape({-1, 2});
-  return backproject_points(uv, depth.reshape({-1}), K.to(depth.scalar_type())).reshape({depth.size(0), depth.size(1), 3});
+  return backproject_points(uv, depth.reshape({-1}), K.to(depth.scalar_type()))
+      .reshape({depth.size(0), depth.size(1), 3});
 }
 
 torch::Tensor resize_bilinear(const torch::Tensor& x, int64_t height, int64_t width) {
-  return F::interpolate(
-      x, F::InterpolateFuncOptions().size(std::vector<int64_t>{height, width}).mode(torch::kBilinear).align_corners(false));
+  return F::interpolate(x, F::InterpolateFuncOptions()
+                               .size(std::vector<int64_t>{height, width})
+                               .mode(torch::kBilinear)
+                               .align_corners(false));
 }
 
 std::pair<torch::Tensor, torch::Tensor> resize_with_K(const torch::Tensor& image, const torch::Tensor& K,
                                                       int64_t new_height, int64_t new_width) {
   ISPLAT_CHECK(image.dim() == 3, "resize_with_K: image must be [C, H, W], got ", image.sizes());
   ISPLAT_CHECK(new_height > 0 && new_width > 0, "resize_with_K: target size must be positive");
-  const double sy = static_cast<double>(new_height) / image.size(1), sx = static_cast<double>(new_width) / image.size(2);
+  const double sy = static_cast<double>(new_height) / image.size(1),
+               sx = static_cast<double>(new_width) / image.size(2);
   const bool shrink = sx < 1.0 || sy < 1.0;
   auto out = F::interpolate(image.unsqueeze(0), F::InterpolateFuncOptions()
                                                     .size(std::vector<int64_t>{new_height, new_width})

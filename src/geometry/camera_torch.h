@@ -13,13 +13,13 @@ struct Camera {
   int64_t width = 0, height = 0;
 
   int64_t batch() const { return K.dim() == 3 ? K.size(0) : 0; }  // 0 = unbatched
-  Camera select(int64_t b) const;  // one camera from a batch
+  Camera select(int64_t b) const;                                 // one camera from a batch
   Camera to(torch::Dtype dtype) const;
 };
 
 Camera to_camera(const View& view, torch::Dtype dtype = torch::kFloat32);
 Camera stack_cameras(const std::vector<Camera>& cameras);  // same size required
-View to_view(const Camera& camera);                         // unbatched only
+View to_view(const Camera& camera);                        // unbatched only
 
 torch::Tensor make_K(double fx, double fy, double cx, double cy, torch::Dtype dtype = torch::kFloat32);
 

@@ -22,7 +22,7 @@ Eigen::Matrix4d opengl_c2w_from_pose(const Pose& T_cw);
 struct HypersimCamera {
   Intrinsics intr;
   Eigen::Matrix3d R_eff = Eigen::Matrix3d::Identity();  // OpenCV camera frame -> effective pinhole frame
-  bool tilt_shift = false;                             // M has a non-trivial third row or shift
+  bool tilt_shift = false;                              // M has a non-trivial third row or shift
 
   // Ray direction (unnormalized) in the OpenGL camera frame for continuous pixel (x, y): M·[u, v, 1].
   Eigen::Vector3d ray_gl(double x, double y) const;

@@ -11,8 +11,8 @@
 namespace isplat {
 
 CropBox center_crop_box(int width, int height, double aspect) {
-  ISPLAT_CHECK(width > 0 && height > 0 && aspect > 0, "center_crop_box: bad size ", width, "x", height,
-               " or aspect ", aspect);
+  ISPLAT_CHECK(width > 0 && height > 0 && aspect > 0, "center_crop_box: bad size ", width, "x", height, " or aspect ",
+               aspect);
   CropBox box{0, 0, width, height};
   if (static_cast<double>(width) / height > aspect) {
     box.width = std::max(1, static_cast<int>(std::lround(height * aspect)));

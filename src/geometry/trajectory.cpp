@@ -68,7 +68,8 @@ CameraPath load_camera_path(const std::string& path, const View& base) {
     for (size_t i = 0; i < j["frames"].size(); ++i) {
       const auto& f = j["frames"][i];
       const std::string where = cat("frames[", i, "]");
-      if (!f.contains("T_cw") || !f["T_cw"].is_array() || f["T_cw"].size() != 4) fail(path, ": ", where, ".T_cw must be a 4x4 matrix");
+      if (!f.contains("T_cw") || !f["T_cw"].is_array() || f["T_cw"].size() != 4)
+        fail(path, ": ", where, ".T_cw must be a 4x4 matrix");
       View v{intr, Pose::Identity()};
       for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) v.T_cw(r, c) = number(f["T_cw"][r][c], where + ".T_cw");

@@ -63,7 +63,8 @@ void load_named_tensors(torch::nn::Module& module, const std::map<std::string, t
   for (auto& [name, t] : ours) t.copy_(tensors.at(prefix + name).to(t.scalar_type()));
 }
 
-void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix) {
+void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source,
+                 const std::string& prefix) {
   load_named_tensors(module, ck.tensors, prefix, source + ": checkpoint does not fit the model built from its config.");
 }
 

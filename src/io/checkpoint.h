@@ -11,8 +11,8 @@
 namespace isplat {
 
 struct Checkpoint {
-  std::map<std::string, torch::Tensor> tensors;      // "model/<param>", "optim/state", "rng/torch", ...
-  std::map<std::string, std::string> metadata;       // "format", "step", "config", ...
+  std::map<std::string, torch::Tensor> tensors;  // "model/<param>", "optim/state", "rng/torch", ...
+  std::map<std::string, std::string> metadata;   // "format", "step", "config", ...
   int64_t step() const;
   const std::string& config_json() const;
 };
@@ -30,7 +30,8 @@ void load_named_tensors(torch::nn::Module& module, const std::map<std::string, t
 void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::string& prefix = "model/");
 // Copies "model/<name>" tensors into `module`; any missing, unexpected or mis-shaped tensor is listed in
 // one Error naming the file.
-void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source, const std::string& prefix = "model/");
+void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source,
+                 const std::string& prefix = "model/");
 
 void save_checkpoint(const std::string& path, const Checkpoint& ck);  // atomic
 Checkpoint load_checkpoint(const std::string& path);                  // checks the format tag

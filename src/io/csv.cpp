@@ -101,7 +101,9 @@ CsvTable parse_csv(const std::string& text, const std::string& source) {
   return table;
 }
 
-CsvTable read_csv(const std::string& path) { return parse_csv(read_file_bytes(path), path); }
+CsvTable read_csv(const std::string& path) {
+  return parse_csv(read_file_bytes(path), path);
+}
 
 static std::string quote(const std::string& s) {
   if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
@@ -118,12 +120,15 @@ std::string format_csv(const CsvTable& table) {
   };
   emit(table.header);
   for (const auto& r : table.rows) {
-    ISPLAT_CHECK(r.size() == table.header.size(), "format_csv: row has ", r.size(), " fields, header ", table.header.size());
+    ISPLAT_CHECK(r.size() == table.header.size(), "format_csv: row has ", r.size(), " fields, header ",
+                 table.header.size());
     emit(r);
   }
   return out;
 }
 
-void write_csv(const std::string& path, const CsvTable& table) { write_file_atomic(path, format_csv(table)); }
+void write_csv(const std::string& path, const CsvTable& table) {
+  write_file_atomic(path, format_csv(table));
+}
 
 }  // namespace isplat

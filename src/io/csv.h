@@ -11,7 +11,7 @@ class CsvTable {
   std::vector<std::vector<std::string>> rows;
   std::string source;  // file path, for error messages
 
-  int column(const std::string& name) const;  // -1 if absent
+  int column(const std::string& name) const;          // -1 if absent
   int require_column(const std::string& name) const;  // throws Error naming file and column
   const std::string& cell(size_t row, const std::string& name) const;
   double number(size_t row, const std::string& name) const;  // throws Error naming file, line, column

@@ -56,7 +56,8 @@ cv::Mat read_exr_channel(const std::string& path, const std::string& channel) {
       }
     } else if (!channels.findChannel(name.c_str())) {
       std::string names;
-      for (auto it = channels.begin(); it != channels.end(); ++it) names += std::string(names.empty() ? "" : ", ") + it.name();
+      for (auto it = channels.begin(); it != channels.end(); ++it)
+        names += std::string(names.empty() ? "" : ", ") + it.name();
       fail(path, ": no channel '", name, "' (channels: ", names, ")");
     }
     if (!file.isComplete()) fail(path, ": truncated EXR (pixel data incomplete)");

@@ -73,6 +73,8 @@ ExifFocal read_exif_focal(const std::string& b) {
   return out;
 }
 
-double fx_from_35mm(double focal_35mm, int width, int height) { return focal_35mm / 36.0 * std::max(width, height); }
+double fx_from_35mm(double focal_35mm, int width, int height) {
+  return focal_35mm / 36.0 * std::max(width, height);
+}
 
 }  // namespace isplat

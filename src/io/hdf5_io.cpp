@@ -70,8 +70,8 @@ H5Type classify(const std::string& path, const std::string& dataset, hid_t dtype
     if (is_signed && size == 8) return H5Type::Int64;
     if (!is_signed && size == 1) return H5Type::UInt8;
   }
-  static const char* class_names[] = {"integer", "float", "time", "string", "bitfield", "opaque",
-                                      "compound", "reference", "enum", "vlen", "array"};
+  static const char* class_names[] = {"integer",  "float",     "time", "string", "bitfield", "opaque",
+                                      "compound", "reference", "enum", "vlen",   "array"};
   const std::string cname = cls >= 0 && cls < 11 ? class_names[cls] : "unknown";
   fail(path, ": dataset '", dataset, "' has unsupported type (", cname, ", ", size, " bytes", ")");
 }
@@ -114,10 +114,10 @@ Opened read_raw(const std::string& path, const std::string& dataset, std::vector
 
 template <class Out>
 void convert_from(const std::vector<uint8_t>& bytes, H5Type type, std::vector<Out>& out) {
-  const size_t n = bytes.size() / (type == H5Type::Float16 || type == H5Type::Int16 ? 2
-                                   : type == H5Type::UInt8                        ? 1
+  const size_t n = bytes.size() / (type == H5Type::Float16 || type == H5Type::Int16   ? 2
+                                   : type == H5Type::UInt8                            ? 1
                                    : type == H5Type::Float32 || type == H5Type::Int32 ? 4
-                                                                                     : 8);
+                                                                                      : 8);
   out.resize(n);
   auto copy = [&](auto tag) {
     using In = decltype(tag);
@@ -134,16 +134,30 @@ void convert_from(const std::vector<uint8_t>& bytes, H5Type type, std::vector<Ou
       }
       break;
     }
-    case H5Type::Float32: copy(float{}); break;
-    case H5Type::Float64: copy(double{}); break;
-    case H5Type::Int16: copy(int16_t{}); break;
-    case H5Type::Int32: copy(int32_t{}); break;
-    case H5Type::Int64: copy(int64_t{}); break;
-    case H5Type::UInt8: copy(uint8_t{}); break;
+    case H5Type::Float32:
+      copy(float{});
+      break;
+    case H5Type::Float64:
+      copy(double{});
+      break;
+    case H5Type::Int16:
+      copy(int16_t{});
+      break;
+    case H5Type::Int32:
+      copy(int32_t{});
+      break;
+    case H5Type::Int64:
+      copy(int64_t{});
+      break;
+    case H5Type::UInt8:
+      copy(uint8_t{});
+      break;
   }
 }
 
-bool is_float(H5Type t) { return t == H5Type::Float16 || t == H5Type::Float32 || t == H5Type::Float64; }
+bool is_float(H5Type t) {
+  return t == H5Type::Float16 || t == H5Type::Float32 || t == H5Type::Float64;
+}
 
 template <class Out>
 H5Array<Out> read_as(const std::string& path, const std::string& dataset, bool want_float) {
@@ -193,12 +207,24 @@ void write_impl(const std::string& path, const std::vector<int64_t>& shape, cons
       own_type = true;
       break;
     }
-    case H5Type::Float32: store(float{}, H5T_IEEE_F32LE); break;
-    case H5Type::Float64: store(double{}, H5T_IEEE_F64LE); break;
-    case H5Type::Int16: store(int16_t{}, H5T_STD_I16LE); break;
-    case H5Type::Int32: store(int32_t{}, H5T_STD_I32LE); break;
-    case H5Type::Int64: store(int64_t{}, H5T_STD_I64LE); break;
-    case H5Type::UInt8: store(uint8_t{}, H5T_STD_U8LE); break;
+    case H5Type::Float32:
+      store(float{}, H5T_IEEE_F32LE);
+      break;
+    case H5Type::Float64:
+      store(double{}, H5T_IEEE_F64LE);
+      break;
+    case H5Type::Int16:
+      store(int16_t{}, H5T_STD_I16LE);
+      break;
+    case H5Type::Int32:
+      store(int32_t{}, H5T_STD_I32LE);
+      break;
+    case H5Type::Int64:
+      store(int64_t{}, H5T_STD_I64LE);
+      break;
+    case H5Type::UInt8:
+      store(uint8_t{}, H5T_STD_U8LE);
+      break;
   }
   H5Id type_guard(own_type ? file_type : -1, H5Tclose);
   AtomicPath target(path);
@@ -226,13 +252,20 @@ void write_impl(const std::string& path, const std::vector<int64_t>& shape, cons
 
 const char* h5type_name(H5Type t) {
   switch (t) {
-    case H5Type::Float16: return "float16";
-    case H5Type::Float32: return "float32";
-    case H5Type::Float64: return "float64";
-    case H5Type::Int16: return "int16";
-    case H5Type::Int32: return "int32";
-    case H5Type::Int64: return "int64";
-    case H5Type::UInt8: return "uint8";
+    case H5Type::Float16:
+      return "float16";
+    case H5Type::Float32:
+      return "float32";
+    case H5Type::Float64:
+      return "float64";
+    case H5Type::Int16:
+      return "int16";
+    case H5Type::Int32:
+      return "int32";
+    case H5Type::Int64:
+      return "int64";
+    case H5Type::UInt8:
+      return "uint8";
   }
   return "?";
 }

@@ -32,7 +32,8 @@ void check_container(const std::string& path, const std::string& bytes) {
     if (!tail_contains(bytes, "IEND", 64)) fail(path, ": truncated PNG (no IEND chunk at the end)");
     return;
   }
-  if (bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xD8) {
+  if (bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF &&
+      static_cast<unsigned char>(bytes[1]) == 0xD8) {
     if (!tail_contains(bytes, std::string("\xFF\xD9", 2), 64)) fail(path, ": truncated JPEG (no end-of-image marker)");
     return;
   }
@@ -74,17 +75,31 @@ cv::Mat read_image(const std::string& path) {
   cv::Mat img = decode(path, cv::IMREAD_UNCHANGED);
   double scale = 1.0;
   switch (img.depth()) {
-    case CV_8U: scale = 1.0 / 255.0; break;
-    case CV_16U: scale = 1.0 / 65535.0; break;
-    case CV_32F: scale = 1.0; break;
-    default: fail(path, ": unsupported pixel depth (", img.depth(), ")");
+    case CV_8U:
+      scale = 1.0 / 255.0;
+      break;
+    case CV_16U:
+      scale = 1.0 / 65535.0;
+      break;
+    case CV_32F:
+      scale = 1.0;
+      break;
+    default:
+      fail(path, ": unsupported pixel depth (", img.depth(), ")");
   }
   cv::Mat rgb;
   switch (img.channels()) {
-    case 1: cv::cvtColor(img, rgb, cv::COLOR_GRAY2RGB); break;
-    case 3: cv::cvtColor(img, rgb, cv::COLOR_BGR2RGB); break;
-    case 4: cv::cvtColor(img, rgb, cv::COLOR_BGRA2RGB); break;
-    default: fail(path, ": unsupported channel count ", img.channels());
+    case 1:
+      cv::cvtColor(img, rgb, cv::COLOR_GRAY2RGB);
+      break;
+    case 3:
+      cv::cvtColor(img, rgb, cv::COLOR_BGR2RGB);
+      break;
+    case 4:
+      cv::cvtColor(img, rgb, cv::COLOR_BGRA2RGB);
+      break;
+    default:
+      fail(path, ": unsupported channel count ", img.channels());
   }
   cv::Mat out;
   rgb.convertTo(out, CV_32FC3, scale);
@@ -93,7 +108,8 @@ cv::Mat read_image(const std::string& path) {
 
 cv::Mat read_png16(const std::string& path) {
   cv::Mat img = decode(path, cv::IMREAD_UNCHANGED);
-  if (img.type() != CV_16UC1) fail(path, ": expected a single-channel 16-bit PNG, got ", img.channels(), " channel(s) of depth ", img.depth());
+  if (img.type() != CV_16UC1)
+    fail(path, ": expected a single-channel 16-bit PNG, got ", img.channels(), " channel(s) of depth ", img.depth());
   return img;
 }
 

@@ -13,8 +13,8 @@
 namespace isplat {
 namespace {
 
-const char* kProps[] = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
-                        "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+const char* kProps[] = {"x",       "y",       "z",       "nx",      "ny",    "nz",    "f_dc_0", "f_dc_1", "f_dc_2",
+                        "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2",  "rot_3"};
 
 // Property types, resolved once from the header so the per-vertex loop does not compare strings.
 enum class PlyType { F32, F64, U8, I8, I16, U16, I32, U32 };
@@ -45,14 +45,22 @@ double load(const char* p) {
 
 double read_value(const char* p, PlyType t) {
   switch (t) {
-    case PlyType::F32: return load<float>(p);
-    case PlyType::F64: return load<double>(p);
-    case PlyType::U8: return load<uint8_t>(p);
-    case PlyType::I8: return load<int8_t>(p);
-    case PlyType::I16: return load<int16_t>(p);
-    case PlyType::U16: return load<uint16_t>(p);
-    case PlyType::I32: return load<int32_t>(p);
-    case PlyType::U32: return load<uint32_t>(p);
+    case PlyType::F32:
+      return load<float>(p);
+    case PlyType::F64:
+      return load<double>(p);
+    case PlyType::U8:
+      return load<uint8_t>(p);
+    case PlyType::I8:
+      return load<int8_t>(p);
+    case PlyType::I16:
+      return load<int16_t>(p);
+    case PlyType::U16:
+      return load<uint16_t>(p);
+    case PlyType::I32:
+      return load<int32_t>(p);
+    case PlyType::U32:
+      return load<uint32_t>(p);
   }
   return 0;
 }
@@ -66,10 +74,11 @@ void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linea
   auto colors = colors_linear ? linear_to_srgb(g.colors) : g.colors;
   auto quats = g.quats / torch::clamp_min(g.quats.norm(2, 1, true), 1e-12);
   auto opac = torch::clamp(g.opacities, 1e-6, 1 - 1e-6);
-  auto cols = torch::cat({g.means, torch::zeros({N, 3}), (colors - 0.5) / kShC0, torch::log(opac / (1 - opac)).unsqueeze(1),
-                          torch::log(torch::clamp_min(g.scales, 1e-12)), quats},
-                         1)
-                  .contiguous();
+  auto cols =
+      torch::cat({g.means, torch::zeros({N, 3}), (colors - 0.5) / kShC0, torch::log(opac / (1 - opac)).unsqueeze(1),
+                  torch::log(torch::clamp_min(g.scales, 1e-12)), quats},
+                 1)
+          .contiguous();
   ISPLAT_CHECK(torch::isfinite(cols).all().item<bool>(), path, ": Gaussians have non-finite values; not written");
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n"
@@ -103,8 +112,10 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
       int64_t count;
       ls >> name >> count;
       in_vertex = name == "vertex";
-      if (in_vertex) n = count;
-      else if (count > 0) fail(path, ": unsupported element '", name, "' before or after the vertices");
+      if (in_vertex)
+        n = count;
+      else if (count > 0)
+        fail(path, ": unsupported element '", name, "' before or after the vertices");
     } else if (word == "property" && in_vertex) {
       std::string type, name;
       ls >> type;
@@ -115,7 +126,8 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
       props.emplace_back(name, t);
     }
   }
-  if (format != "binary_little_endian") fail(path, ": format '", format, "' is not supported (binary_little_endian only)");
+  if (format != "binary_little_endian")
+    fail(path, ": format '", format, "' is not supported (binary_little_endian only)");
   if (n < 0) fail(path, ": no vertex element");
   std::vector<int> col(17, -1);
   std::vector<size_t> offset(props.size());
@@ -136,7 +148,8 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   for (int64_t v = 0; v < n; ++v) {
     const char* rec = bytes.data() + data + v * stride;
     for (int k = 0; k < 17; ++k)
-      o[v * 17 + k] = col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second->type));
+      o[v * 17 + k] =
+          col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second->type));
   }
   Gaussians g;
   g.means = out.narrow(1, 0, 3).contiguous();

@@ -14,8 +14,8 @@ torch::Tensor image_to_tensor(const cv::Mat& rgb) {
 }
 
 cv::Mat tensor_to_image(const torch::Tensor& chw) {
-  ISPLAT_CHECK(chw.dim() == 3 && (chw.size(0) == 3 || chw.size(0) == 1), "tensor_to_image expects [3,H,W] or [1,H,W], got ",
-               chw.sizes());
+  ISPLAT_CHECK(chw.dim() == 3 && (chw.size(0) == 3 || chw.size(0) == 1),
+               "tensor_to_image expects [3,H,W] or [1,H,W], got ", chw.sizes());
   auto hwc = chw.detach().to(torch::kCPU, torch::kFloat32).permute({1, 2, 0}).contiguous();
   cv::Mat out(static_cast<int>(hwc.size(0)), static_cast<int>(hwc.size(1)), chw.size(0) == 3 ? CV_32FC3 : CV_32FC1);
   std::memcpy(out.data, hwc.data_ptr<float>(), hwc.numel() * sizeof(float));

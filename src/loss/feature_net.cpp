@@ -47,7 +47,8 @@ FeatureNet::FeatureNet(const std::string& arch, std::vector<int> taps, const std
         fire(384, 48, 192, 192), fire(384, 64, 256, 256), fire(512, 64, 256, 256);
   } else if (arch == "alexnet") {
     conv(3, 64, 11, 4, 2), relu(), pool(3, 2, false), conv(64, 192, 5, 1, 2), relu(), pool(3, 2, false),
-        conv(192, 384, 3, 1, 1), relu(), conv(384, 256, 3, 1, 1), relu(), conv(256, 256, 3, 1, 1), relu(), pool(3, 2, false);
+        conv(192, 384, 3, 1, 1), relu(), conv(384, 256, 3, 1, 1), relu(), conv(256, 256, 3, 1, 1), relu(),
+        pool(3, 2, false);
   } else if (arch == "vgg16") {
     vgg({64, 64, 0, 128, 128, 0, 256, 256, 256, 0, 512, 512, 512, 0, 512, 512, 512, 0});
   } else if (arch == "vgg19") {
@@ -106,15 +107,22 @@ std::vector<torch::Tensor> FeatureNet::forward(const torch::Tensor& input) const
   auto x = input;
   const int last = taps_.empty() ? -1 : *std::max_element(taps_.begin(), taps_.end());
   auto conv = [&](const torch::Tensor& t, const std::string& n, int64_t stride, int64_t pad) {
-    return F::conv2d(t, params_.at(n + ".weight"), F::Conv2dFuncOptions().bias(params_.at(n + ".bias")).stride(stride).padding(pad));
+    return F::conv2d(t, params_.at(n + ".weight"),
+                     F::Conv2dFuncOptions().bias(params_.at(n + ".bias")).stride(stride).padding(pad));
   };
   for (int i = 0; i <= last; ++i) {
     const Layer& l = layers_[i];
     const std::string n = std::to_string(i);
     switch (l.kind) {
-      case Layer::Conv: x = conv(x, n, l.stride, l.pad); break;
-      case Layer::Relu: x = torch::relu(x); break;
-      case Layer::MaxPool: x = F::max_pool2d(x, F::MaxPool2dFuncOptions(l.kernel).stride(l.stride).ceil_mode(l.ceil)); break;
+      case Layer::Conv:
+        x = conv(x, n, l.stride, l.pad);
+        break;
+      case Layer::Relu:
+        x = torch::relu(x);
+        break;
+      case Layer::MaxPool:
+        x = F::max_pool2d(x, F::MaxPool2dFuncOptions(l.kernel).stride(l.stride).ceil_mode(l.ceil));
+        break;
       case Layer::Fire: {
         auto s = torch::relu(conv(x, n + ".squeeze", 1, 0));
         x = torch::cat({torch::relu(conv(s, n + ".expand1x1", 1, 0)), torch::relu(conv(s, n + ".expand3x3", 1, 1))}, 1);
@@ -145,13 +153,15 @@ std::vector<int> FeatureNet::lpips_taps(const std::string& arch) {
 }
 
 std::vector<int> FeatureNet::perceptual_taps(const std::string& arch) {
-  if (arch == "vgg16") return {3, 8, 15, 22};    // relu1_2, relu2_2, relu3_3, relu4_3
-  if (arch == "vgg19") return {3, 8, 17, 26};    // relu1_2, relu2_2, relu3_4, relu4_4
+  if (arch == "vgg16") return {3, 8, 15, 22};  // relu1_2, relu2_2, relu3_3, relu4_3
+  if (arch == "vgg19") return {3, 8, 17, 26};  // relu1_2, relu2_2, relu3_4, relu4_4
   if (arch == "squeezenet1_1") return {1, 4, 7, 9, 12};
   if (arch == "alexnet") return {1, 4, 7, 9, 11};
   fail("perceptual loss: unknown network '", arch, "'");
 }
 
-torch::Tensor normalize_channels(const torch::Tensor& f) { return f / (torch::sqrt((f * f).sum(1, true)) + 1e-10); }
+torch::Tensor normalize_channels(const torch::Tensor& f) {
+  return f / (torch::sqrt((f * f).sum(1, true)) + 1e-10);
+}
 
 }  // namespace isplat

@@ -25,7 +25,8 @@ torch::Tensor knn_2d(const torch::Tensor& points, int64_t k) {
     x0 = std::min(x0, xy[2 * i]), x1 = std::max(x1, xy[2 * i]);
     y0 = std::min(y0, xy[2 * i + 1]), y1 = std::max(y1, xy[2 * i + 1]);
   }
-  ISPLAT_CHECK(std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1), "knn_2d: non-finite points");
+  ISPLAT_CHECK(std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1),
+               "knn_2d: non-finite points");
   // About 2 points per cell on average.
   const double area = std::max(1e-12, static_cast<double>(x1 - x0) * (y1 - y0));
   const double cell = std::max(1e-6, std::sqrt(2.0 * area / N));

@@ -18,15 +18,17 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("reg", reg, "weight of L_reg = scale * L_scale + smooth * L_smooth (paper: 0.1)", Range::at_least(0));
   v.field("scale", scale, "weight of the scale-range hinge inside L_reg (paper: 0.1)", Range::at_least(0));
   v.field("smooth", smooth, "weight of neighbour smoothness inside L_reg (paper: 0.1)", Range::at_least(0));
-  v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)", Range::at_least(0));
+  v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)",
+          Range::at_least(0));
   v.field("scale_bounds", scale_bounds, "hinge bounds [lo, hi] on log(scale / depth) (paper: [-8, -3])");
   v.field("knn", knn, "neighbours per support for smoothness (paper: 8)", Range::at_least(1));
   v.field("perceptual_net", perceptual_net, "frozen perceptual network", {"squeezenet1_1", "vgg16", "vgg19"});
   v.field("perceptual_weights", perceptual_weights,
           "safetensors of the perceptual network under torchvision names (e.g. ../shared/weights/"
           "squeezenet1_1_features.safetensors); missing = the term is off");
-  v.field("allow_random_perceptual", allow_random_perceptual, "run the perceptual term on a random network "
-                                                              "(only for experiments; never the default)");
+  v.field("allow_random_perceptual", allow_random_perceptual,
+          "run the perceptual term on a random network "
+          "(only for experiments; never the default)");
 }
 
 PerceptualLoss::PerceptualLoss(const LossOptions& o) : gamma_(o.gram_gamma) {
@@ -70,7 +72,8 @@ torch::Tensor PerceptualLoss::operator()(const torch::Tensor& x, const torch::Te
   for (size_t l = 0; l < fx.size(); ++l) {
     const auto a = normalize_channels(fx[l]), b = normalize_channels(fy[l]);
     total = total + torch::mse_loss(a, b) * static_cast<double>(a.size(1));  // per-pixel squared distance
-    if (gamma_ > 0) total = total + gamma_ * torch::mse_loss(gram_matrix(a), gram_matrix(b)) * static_cast<double>(a.size(1));
+    if (gamma_ > 0)
+      total = total + gamma_ * torch::mse_loss(gram_matrix(a), gram_matrix(b)) * static_cast<double>(a.size(1));
   }
   return total / static_cast<double>(fx.size());
 }

@@ -16,17 +16,17 @@ namespace isplat {
 class ConfigVisitor;
 
 struct LossOptions {
-  double rgb = 1.0;          // L1 weight
-  double perceptual = 1.0;   // perceptual (+ Gram) weight
-  double reg = 0.1;          // weight of L_reg = scale * L_scale + smooth * L_smooth
+  double rgb = 1.0;         // L1 weight
+  double perceptual = 1.0;  // perceptual (+ Gram) weight
+  double reg = 0.1;         // weight of L_reg = scale * L_scale + smooth * L_smooth
   double scale = 0.1;
   double smooth = 0.1;
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;
-  std::string perceptual_net = "squeezenet1_1";     // squeezenet1_1 | vgg16 | vgg19
-  std::string perceptual_weights;                   // safetensors under torchvision names
-  bool allow_random_perceptual = false;             // explicit opt-in to a random network
+  std::string perceptual_net = "squeezenet1_1";  // squeezenet1_1 | vgg16 | vgg19
+  std::string perceptual_weights;                // safetensors under torchvision names
+  bool allow_random_perceptual = false;          // explicit opt-in to a random network
   void visit(ConfigVisitor& v);
 };
 
@@ -51,6 +51,7 @@ torch::Tensor gram_matrix(const torch::Tensor& f);  // [B,C,H,W] -> [B,C,C] / (C
 // Hinge on log(scale / depth) outside [lo, hi]; scales [N,3], depth [N] (camera-space z of the means).
 torch::Tensor scale_range_loss(const torch::Tensor& scales, const torch::Tensor& depth, double lo, double hi);
 // Mean over i and its k neighbours of |log s_i - log s_j|_1 + |alpha_i - alpha_j|; neighbours [N,k].
-torch::Tensor smoothness_loss(const torch::Tensor& scales, const torch::Tensor& opacities, const torch::Tensor& neighbours);
+torch::Tensor smoothness_loss(const torch::Tensor& scales, const torch::Tensor& opacities,
+                              const torch::Tensor& neighbours);
 
 }  // namespace isplat

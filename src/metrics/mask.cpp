@@ -1,8 +1,8 @@
 // Forward splatting of source pixels into the target, then a morphological closing.
 #include "metrics/mask.h"
 
-#include <opencv2/imgproc.hpp>
 #include <torch/torch.h>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 

@@ -129,8 +129,9 @@ double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const t
   for (size_t l = 0; l < fa.size(); ++l) {
     auto d = F::conv2d((normalize_channels(fa[l]) - normalize_channels(fb[l])).pow(2), heads_[l]);  // [1,1,h,w]
     if (mask.defined()) {
-      auto m = F::interpolate(mask.to(torch::kFloat32).view({1, 1, mask.size(0), mask.size(1)}),
-                              F::InterpolateFuncOptions().size(std::vector<int64_t>{d.size(2), d.size(3)}).mode(torch::kArea));
+      auto m = F::interpolate(
+          mask.to(torch::kFloat32).view({1, 1, mask.size(0), mask.size(1)}),
+          F::InterpolateFuncOptions().size(std::vector<int64_t>{d.size(2), d.size(3)}).mode(torch::kArea));
       const double msum = m.sum().item<double>();
       if (msum <= 0) return std::numeric_limits<double>::quiet_NaN();
       total += (d * m).sum().item<double>() / msum;
@@ -148,7 +149,8 @@ std::unique_ptr<Lpips> Lpips::from_folder(const std::string& net, const std::str
     why = cat("LPIPS: unknown network '", net, "' ", kLpipsNets);
     return nullptr;
   }
-  const fs::path backbone = fs::path(folder) / (arch + "_features.safetensors"), heads = fs::path(folder) / ("lpips_v0.1_" + net + "_lin.safetensors");
+  const fs::path backbone = fs::path(folder) / (arch + "_features.safetensors"),
+                 heads = fs::path(folder) / ("lpips_v0.1_" + net + "_lin.safetensors");
   if (folder.empty() || !fs::exists(backbone) || !fs::exists(heads)) {
     why = cat("LPIPS-", net, " needs ", backbone.string(), " and ", heads.string());
     return nullptr;

@@ -25,7 +25,8 @@ torch::Tensor ssim_map(const torch::Tensor& a, const torch::Tensor& b);
 // mean (over the mask, resized to each layer, when given), summed over layers.
 class Lpips {
  public:
-  // net: squeeze | alex | vgg. `backbone`: torchvision `features` safetensors; `heads`: lpips_v0.1_<net>_lin.safetensors.
+  // net: squeeze | alex | vgg. `backbone`: torchvision `features` safetensors; `heads`:
+  // lpips_v0.1_<net>_lin.safetensors.
   Lpips(const std::string& net, const std::string& backbone, const std::string& heads);
   double operator()(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor& mask = torch::Tensor()) const;
   const std::string& net() const { return net_; }

@@ -60,9 +60,11 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
   return p;
 }
 
-torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width, int64_t height) {
+torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width,
+                                      int64_t height) {
   ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
-  return decoder ? decoder->forward(uv, width, height, f) : sample_features(dense->forward(f, width, height), uv, width, height);
+  return decoder ? decoder->forward(uv, width, height, f)
+                 : sample_features(dense->forward(f, width, height), uv, width, height);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

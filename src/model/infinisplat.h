@@ -31,10 +31,10 @@ struct ModelOptions {
 };
 
 struct Prediction {
-  Gaussians gaussians;    // world frame, metres
+  Gaussians gaussians;  // world frame, metres
   Supports supports;
   BaseGaussians base;
-  torch::Tensor delta;    // [N,14]
+  torch::Tensor delta;                       // [N,14]
   std::map<std::string, double> timings_ms;  // sampler, encoder, decoder, composer
 };
 

@@ -38,7 +38,8 @@ std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string&
   auto pipeline = std::make_unique<Pipeline>(options, &ck.tensors);
   load_module(ck, *pipeline->model(), path);
   pipeline->model()->eval();
-  log_info("model: ", path, " (step ", ck.step(), ", variant ", options.variant, ", prior: ", pipeline->prior().describe(), ")");
+  log_info("model: ", path, " (step ", ck.step(), ", variant ", options.variant,
+           ", prior: ", pipeline->prior().describe(), ")");
   return pipeline;
 }
 

@@ -15,7 +15,8 @@ ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::stri
                                            const std::vector<std::string>& overrides = {});
 
 // A pipeline (prior + model) with the checkpoint's weights, in eval mode.
-std::unique_ptr<Pipeline> load_pipeline(const std::string& checkpoint_path, const std::vector<std::string>& overrides = {});
+std::unique_ptr<Pipeline> load_pipeline(const std::string& checkpoint_path,
+                                        const std::vector<std::string>& overrides = {});
 // The same from a checkpoint already in memory; `path` names it in messages.
 std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string& path,
                                         const std::vector<std::string>& overrides = {});

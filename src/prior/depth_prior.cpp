@@ -28,20 +28,23 @@ void SparsePriorOptions::visit(ConfigVisitor& v) {
 }
 
 void PriorOptions::visit(ConfigVisitor& v) {
-  v.field("type", type, "depth prior: the tuple's own depth (oracle), sparse prompts (LiDAR variant), a TorchScript "
-                        "model, or the project's learned net (RGB-only default)",
+  v.field("type", type,
+          "depth prior: the tuple's own depth (oracle), sparse prompts (LiDAR variant), a TorchScript "
+          "model, or the project's learned net (RGB-only default)",
           {"dataset", "sparse", "torchscript", "learned"});
   v.field("hfov_deg", hfov_deg, "horizontal field of view assumed when an image comes without intrinsics",
           Range::between(1, 179));
   v.field("torchscript", torchscript, "traced depth model: input [1,3,H,W] in [0,1], output metric depth [1,1,H,W]");
-  v.field("learned_weights", learned_weights, "safetensors of the learned depth net (train it with task: depth); "
-                                              "empty = untrained, which the log says");
+  v.field("learned_weights", learned_weights,
+          "safetensors of the learned depth net (train it with task: depth); "
+          "empty = untrained, which the log says");
   v.field("learned_width", learned_width, "channel width of the learned depth net", Range::at_least(4));
   v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
 }
 
 torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg) {
-  const Intrinsics k = Intrinsics::from_hfov(hfov_deg * M_PI / 180.0, static_cast<int>(width), static_cast<int>(height));
+  const Intrinsics k =
+      Intrinsics::from_hfov(hfov_deg * M_PI / 180.0, static_cast<int>(width), static_cast<int>(height));
   return make_K(k.fx, k.fy, k.cx, k.cy, torch::kFloat32);
 }
 
@@ -53,7 +56,8 @@ torch::Tensor intrinsics_for(const PriorInput& in, double hfov) {
 
 void check_image(const PriorInput& in) {
   ISPLAT_CHECK(in.image.defined() && in.image.dim() == 3 && in.image.size(0) == 3,
-               "depth prior: image must be [3, H, W], got ", in.image.defined() ? in.image.sizes() : torch::IntArrayRef{});
+               "depth prior: image must be [3, H, W], got ",
+               in.image.defined() ? in.image.sizes() : torch::IntArrayRef{});
 }
 
 PriorOutput finish(torch::Tensor depth, torch::Tensor K) {
@@ -67,8 +71,9 @@ class DatasetPrior final : public DepthPrior {
   explicit DatasetPrior(const PriorOptions& o) : o_(o) {}
   PriorOutput predict(const PriorInput& in) override {
     check_image(in);
-    ISPLAT_CHECK(in.depth.defined(), "prior.type = dataset needs the frame's depth, and this input has none; use "
-                                     "prior.type = learned | torchscript | sparse");
+    ISPLAT_CHECK(in.depth.defined(),
+                 "prior.type = dataset needs the frame's depth, and this input has none; use "
+                 "prior.type = learned | torchscript | sparse");
     auto d = in.depth.to(torch::kFloat32);
     if (in.valid.defined()) d = torch::where(in.valid > 0, d, torch::zeros_like(d));
     return finish(d, intrinsics_for(in, o_.hfov_deg));
@@ -87,8 +92,9 @@ class LearnedPrior final : public DepthPrior {
       load_named_tensors(*net_, *embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
       source_ = "weights embedded in the checkpoint";
     } else if (o.learned_weights.empty()) {
-      log_warn("depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
-               "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
+      log_warn(
+          "depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
+          "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
     } else {
       load_named_tensors(*net_, read_safetensors(o.learned_weights).tensors, "",
                          o.learned_weights + ": does not fit the learned depth net (prior.learned_width must match)");
@@ -138,8 +144,10 @@ class TorchScriptPrior final : public DepthPrior {
     ISPLAT_CHECK(out.isTensor(), o_.torchscript, ": the depth model must return one tensor (metric depth [1,1,H,W])");
     auto d = out.toTensor();
     // Contract: [1,1,H,W]; [1,H,W] and [H,W] are accepted as the same thing.
-    if (d.dim() == 4 && d.size(0) == 1 && d.size(1) == 1) d = d[0][0];
-    else if (d.dim() == 3 && d.size(0) == 1) d = d[0];
+    if (d.dim() == 4 && d.size(0) == 1 && d.size(1) == 1)
+      d = d[0][0];
+    else if (d.dim() == 3 && d.size(0) == 1)
+      d = d[0];
     if (d.dim() != 2 || d.size(0) != H || d.size(1) != W)
       fail(o_.torchscript, ": depth model returned shape ", out.toTensor().sizes(), ", expected [1, 1, ", H, ", ", W,
            "] (metric depth at the input size)");
@@ -167,7 +175,8 @@ class SparsePrior final : public DepthPrior {
     torch::Tensor prompts = in.prompts;
     if (!prompts.defined()) {
       ISPLAT_CHECK(in.depth.defined(), "prior.type = sparse needs prompts or the frame's depth to draw them from");
-      prompts = draw_prompts(in.depth, in.valid.defined() ? in.valid : (in.depth > 0), o_.sparse.prompts, o_.sparse.noise, in.seed);
+      prompts = draw_prompts(in.depth, in.valid.defined() ? in.valid : (in.depth > 0), o_.sparse.prompts,
+                             o_.sparse.noise, in.seed);
     }
     ISPLAT_CHECK(prompts.dim() == 2 && prompts.size(1) == 3 && prompts.size(0) >= 3,
                  "sparse prior: prompts must be [P>=3, 3] (u, v, z), got ", prompts.sizes());
@@ -188,7 +197,8 @@ class SparsePrior final : public DepthPrior {
 
 }  // namespace
 
-torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise, uint64_t seed) {
+torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,
+                           uint64_t seed) {
   auto d = depth.to(torch::kFloat32).contiguous();
   auto ok = usable_depth(d, valid).contiguous();
   auto idx = torch::nonzero(ok.flatten()).squeeze(1);
@@ -253,7 +263,8 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   float* al = aligned.data_ptr<float>();
   for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
   std::vector<double> logs(P);
-  for (int64_t i = 0; i < P; ++i) logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1])));
+  for (int64_t i = 0; i < P; ++i)
+    logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1])));
   const int64_t cell = 8, gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
   const double sigma = bandwidth * std::sqrt(double(H) * H + double(W) * W), inv2s2 = 1.0 / (2 * sigma * sigma);
   auto field = torch::empty({1, 1, gh, gw});
@@ -277,7 +288,8 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   return aligned * torch::exp(up);
 }
 
-std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded) {
+std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o,
+                                             const std::map<std::string, torch::Tensor>* embedded) {
   if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);
   if (o.type == "learned") return std::make_unique<LearnedPrior>(o, embedded);
   if (o.type == "torchscript") return std::make_unique<TorchScriptPrior>(o);

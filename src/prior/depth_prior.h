@@ -16,19 +16,19 @@ namespace isplat {
 class ConfigVisitor;
 
 struct SparsePriorOptions {
-  int64_t prompts = 1500;      // paper: 1,500 LiDAR-like prompts
-  double noise = 0.0;          // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
-  std::string mono = "learned";// monocular prior aligned to the prompts: learned | torchscript | none
-  double bandwidth = 0.08;     // residual scale field: Gaussian kernel width as a fraction of the image diagonal
+  int64_t prompts = 1500;        // paper: 1,500 LiDAR-like prompts
+  double noise = 0.0;            // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
+  std::string mono = "learned";  // monocular prior aligned to the prompts: learned | torchscript | none
+  double bandwidth = 0.08;       // residual scale field: Gaussian kernel width as a fraction of the image diagonal
   void visit(ConfigVisitor& v);
 };
 
 struct PriorOptions {
-  std::string type = "dataset";     // dataset | sparse | torchscript | learned
-  double hfov_deg = 60.0;           // field of view assumed when no intrinsics are given
-  std::string torchscript;          // path of a traced model: input [1,3,H,W] in [0,1] -> metric depth [1,1,H,W]
-  std::string learned_weights;      // safetensors of the learned depth net (from `task: depth` training)
-  int64_t learned_width = 32;       // channel width of the learned depth net
+  std::string type = "dataset";  // dataset | sparse | torchscript | learned
+  double hfov_deg = 60.0;        // field of view assumed when no intrinsics are given
+  std::string torchscript;       // path of a traced model: input [1,3,H,W] in [0,1] -> metric depth [1,1,H,W]
+  std::string learned_weights;   // safetensors of the learned depth net (from `task: depth` training)
+  int64_t learned_width = 32;    // channel width of the learned depth net
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
 };
@@ -70,6 +70,7 @@ torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);
 // scale/shift in inverse depth, then a smooth residual scale field.
 torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts, double bandwidth);
 // Draws `count` prompts (u, v, z) from valid depth, with multiplicative noise sigma (deterministic in seed).
-torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise, uint64_t seed);
+torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,
+                           uint64_t seed);
 
 }  // namespace isplat

@@ -40,6 +40,8 @@ torch::Tensor LearnedDepthNetImpl::forward_log(const torch::Tensor& image) {
   return head->forward(x);
 }
 
-torch::Tensor LearnedDepthNetImpl::forward(const torch::Tensor& image) { return torch::exp(forward_log(image)); }
+torch::Tensor LearnedDepthNetImpl::forward(const torch::Tensor& image) {
+  return torch::exp(forward_log(image));
+}
 
 }  // namespace isplat

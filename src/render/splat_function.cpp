@@ -32,7 +32,8 @@ void check_no_nonfinite(int64_t bad, const char* name) {
 
 }  // namespace
 
-CameraParams camera_params(const torch::Tensor& K_in, const torch::Tensor& T_in, int64_t width, int64_t height, bool validate) {
+CameraParams camera_params(const torch::Tensor& K_in, const torch::Tensor& T_in, int64_t width, int64_t height,
+                           bool validate) {
   const auto K = K_in.detach().to(torch::kFloat64).contiguous();
   const auto T = T_in.detach().to(torch::kFloat64).contiguous();
   const double* k = K.data_ptr<double>();

@@ -16,12 +16,14 @@
 namespace isplat {
 
 void SamplerOptions::visit(ConfigVisitor& v) {
-  v.field("mode", mode, "support placement: area-weighted on the depth surface (paper), one per pixel (ablation), "
-                        "or the release's gradient-priority vertices + area-weighted faces",
+  v.field("mode", mode,
+          "support placement: area-weighted on the depth surface (paper), one per pixel (ablation), "
+          "or the release's gradient-priority vertices + area-weighted faces",
           {"area", "pixel", "vertex_face"});
   v.field("budget_mode", budget_mode, "fixed count, or adaptive: per image pixel, or per steradian of valid surface",
           {"fixed", "per_pixel", "solid_angle"});
-  v.field("budget", budget, "number of supports when budget_mode = fixed (paper: 1.5M at 1536x1024)", Range::at_least(1));
+  v.field("budget", budget, "number of supports when budget_mode = fixed (paper: 1.5M at 1536x1024)",
+          Range::at_least(1));
   v.field("density", density, "supports per pixel (per_pixel) or per steradian (solid_angle)", Range::above(0));
   v.field("min_budget", min_budget, "lower bound for adaptive budgets", Range::at_least(1));
   v.field("max_budget", max_budget, "upper bound for adaptive budgets", Range::at_least(1));
@@ -44,20 +46,29 @@ struct Grid {
   double fx, fy, cx, cy, skew;
 };
 
-Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K, const torch::Tensor& image,
-               torch::Tensor& d_keep, torch::Tensor& v_keep, torch::Tensor& i_keep) {
+Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
+               const torch::Tensor& image, torch::Tensor& d_keep, torch::Tensor& v_keep, torch::Tensor& i_keep) {
   ISPLAT_CHECK(depth.dim() == 2, "sampler: depth must be [H, W], got ", depth.sizes());
   ISPLAT_CHECK(valid.sizes() == depth.sizes(), "sampler: valid ", valid.sizes(), " differs from depth ", depth.sizes());
-  ISPLAT_CHECK(image.dim() == 3 && image.size(0) == 3 && image.size(1) == depth.size(0) && image.size(2) == depth.size(1),
-               "sampler: image must be [3, H, W] matching depth ", depth.sizes(), ", got ", image.sizes());
+  ISPLAT_CHECK(
+      image.dim() == 3 && image.size(0) == 3 && image.size(1) == depth.size(0) && image.size(2) == depth.size(1),
+      "sampler: image must be [3, H, W] matching depth ", depth.sizes(), ", got ", image.sizes());
   ISPLAT_CHECK(K.sizes() == torch::IntArrayRef({3, 3}), "sampler: K must be [3, 3], got ", K.sizes());
   d_keep = depth.detach().to(torch::kFloat32).contiguous();
   v_keep = usable_depth(d_keep, valid.detach()).to(torch::kFloat32).contiguous();
   i_keep = image.detach().to(torch::kFloat32).contiguous();
   auto Kd = K.detach().to(torch::kFloat64).contiguous();
   const double* k = Kd.data_ptr<double>();
-  return {d_keep.data_ptr<float>(), v_keep.data_ptr<float>(), i_keep.data_ptr<float>(), depth.size(0), depth.size(1),
-          k[0], k[4], k[2], k[5], k[1]};
+  return {d_keep.data_ptr<float>(),
+          v_keep.data_ptr<float>(),
+          i_keep.data_ptr<float>(),
+          depth.size(0),
+          depth.size(1),
+          k[0],
+          k[4],
+          k[2],
+          k[5],
+          k[1]};
 }
 
 inline void backproject(const Grid& g, double u, double v, double z, double* X) {
@@ -91,7 +102,8 @@ double triangle_area(const Grid& g, int64_t i, int64_t j, int t) {
   if (zmax / zmin >= discontinuity_threshold((z[0] + z[1] + z[2]) / 3.0)) return 0.0;
   double e1[3], e2[3];
   for (int k = 0; k < 3; ++k) e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
-  const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+  const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+               cz = e1[0] * e2[1] - e1[1] * e2[0];
   return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
 }
 
@@ -103,7 +115,9 @@ inline uint64_t mix(uint64_t x) {
   x *= 0xc4ceb9fe1a85ec53ull;
   return x ^ (x >> 33);
 }
-inline double unit(uint64_t x) { return static_cast<double>(mix(x) >> 11) * (1.0 / 9007199254740992.0); }
+inline double unit(uint64_t x) {
+  return static_cast<double>(mix(x) >> 11) * (1.0 / 9007199254740992.0);
+}
 
 struct Output {
   float *uv, *depth, *color, *area;
@@ -153,8 +167,9 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
     row_sum[i] = s;
   });
   const double total = row_offsets(row_sum, 0.0)[Hq];
-  ISPLAT_CHECK(total > 0, "sampler: the depth map has no valid triangle (all depth is invalid, NaN/inf/<=0, or broken "
-                          "by discontinuities)");
+  ISPLAT_CHECK(total > 0,
+               "sampler: the depth map has no valid triangle (all depth is invalid, NaN/inf/<=0, or broken "
+               "by discontinuities)");
   if (n == 0) return total;
   // Systematic (stratified) allocation over the cumulative area, in exact integer arithmetic so that
   // row boundaries agree and rejected (zero-area) triangles can never receive a support:
@@ -219,7 +234,8 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
           if (quad_ok) {
             z = bilinear_at(g.depth, g.H, g.W, u, v);
           } else {
-            const float z0 = g.depth[r[0] * g.W + c[0]], z1 = g.depth[r[1] * g.W + c[1]], z2 = g.depth[r[2] * g.W + c[2]];
+            const float z0 = g.depth[r[0] * g.W + c[0]], z1 = g.depth[r[1] * g.W + c[1]],
+                        z2 = g.depth[r[2] * g.W + c[2]];
             z = static_cast<float>(z0 + b1 * (z1 - z0) + b2 * (z2 - z0));
           }
           write_support(g, o, k, u, v, z, rep);
@@ -264,7 +280,8 @@ void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int6
 
 }  // namespace
 
-int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K) {
+int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid,
+                       const torch::Tensor& K) {
   if (o.budget_mode == "fixed") return o.budget;
   int64_t n = 0;
   if (o.budget_mode == "per_pixel") {
@@ -306,7 +323,8 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     sample_faces(g, n, seed, pointers(s), 0);
     return s;
   }
-  ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode, "' (area | pixel | vertex_face)");
+  ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,
+               "' (area | pixel | vertex_face)");
   // Vertices: valid pixel centres with the strongest image gradients (the release's priority).
   std::vector<float> grad(static_cast<size_t>(g.H * g.W), -1.0f);
   at::parallel_for(0, g.H, 16, [&](int64_t b, int64_t e) {

@@ -16,7 +16,7 @@ struct SamplerOptions {
   int64_t budget = 100000;            // supports, for budget_mode "fixed"
   double density = 1.0;               // supports per image pixel (per_pixel) or per steradian (solid_angle)
   int64_t min_budget = 1000, max_budget = 4000000;
-  double vertex_fraction = 0.65;      // vertex_face: share of the budget spent on gradient-priority vertices
+  double vertex_fraction = 0.65;  // vertex_face: share of the budget spent on gradient-priority vertices
   void visit(ConfigVisitor& v);
 };
 
