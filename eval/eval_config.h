@@ -23,7 +23,7 @@ struct MethodOptions {
 struct ScoringOptions {
   std::string out = "out/eval";
   std::vector<std::string> lpips = {"squeeze", "alex", "vgg"};
-  std::string weights_dir = "../shared/weights";  // LPIPS backbones + heads
+  std::string weights_dir = "weights";  // LPIPS backbones + heads (shipped in weights/)
   int64_t mask_radius = 2;
   int64_t examples = 4;     // example panels saved per dataset and method
   int64_t max_per_bin = 0;  // score only the first N pairs of each bin (0 = all)

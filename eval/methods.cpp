@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "decoder/composer.h"
+#include "geometry/color.h"
 #include "model/model_io.h"
 #include "render/render.h"
 #include "sampler/base_gaussians.h"
@@ -44,6 +45,10 @@ class ModelMethod final : public Method {
     return out;
   }
   std::string describe() const override { return "checkpoint " + options_.checkpoint; }
+  bool needs_source_depth(bool have_prompts) const override {
+    const std::string& type = pipeline_->model()->options.prior.type;
+    return type == "dataset" || (type == "sparse" && !have_prompts);
+  }
 
  private:
   MethodOptions options_;
@@ -74,6 +79,7 @@ class LiftMethod final : public Method {
     return out;
   }
   std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }
+  bool needs_source_depth(bool) const override { return true; }
 
  private:
   RenderOptions render_;

@@ -25,6 +25,8 @@ class Method {
   virtual MethodOutput predict(const ViewTensors& source, const Camera& target, uint64_t seed,
                                const torch::Tensor& prompts) = 0;
   virtual std::string describe() const = 0;
+  // True when predict() needs the source view's depth (given `prompts`, or drawing them from the depth).
+  virtual bool needs_source_depth(bool have_prompts) const { return false; }
 };
 
 std::unique_ptr<Method> make_method(const MethodOptions& options, const RenderOptions& render);

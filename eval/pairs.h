@@ -2,11 +2,13 @@
 // views, filtered by frustum overlap and rotation, binned by baseline, drawn under a fixed seed with a
 // per-scene cap, and written to a manifest that every method is scored on.
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "data/colmap.h"
 #include "data/sequence.h"
 
 namespace isplat {
@@ -21,6 +23,9 @@ struct ProtocolOptions {
   int64_t pairs_per_bin = 128;
   int64_t per_scene_cap = 32;  // at most this many pairs per scene in each bin
   int64_t seed = 0;
+  // Overlap depth for frames without depth and without usable COLMAP points3D: metres, or 0 = from the
+  // cameras (the median depth at which neighbouring optical axes converge).
+  double fallback_depth = 0.0;
   void visit(ConfigVisitor& v);
 };
 
@@ -31,6 +36,8 @@ struct Pair {
   std::string source_name, target_name;
   double baseline = 0, overlap = 0, rotation_deg = 0;
   int bin = 0;
+  std::string overlap_depth =
+      "dataset";  // what the overlap test used: dataset | points3d | scene-points3d | fixed | camera-axes
 };
 
 struct Manifest {
@@ -39,15 +46,43 @@ struct Manifest {
   std::vector<Pair> pairs;
   std::vector<int64_t> bin_counts;      // filled per bin
   std::vector<int64_t> bin_candidates;  // candidates available per bin (after filters)
+  // Why candidate pairs were dropped: "rotation", "overlap", "outside bins", "per-scene cap", and
+  // "source without depth" (frames skipped).
+  std::map<std::string, int64_t> rejected;
+  std::map<std::string, int64_t> overlap_depth;  // source frames per overlap-depth kind
+  // One sentence on why `bin` has fewer pairs than requested, naming the dominant cause.
+  std::string shortfall_reason(int bin) const;
   nlohmann::ordered_json to_json() const;
   static Manifest from_json(const nlohmann::json& j, const std::string& source);
   std::string bin_label(int b) const;  // "[0.5,1)" or "[2,inf)"
 };
 
+// Depth for the frustum-overlap test of a source frame. Frames with depth use it; frames without use,
+// in order: the COLMAP points3D the view observes (a coarse map of their depths, empty cells at the view's
+// median point depth), the scene's median point depth, protocol.fallback_depth, or the depth at which
+// neighbouring optical axes converge. `kind` names the one used.
+struct OverlapDepth {
+  DepthMap map;
+  std::string kind;
+};
+class OverlapDepthSource {
+ public:
+  // `model`: the sequence's COLMAP model, or nullptr (nerfstudio, or no points).
+  OverlapDepthSource(const Sequence& sequence, const ColmapModel* model, const ProtocolOptions& options);
+  OverlapDepth for_frame(size_t index) const;
+
+ private:
+  const Sequence& sequence_;
+  std::vector<std::vector<Eigen::Vector3d>> points_;  // per frame: (u, v, z) of observed points
+  double scene_depth_ = 0, fallback_ = 0;
+  std::string fallback_kind_;
+};
+
 // Scores every candidate pair (frame depth is loaded once per source frame) and draws the manifest.
 // Bins that cannot be filled keep what they have, and the manifest says so; they are never padded.
-Manifest select_pairs(const std::string& dataset, const std::vector<Sequence>& sequences,
-                      const ProtocolOptions& options);
+// `models` (optional, one per sequence) gives depth-free COLMAP captures their points3D for the overlap.
+Manifest draw_manifest(const std::string& dataset, const std::vector<Sequence>& sequences,
+                       const ProtocolOptions& options, const std::vector<ColmapModel>& models = {});
 
 void write_manifest(const std::string& path, const Manifest& m);  // atomic; byte-identical for equal input
 Manifest read_manifest(const std::string& path);

@@ -4,9 +4,9 @@
 
 #include <torch/torch.h>
 
-#include "loss/feature_net.h"
 #include "loss/knn.h"
 #include "loss/losses.h"
+#include "nets/feature_net.h"
 #include "support/test_util.h"
 
 using namespace isplat;
@@ -73,11 +73,7 @@ TEST_CASE("losses: the perceptual term is off, loudly, without weights", "[loss]
 }
 
 TEST_CASE("losses: perceptual + Gram on the real SqueezeNet weights", "[loss]") {
-  const std::string dir = test::shared_weights_dir();
-  if (dir.empty()) {
-    SUCCEED("shared SqueezeNet weights not found; the pretrained perceptual test is skipped");
-    return;
-  }
+  const std::string dir = test::project_weights_dir();
   LossOptions o;
   o.perceptual_weights = dir + "/squeezenet1_1_features.safetensors";
   PerceptualLoss p(o);

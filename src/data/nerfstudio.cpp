@@ -2,10 +2,15 @@
 #include "data/nerfstudio.h"
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <filesystem>
+#include <functional>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/convert.h"
 #include "io/atomic_file.h"
 
@@ -35,14 +40,40 @@ Eigen::Matrix4d matrix(const json& j, int rows, const std::string& where, const 
   return M;
 }
 
-// Intrinsics from an object holding fl_x/fl_y/cx/cy/w/h (frame keys override the global ones).
-Intrinsics intrinsics(const json& global, const json& frame, const std::string& where, std::vector<double>& dist) {
+// Intrinsics from an object holding fl_x/fl_y/cx/cy/w/h (frame keys override the global ones), or, in the
+// NeRF-synthetic style, camera_angle_x (and camera_angle_y) with the size read from `image_size`.
+Intrinsics intrinsics(const json& global, const json& frame, const std::string& where, std::vector<double>& dist,
+                      const std::function<cv::Size()>& image_size) {
   auto pick = [&](const char* key) -> const json& { return frame.contains(key) ? frame : global; };
   Intrinsics k;
-  k.fx = number(pick("fl_x"), "fl_x", where);
-  k.fy = pick("fl_y").contains("fl_y") ? number(pick("fl_y"), "fl_y", where) : k.fx;
-  k.width = static_cast<int>(number(pick("w"), "w", where));
-  k.height = static_cast<int>(number(pick("h"), "h", where));
+  if (pick("w").contains("w") && pick("h").contains("h")) {
+    k.width = static_cast<int>(number(pick("w"), "w", where));
+    k.height = static_cast<int>(number(pick("h"), "h", where));
+  } else {
+    const cv::Size size = image_size();
+    k.width = size.width, k.height = size.height;
+  }
+  if (k.width <= 0 || k.height <= 0) fail(where, ": image size ", k.width, "x", k.height, " is not positive");
+  if (pick("fl_x").contains("fl_x")) {
+    k.fx = number(pick("fl_x"), "fl_x", where);
+  } else if (pick("camera_angle_x").contains("camera_angle_x")) {
+    const double ax = number(pick("camera_angle_x"), "camera_angle_x", where);
+    if (!(ax > 0 && ax < M_PI)) fail(where, ": camera_angle_x = ", ax, " is not an angle in (0, pi) radians");
+    k.fx = 0.5 * k.width / std::tan(0.5 * ax);
+  } else {
+    fail(where, ": missing key 'fl_x' (or 'camera_angle_x')");
+  }
+  if (pick("fl_y").contains("fl_y")) {
+    k.fy = number(pick("fl_y"), "fl_y", where);
+  } else if (!pick("fl_x").contains("fl_x") && pick("camera_angle_y").contains("camera_angle_y")) {
+    const double ay = number(pick("camera_angle_y"), "camera_angle_y", where);
+    if (!(ay > 0 && ay < M_PI)) fail(where, ": camera_angle_y = ", ay, " is not an angle in (0, pi) radians");
+    k.fy = 0.5 * k.height / std::tan(0.5 * ay);
+  } else {
+    k.fy = k.fx;
+  }
+  if (!(std::isfinite(k.fx) && k.fx > 0 && std::isfinite(k.fy) && k.fy > 0))
+    fail(where, ": focal length fx ", k.fx, ", fy ", k.fy, " must be finite and positive");
   k.cx = pick("cx").contains("cx") ? number(pick("cx"), "cx", where) : k.width / 2.0;
   k.cy = pick("cy").contains("cy") ? number(pick("cy"), "cy", where) : k.height / 2.0;
   const std::string model = pick("camera_model").value("camera_model", std::string("OPENCV"));
@@ -82,17 +113,35 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
   std::sort(frames.begin(), frames.end(), [](const json& a, const json& b) {
     return a["file_path"].get<std::string>() < b["file_path"].get<std::string>();
   });
+  cv::Size first_size;  // NeRF-synthetic files give no w/h: the first image's size, read once
+  bool any_depth = false;
   for (const auto& fr : frames) {
     const std::string rel = fr["file_path"].get<std::string>();
     const std::string where = path + " frame '" + rel + "'";
     FrameRecord f;
     f.name = seq.scene + "/" + rel;
     f.image_path = (fs::path(scene_dir) / rel).string();
+    // NeRF-synthetic (and instant-ngp's examples) name frames without the extension: "./train/r_0".
+    if (!fs::exists(f.image_path) && fs::path(rel).extension().empty())
+      for (const char* ext : {".png", ".jpg", ".jpeg", ".PNG", ".JPG"})
+        if (fs::exists(f.image_path + ext)) {
+          f.image_path += ext;
+          break;
+        }
     if (!fs::exists(f.image_path)) fail(where, ": image file ", f.image_path, " does not exist");
+    const std::string image_path = f.image_path;
+    auto image_size = [&]() {
+      if (first_size.area() == 0) {
+        const cv::Mat img = cv::imread(image_path, cv::IMREAD_UNCHANGED);
+        if (img.empty()) fail(where, ": cannot read ", image_path, " to find the image size (no 'w'/'h' given)");
+        first_size = img.size();
+      }
+      return first_size;
+    };
     if (!fr.contains("transform_matrix")) fail(where, ": missing 'transform_matrix'");
     const Eigen::Matrix4d c2w = undo * matrix(fr["transform_matrix"], 4, where, "transform_matrix");
     f.view.T_cw = pose_from_opengl_c2w(c2w);
-    f.view.intr = intrinsics(j, fr, where, f.distortion);
+    f.view.intr = intrinsics(j, fr, where, f.distortion, image_size);
     f.rescale_to_image = true;
     if (fr.contains("depth_file_path")) {
       const std::string d = (fs::path(scene_dir) / fr["depth_file_path"].get<std::string>()).string();
@@ -100,10 +149,15 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
       if (fs::exists(d)) {
         f.depth_path = d;
         f.depth = ext == ".exr" ? DepthSource::PlanarExr : DepthSource::Png16Millimetres;
+        any_depth = true;
       }
     }
     seq.frames.push_back(std::move(f));
   }
+  if (!any_depth)
+    log_warn(path,
+             ": no depth files, so nothing fixes the poses' scale; baselines and the protocol's bins assume "
+             "metres. Unless the poses are metric (a metric SLAM or LiDAR capture), scale them first.");
   return seq;
 }
 

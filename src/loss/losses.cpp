@@ -8,7 +8,8 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
-#include "encoder/imagenet.h"
+#include "core/paths.h"
+#include "nets/imagenet.h"
 
 namespace isplat {
 
@@ -24,14 +25,16 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("knn", knn, "neighbours per support for smoothness (paper: 8)", Range::at_least(1));
   v.field("perceptual_net", perceptual_net, "frozen perceptual network", {"squeezenet1_1", "vgg16", "vgg19"});
   v.field("perceptual_weights", perceptual_weights,
-          "safetensors of the perceptual network under torchvision names (e.g. ../shared/weights/"
+          "safetensors of the perceptual network under torchvision names (e.g. weights/"
           "squeezenet1_1_features.safetensors); missing = the term is off");
   v.field("allow_random_perceptual", allow_random_perceptual,
           "run the perceptual term on a random network "
           "(only for experiments; never the default)");
 }
 
-PerceptualLoss::PerceptualLoss(const LossOptions& o) : gamma_(o.gram_gamma) {
+PerceptualLoss::PerceptualLoss(const LossOptions& options) : gamma_(options.gram_gamma) {
+  LossOptions o = options;
+  o.perceptual_weights = resolve_shipped_path(o.perceptual_weights);
   if (o.perceptual <= 0) return;
   const bool have = !o.perceptual_weights.empty() && std::filesystem::exists(o.perceptual_weights);
   if (!have && !o.allow_random_perceptual) {

@@ -9,7 +9,7 @@
 #include <torch/types.h>
 
 #include "core/gaussians.h"
-#include "loss/feature_net.h"
+#include "nets/feature_net.h"
 
 namespace isplat {
 
@@ -24,9 +24,9 @@ struct LossOptions {
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;
-  std::string perceptual_net = "squeezenet1_1";  // squeezenet1_1 | vgg16 | vgg19
-  std::string perceptual_weights;                // safetensors under torchvision names
-  bool allow_random_perceptual = false;          // explicit opt-in to a random network
+  std::string perceptual_net = "squeezenet1_1";                                   // squeezenet1_1 | vgg16 | vgg19
+  std::string perceptual_weights = "weights/squeezenet1_1_features.safetensors";  // shipped; torchvision names
+  bool allow_random_perceptual = false;                                           // explicit opt-in to a random network
   void visit(ConfigVisitor& v);
 };
 

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/paths.h"
 #include "io/safetensors.h"
 
 namespace isplat {
@@ -142,8 +143,9 @@ double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const t
   return total;
 }
 
-std::unique_ptr<Lpips> Lpips::from_folder(const std::string& net, const std::string& folder, std::string& why) {
+std::unique_ptr<Lpips> Lpips::from_folder(const std::string& net, const std::string& requested, std::string& why) {
   namespace fs = std::filesystem;
+  const std::string folder = resolve_shipped_path(requested);
   const std::string arch = lpips_arch(net);
   if (arch.empty()) {
     why = cat("LPIPS: unknown network '", net, "' ", kLpipsNets);

@@ -25,15 +25,9 @@ std::string temp_dir(const std::string& tag) {
   return dir.string();
 }
 
-std::string shared_weights_dir() {
-  // $ISPLAT_WEIGHTS_DIR, else ../shared/weights beside the source tree, else this workplace's shared folder.
-  std::vector<fs::path> candidates;
-  if (const char* env = std::getenv("ISPLAT_WEIGHTS_DIR")) candidates.emplace_back(env);
-  candidates.push_back(fs::path(ISPLAT_SOURCE_DIR) / ".." / "shared" / "weights");
-  candidates.emplace_back("/work/shared/weights");
-  for (const auto& dir : candidates)
-    if (fs::exists(dir / "squeezenet1_1_features.safetensors")) return fs::weakly_canonical(dir).string();
-  return std::string();
+std::string project_weights_dir() {
+  // The weights that ship in the repository (weights/README.md); their sha256 is its own test.
+  return (fs::path(ISPLAT_SOURCE_DIR) / "weights").string();
 }
 
 void write_bytes(const std::string& path, const std::string& bytes) {

@@ -18,8 +18,8 @@ struct QuietLogs {
 
 // A new empty folder under $ISPLAT_TEST_TMP (or /tmp), unique per call.
 std::string temp_dir(const std::string& tag);
-// ../shared/weights relative to the source tree, or "" when absent.
-std::string shared_weights_dir();
+// The weights shipped in the repository (<source>/weights).
+std::string project_weights_dir();
 // Writes raw bytes to a file (for crafting corrupt inputs).
 void write_bytes(const std::string& path, const std::string& bytes);
 std::string read_bytes(const std::string& path);

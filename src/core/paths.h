@@ -1,0 +1,12 @@
+// Finding the files that ship with the project (weights/, scripts/) from wherever a tool is started.
+#pragma once
+#include <string>
+
+namespace isplat {
+
+// `path` itself when it is absolute or exists relative to the working directory; otherwise the first
+// `<dir>/<path>` that exists for dir = the running executable's folder and its parents (so build/tool
+// finds the checkout's weights/ from any working directory); otherwise `path` unchanged.
+std::string resolve_shipped_path(const std::string& path);
+
+}  // namespace isplat
