@@ -1,5 +1,6 @@
-// Renderer benchmark: Gaussians from a synthetic room's depth map, forward and forward+backward medians,
-// per-phase times, intersections per second and peak memory at three sizes plus a large-splats variant.
+// Renderer benchmark: base Gaussians from a generated room (generator + sampler + composer), forward and
+// forward+backward medians, per-phase times, intersections per second and peak memory at three sizes plus a
+// large-splats variant.
 #include <ATen/Parallel.h>
 #include <torch/torch.h>
 
@@ -18,147 +19,60 @@
 #include "core/args.h"
 #include "core/error.h"
 #include "core/runtime.h"
+#include "data/synth/builder.h"
+#include "data/synth/render.h"
+#include "decoder/composer.h"
 #include "geometry/camera.h"
 #include "geometry/camera_torch.h"
+#include "io/tensor_image.h"
 #include "render/kernels.h"
 #include "render/render.h"
+#include "sampler/base_gaussians.h"
+#include "sampler/sampler.h"
 
 using namespace isplat;
-using Eigen::Vector3d;
 
 namespace {
 
-// ---- A synthetic room: an inside-out box with two solid boxes (table, cabinet) and textured faces ----
+// ---- The scene: the project's own generator, sampler and base Gaussians ----
 
-struct Hit {
-  double t = 0;
-  Vector3d normal, color;
+struct Scene {
+  Gaussians gaussians;
+  Camera target;
 };
 
-struct Box {
-  Vector3d lo, hi, color;
-};
-
-Vector3d texture(const Vector3d& p, const Vector3d& base) {
-  const double checker = ((int(std::floor(p.x() * 3)) + int(std::floor(p.y() * 3)) + int(std::floor(p.z() * 3))) & 1);
-  const double stripes = 0.5 + 0.5 * std::sin(17.0 * (p.x() + 0.7 * p.z()));
-  return (base * (0.7 + 0.2 * checker + 0.1 * stripes)).cwiseMin(1.0);
-}
-
-struct Room {
-  Box shell{{-2.5, -1.3, -1.0}, {2.5, 1.5, 6.0}, {0.75, 0.7, 0.6}};
-  std::vector<Box> solids{{{-1.2, 0.7, 2.4}, {0.3, 1.5, 3.4}, {0.55, 0.35, 0.2}},
-                          {{1.1, -0.6, 3.6}, {2.5, 1.5, 5.0}, {0.3, 0.45, 0.7}},
-                          {{-2.5, -0.2, 4.2}, {-1.6, 1.5, 6.0}, {0.8, 0.8, 0.75}}};
-
-  bool cast(const Vector3d& o, const Vector3d& d, Hit& hit) const {
-    // Exit of the shell.
-    double t_exit = 1e30;
-    int axis = 0;
-    for (int a = 0; a < 3; ++a) {
-      if (d[a] == 0) continue;
-      const double t = ((d[a] > 0 ? shell.hi[a] : shell.lo[a]) - o[a]) / d[a];
-      if (t < t_exit) t_exit = t, axis = a;
-    }
-    hit.t = t_exit;
-    hit.normal = Vector3d::Zero();
-    hit.normal[axis] = d[axis] > 0 ? -1 : 1;
-    Vector3d base = shell.color;
-    if (axis == 1) base = d[1] > 0 ? Vector3d(0.45, 0.35, 0.3) : Vector3d(0.9, 0.9, 0.88);  // floor, ceiling
-    // Entries of the solids.
-    for (const Box& b : solids) {
-      double t0 = -1e30, t1 = 1e30;
-      int ax = 0;
-      for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0) {
-          if (o[a] < b.lo[a] || o[a] > b.hi[a]) t0 = 1e30;
-          continue;
-        }
-        double ta = (b.lo[a] - o[a]) / d[a], tb = (b.hi[a] - o[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        if (ta > t0) t0 = ta, ax = a;
-        t1 = std::min(t1, tb);
-      }
-      if (t0 <= t1 && t0 > 1e-6 && t0 < hit.t) {
-        hit.t = t0;
-        hit.normal = Vector3d::Zero();
-        hit.normal[ax] = d[ax] > 0 ? -1 : 1;
-        base = b.color;
-      }
-    }
-    hit.color = texture(o + hit.t * d, base);
-    return hit.t < 1e29;
-  }
-};
-
-View make_view(int W, int H, double yaw_deg, double x) {
-  View v;
-  v.intr = Intrinsics::from_hfov(65.0 * M_PI / 180.0, W, H);
-  const Eigen::Matrix3d R_wc = (Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Vector3d::UnitY()) *
-                                Eigen::AngleAxisd(-8.0 * M_PI / 180.0, Vector3d::UnitX()))
-                                   .toRotationMatrix();
-  const Vector3d C(x, 0.1, 0.0);
-  v.T_cw = make_pose(R_wc.transpose(), -R_wc.transpose() * C);
-  return v;
-}
-
-// DESIGN §3 sampler in miniature: supports stratified by 3D surface area over the source view's depth map
-// (per-pixel area z²·cosφ/(fx·fy·cosθ)), placed at sub-pixel R2 positions and ray cast; being stratified by
-// area, each stands for total area / N, so the base scale is sqrt(total area / N) (isotropic), base opacity
-// 0.5. On top, the kind of spread a decoder adds: per-axis scale jitter exp(0.25·n), small rotations, opacity
-// sigmoid(1.2·n). Rendered from a nearby target view (0.15 m, 3°). `scale_factor` > 1: large-splats variant.
-Gaussians make_scene(int64_t n, int W, int H, double scale_factor, uint64_t seed) {
-  const Room room;
-  const View src = make_view(W, H, 0.0, 0.0);
-  const Eigen::Matrix3d R_wc = src.T_cw.topLeftCorner<3, 3>().transpose();
-  const Vector3d C = camera_center(src.T_cw);
-  const Intrinsics& K = src.intr;
-  std::vector<double> cum(size_t(W) * H + 1, 0.0);
-  for (int i = 0; i < H; ++i)
-    for (int j = 0; j < W; ++j) {
-      const Vector3d r = K.ray(j + 0.5, i + 0.5);
-      const Vector3d d = R_wc * r;
-      Hit h;
-      double area = 0;
-      if (room.cast(C, d, h)) {
-        const double z = h.t;  // r has unit z, so the ray parameter is the planar depth
-        const double cos_phi = 1.0 / r.norm(), cos_theta = std::max(0.1, std::abs(h.normal.dot(d.normalized())));
-        area = z * z * cos_phi / (K.fx * K.fy * cos_theta);
-      }
-      cum[size_t(i) * W + j + 1] = cum[size_t(i) * W + j] + area;
-    }
-  const double total = cum.back(), base_scale = std::sqrt(total / double(n));
+// A generated room (data/synth), rendered from the first pose of a generated trajectory; supports from the
+// project's area sampler on its planar depth, composed into base Gaussians with zero updates (DESIGN §3).
+// On top, the kind of spread a decoder adds: per-axis scale jitter exp(0.25·n), small rotations, opacity
+// sigmoid(1.2·n). Rendered from the trajectory's next pose (0.15 m on). `scale_factor` > 1: large splats.
+Scene make_scene(int64_t n, int W, int H, double scale_factor, uint64_t seed) {
+  const synth::Scene room = synth::build_room(seed);
+  const auto poses = synth::make_trajectory(room, 2, seed, 0.15, 0.15);
+  const Intrinsics intr = Intrinsics::from_hfov(65.0 * M_PI / 180.0, W, H);
+  const synth::RenderedFrame frame = synth::render_frame(room, synth::pinhole_ray_camera(poses[0], intr), 1);
+  auto depth = map_to_tensor(frame.planar);
+  const auto valid = torch::isfinite(depth) & (depth > 0);
+  depth = torch::where(valid, depth, torch::zeros_like(depth));
+  const auto image = torch::pow(image_to_tensor(frame.radiance).clamp(0, 1), 1.0 / 2.2);  // display sRGB
+  auto view_of = [&](const synth::CameraPose& c) {
+    View v;
+    v.intr = intr;
+    v.T_cw = invert_pose(make_pose(c.R_wc, c.center));
+    return v;
+  };
+  const Camera source = to_camera(view_of(poses[0]), torch::kFloat32);
+  SamplerOptions so;
+  so.budget = n;
+  const Supports supports = sample_supports(depth, valid, source.K, image, so, seed);
+  const BaseGaussians base = make_base_gaussians(supports);
+  Gaussians g = compose(base, torch::zeros({supports.count(), kDeltaDim}), source.K, source.T_cw, ComposerOptions{});
   torch::manual_seed(seed);
-  const auto jitter = torch::randn({n, 8}, torch::kFloat64);
-  const double* jr = jitter.data_ptr<double>();
-  auto means = torch::empty({n, 3}, torch::kFloat32), scales = torch::empty({n, 3}, torch::kFloat32);
-  auto quats = torch::empty({n, 4}, torch::kFloat32), colors = torch::empty({n, 3}, torch::kFloat32);
-  auto opac = torch::empty({n}, torch::kFloat32);
-  float *m = means.data_ptr<float>(), *s = scales.data_ptr<float>(), *q = quats.data_ptr<float>();
-  float *c = colors.data_ptr<float>(), *o = opac.data_ptr<float>();
-  size_t pix = 0;
-  const double g1 = 0.7548776662466927, g2 = 0.5698402909980532;  // R2 low-discrepancy sequence
-  for (int64_t k = 0; k < n; ++k) {
-    const double target = (double(k) + 0.5) / double(n) * total;  // stratified over the cumulative area
-    while (pix + 1 < cum.size() - 1 && cum[pix + 1] <= target) ++pix;
-    const double fu = std::fmod(0.5 + g1 * double(k), 1.0), fv = std::fmod(0.5 + g2 * double(k), 1.0);
-    const double u = double(pix % W) + fu, v = double(pix / W) + fv;
-    const Vector3d d = R_wc * K.ray(u, v);
-    Hit h;
-    if (!room.cast(C, d, h)) h.t = 1.0, h.color = Vector3d(0.5, 0.5, 0.5);
-    const Vector3d p = C + h.t * d;
-    const double* jk = jr + 8 * k;
-    for (int a = 0; a < 3; ++a) {
-      m[3 * k + a] = float(p[a]);
-      s[3 * k + a] = float(base_scale * scale_factor * std::exp(0.25 * jk[a]));
-      c[3 * k + a] = float(std::pow(std::clamp(h.color[a], 0.01, 0.99), 2.2));  // linear RGB
-    }
-    const double qn = std::sqrt(1 + 0.09 * (jk[3] * jk[3] + jk[4] * jk[4] + jk[5] * jk[5]));
-    q[4 * k] = float(1 / qn), q[4 * k + 1] = float(0.3 * jk[3] / qn), q[4 * k + 2] = float(0.3 * jk[4] / qn);
-    q[4 * k + 3] = float(0.3 * jk[5] / qn);
-    o[k] = float(1.0 / (1.0 + std::exp(-(0.0 + 1.2 * jk[6]))));
-  }
-  return {means, scales, quats, colors, opac};
+  const auto jitter = torch::randn({n, 7}, torch::kFloat32);
+  g.scales = (g.scales * scale_factor * torch::exp(0.25 * jitter.narrow(1, 0, 3))).contiguous();
+  g.quats = torch::cat({torch::ones({n, 1}), 0.3 * jitter.narrow(1, 3, 3)}, 1).contiguous();
+  g.opacities = torch::sigmoid(1.2 * jitter.select(1, 6)).contiguous();
+  for (torch::Tensor* t : {&g.means, &g.colors}) *t = t->to(torch::kFloat32).contiguous();
+  return {g, to_camera(view_of(poses[1]), torch::kFloat32)};
 }
 
 // ---- Measurement helpers ----
@@ -207,8 +121,9 @@ struct Case {
 
 void run(const Case& cs) {
   const double t_build = now_ms();
-  const Gaussians g = make_scene(cs.n, cs.W, cs.H, cs.scale_factor, 1234);
-  const Camera cam = to_camera(make_view(cs.W, cs.H, 3.0, 0.15), torch::kFloat32);  // a nearby target view
+  const Scene scene = make_scene(cs.n, cs.W, cs.H, cs.scale_factor, 1234);
+  const Gaussians& g = scene.gaussians;
+  const Camera& cam = scene.target;
   const double build_ms = now_ms() - t_build;
   reset_peak();
   const double rss0 = status_mb("VmRSS");
@@ -293,7 +208,9 @@ int main(int argc, char** argv) {
     int64_t threads = 0, runs_scale = 1;
     bool quick = false, huge_large = false;
     std::string only;
-    ArgParser parser("bench_render", "Times the CPU splatting renderer on Gaussians from a synthetic room.");
+    ArgParser parser("bench_render",
+                     "Times the CPU splatting renderer on Gaussians from a generated room (the project's generator, "
+                     "sampler and base Gaussians).");
     parser.option("--threads", threads, "threads (0 = all cores)");
     parser.option("--runs-scale", runs_scale, "multiply the number of timed runs");
     parser.flag("--quick", quick, "only the two smaller sizes");

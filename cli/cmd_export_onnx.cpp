@@ -53,7 +53,7 @@ int run_export_onnx(int argc, char** argv) {
       expect = model->decode(f, uv, width, height);
     }
     std::string why;
-    const auto got = run_onnxruntime(out, image, uv, why);
+    const auto got = run_onnxruntime(out, image, uv, find_ort_runner(), why);
     if (!got) {
       std::cout << "verify: skipped, " << why << "\n";
       return 0;

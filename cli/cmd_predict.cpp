@@ -155,8 +155,9 @@ int run_predict(int argc, char** argv) {
             << std::defaultfloat << prune_opacity << " and " << outside << " outside the view pruned)\n";
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
-    if (pred.timings_ms.count(k)) std::cout << " " << k << " " << std::setprecision(0) << pred.timings_ms.at(k);
-  std::cout << " | total " << ms_since(t_start) << "\n";
+    if (pred.timings_ms.count(k))
+      std::cout << " " << k << " " << std::fixed << std::setprecision(0) << pred.timings_ms.at(k);
+  std::cout << " | total " << std::fixed << std::setprecision(0) << ms_since(t_start) << "\n";
   std::cout << "wrote        " << fs::absolute(out).string() << "\n             "
             << fs::absolute(camera_sidecar_path(out)).string() << "\n";
   return 0;

@@ -4,8 +4,7 @@
 #include <string>
 
 #include "cli/commands.h"
-#include "core/error.h"
-#include "core/log.h"
+#include "core/app.h"
 
 namespace {
 
@@ -34,13 +33,5 @@ int main(int argc, char** argv) {
     usage(commands);
     return 2;
   }
-  try {
-    return it->second.run(argc, argv);
-  } catch (const isplat::Error& e) {
-    isplat::log_line(isplat::LogLevel::Error, e.what());
-    return 1;
-  } catch (const std::exception& e) {
-    isplat::log_line(isplat::LogLevel::Error, std::string("internal error: ") + e.what());
-    return 1;
-  }
+  return isplat::run_main("infinisplat", [&] { return it->second.run(argc, argv); });
 }

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "data/colmap.h"
 #include "eval/eval_config.h"
 #include "eval/methods.h"
 #include "eval/report.h"
@@ -19,11 +20,20 @@ class Evaluator {
   std::vector<ReportRow> run(bool pairs_only = false);
 
   // The manifest for dataset d: reused when <out>/<name>/manifest.json exists with the same protocol.
-  Manifest manifest(size_t d, const std::vector<Sequence>& sequences);
-  // Scores one method on a manifest, appending to results_<method>.jsonl and skipping pairs already there.
-  // `points` holds each sequence's COLMAP model when the dataset's prompts are points3D, else nothing.
+  // `models`: the COLMAP model per sequence (points3D give depth-free captures their overlap depth), or none.
+  Manifest manifest(size_t d, const std::vector<Sequence>& sequences, const std::vector<ColmapModel>& models = {});
+  // The manifest positions to score: every pair, or the first scoring.max_per_bin of each bin. This is the
+  // one place that cuts the work (a shard of the pairs would be chosen here).
+  std::vector<int64_t> select_pairs(const Manifest& m) const;
+  // <out>/<dataset>/results_<method>.jsonl, the method name made file-safe.
+  std::string results_path(size_t d, const std::string& method) const;
+  // Scores one method on the given pairs of a manifest, appending to results_<method>.jsonl and skipping
+  // pairs already there. `points` holds each sequence's COLMAP model when the dataset's prompts are
+  // points3D, else nothing. Returns the results of exactly `pairs`, in manifest order; empty (with a note)
+  // when the method needs the source depth and the dataset has none.
   std::vector<PairResult> score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
-                                const MethodOptions& mo, const std::vector<ColmapModel>& points = {});
+                                const std::vector<int64_t>& pairs, const MethodOptions& mo,
+                                const std::vector<ColmapModel>& points = {});
 
  private:
   EvalConfig config_;

@@ -8,7 +8,7 @@
 
 int main(int argc, char** argv) {
   using namespace isplat;
-  try {
+  return run_main("infinisplat-eval", [&] {
     EvalConfig config;
     CommonArgs common;
     bool pairs_only = false;
@@ -22,8 +22,5 @@ int main(int argc, char** argv) {
     if (!start_app(args, common, config, argc, argv)) return 0;
     Evaluator(config).run(pairs_only);
     return 0;
-  } catch (const Error& e) {
-    log_line(LogLevel::Error, e.what());
-    return 1;
-  }
+  });
 }

@@ -66,7 +66,7 @@ TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Run
     auto image = torch::rand({1, 3, H, W});
     auto uv = torch::rand({500, 2}) * torch::tensor({float(W), float(H)});
     std::string why;
-    const auto got = run_onnxruntime(path, image, uv, why);
+    const auto got = run_onnxruntime(path, image, uv, ort_runner_in(ISPLAT_SOURCE_DIR), why);
     if (!got) {
       WARN("ONNX Runtime comparison skipped: " << why);
       CHECK(!why.empty());

@@ -6,6 +6,7 @@
 
 #include "decoder/composer.h"
 #include "geometry/camera_torch.h"
+#include "geometry/color.h"
 #include "model/infinisplat.h"
 #include "render/render.h"
 #include "support/tiny_model.h"

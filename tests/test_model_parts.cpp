@@ -10,6 +10,7 @@
 #include "decoder/implicit_decoder.h"
 #include "encoder/dual_encoder.h"
 #include "geometry/camera_torch.h"
+#include "geometry/color.h"
 #include "io/safetensors.h"
 #include "support/test_util.h"
 

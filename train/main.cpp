@@ -8,7 +8,7 @@
 
 int main(int argc, char** argv) {
   using namespace isplat;
-  try {
+  return run_main("infinisplat-train", [&] {
     TrainConfig config;
     CommonArgs common;
     std::string resume;
@@ -24,8 +24,5 @@ int main(int argc, char** argv) {
     Trainer trainer(config);
     if (!resume.empty()) trainer.resume(resume);
     return trainer.run();
-  } catch (const Error& e) {
-    log_line(LogLevel::Error, e.what());
-    return 1;
-  }
+  });
 }

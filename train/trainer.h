@@ -9,21 +9,12 @@
 #include <torch/optim/adamw.h>
 
 #include "data/loader.h"
-#include "loss/losses.h"
-#include "model/infinisplat.h"
-#include "prior/learned_depth.h"
+#include "io/checkpoint.h"
+#include "io/jsonl.h"
+#include "train/task.h"
 #include "train/train_config.h"
 
 namespace isplat {
-
-struct StepStats {
-  std::map<std::string, double> losses;  // total, l1, perceptual, scale, smooth (or depth terms)
-  std::map<std::string, double>
-      timings_ms;  // data, prior, sampler, encoder, decoder, composer, render_fwd, losses, backward, render_bwd, optim
-  double lr = 0;
-  int64_t supports = 0;
-  bool skipped = false;
-};
 
 class Trainer {
  public:
@@ -45,24 +36,25 @@ class Trainer {
   static void request_stop();  // async-signal-safe: the loop saves and exits at the next step boundary
 
  private:
-  std::map<std::string, torch::Tensor> gaussian_losses(const Batch& batch, StepStats& stats, bool train,
-                                                       std::vector<torch::Tensor>* predictions = nullptr);
-  std::map<std::string, torch::Tensor> depth_losses(const Batch& batch);
+  // Where gradients of all ranks are averaged before clipping (data-parallel training); one rank: nothing.
+  void synchronize_gradients();
   void write_log(const StepStats& s);
-  void write_val_images(const Batch& batch, const std::vector<torch::Tensor>& predictions, int64_t index);
-  void checkpoint(bool periodic);
+  void write_val_images(const Batch& batch, const RenderedViews& views, int64_t index);
+  Checkpoint make_checkpoint(bool with_optimizer) const;
 
   TrainConfig config_;
-  std::unique_ptr<Pipeline> pipeline_;  // task gaussians
-  LearnedDepthNet depth_net_{nullptr};  // task depth
-  std::unique_ptr<PerceptualLoss> perceptual_;
+  std::unique_ptr<TrainTask> task_;
   std::unique_ptr<TupleSampler> train_sampler_, val_sampler_;
   std::unique_ptr<BatchLoader> loader_;
   std::unique_ptr<torch::optim::AdamW> optimizer_;
   int64_t step_ = 0;
   int64_t bad_steps_ = 0;
   double best_val_ = std::numeric_limits<double>::infinity();
-  std::string run_dir_, log_path_;
+  std::string run_dir_;
+  double cpu_offset_ = 0, cpu_start_ = 0;  // process CPU seconds: before this process (resume) and at start
+  double cpu_seconds() const;              // CPU time spent on this run so far, across resumes
+  std::unique_ptr<JsonlWriter> log_;
+  CheckpointFolder checkpoints_;
 };
 
 }  // namespace isplat

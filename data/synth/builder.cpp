@@ -5,7 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <stdexcept>
+
+#include "core/error.h"
 
 namespace isplat::synth {
 namespace {
@@ -353,7 +354,7 @@ Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "room") return build_room(seed);
   if (style == "courtyard") return build_courtyard(seed);
   if (style == "atrium") return build_atrium(seed);
-  throw std::invalid_argument("unknown scene style '" + style + "' (room | courtyard | atrium)");
+  fail("unknown scene style '", style, "' (room | courtyard | atrium)");
 }
 
 Mat3 look_rotation(const Vec3& center, const Vec3& target) {

@@ -1,6 +1,7 @@
 // Shared start-up for executables: parse the common options, load and validate the config, apply the
 // runtime (threads, seed, logging), and answer --print-config / --help-config.
 #pragma once
+#include <functional>
 #include <iostream>
 
 #include "core/args.h"
@@ -8,6 +9,10 @@
 #include "core/runtime.h"
 
 namespace isplat {
+
+// The one failure path of every executable: runs `body`; the project's Error, a LibTorch error or any
+// other exception becomes one clean line on stderr ("<program>: error: ...") and exit code 1.
+int run_main(const char* program, const std::function<int()>& body);
 
 // `Options` is a root config struct with a `RuntimeOptions runtime` member.
 // Returns false when the program should exit 0 (help or config printed).

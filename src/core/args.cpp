@@ -116,7 +116,10 @@ std::string ArgParser::help() const {
 
 void CommonArgs::add_to(ArgParser& parser, bool with_config) {
   if (with_config) parser.option("--config", config, "JSON config file (keys not given take their defaults)", "FILE");
-  parser.repeated("--set", sets, "override a config key, e.g. --set sampler.budget=50000", "KEY=VALUE");
+  parser.repeated("--set", sets,
+                  "override a config key, e.g. --set model.sampler.budget=50000 (training) or --set "
+                  "scoring.max_per_bin=8 (evaluation)",
+                  "KEY=VALUE");
   parser.flag("--print-config", print_config, "print the merged configuration as JSON and exit");
   parser.flag("--help-config", help_config, "list every config key with its type, default and meaning, and exit");
   parser.option("--threads", threads, "intra-op threads (0 = all cores; default: config runtime.threads)");

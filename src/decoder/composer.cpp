@@ -10,6 +10,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
+#include "geometry/color.h"
 #include "geometry/convert.h"
 
 namespace isplat {
@@ -24,20 +25,8 @@ void ComposerOptions::visit(ConfigVisitor& v) {
   v.field("linear_rgb", linear_rgb, "composite in linear RGB (sRGB -> linear on the colours)");
 }
 
-torch::Tensor srgb_to_linear(const torch::Tensor& x) {
-  return torch::where(x <= 0.04045, x / 12.92, torch::pow((torch::clamp_min(x, 0.04045) + 0.055) / 1.055, 2.4));
-}
-
-torch::Tensor linear_to_srgb(const torch::Tensor& x) {
-  auto c = torch::clamp_min(x, 0.0);
-  return torch::where(c <= 0.0031308, c * 12.92, 1.055 * torch::pow(torch::clamp_min(c, 0.0031308), 1.0 / 2.4) - 0.055);
-}
-
-torch::Tensor inverse_softplus(const torch::Tensor& y) {
-  // log(exp(y) - 1) = y + log(1 - exp(-y)); exact for small y, no overflow for large y.
-  return y + torch::log(-torch::expm1(-y));
-}
-
+namespace {
+// Hamilton product of [...,4] wxyz quaternions.
 torch::Tensor quaternion_multiply(const torch::Tensor& a, const torch::Tensor& b) {
   auto aw = a.select(-1, 0), ax = a.select(-1, 1), ay = a.select(-1, 2), az = a.select(-1, 3);
   auto bw = b.select(-1, 0), bx = b.select(-1, 1), by = b.select(-1, 2), bz = b.select(-1, 3);
@@ -54,6 +43,12 @@ torch::Tensor quaternion_from_matrix(const torch::Tensor& R) {
     for (int j = 0; j < 3; ++j) M(i, j) = m[i * 3 + j];
   const Eigen::Vector4d q = quaternion_from_rotation(M);  // w >= 0
   return torch::tensor({q[0], q[1], q[2], q[3]}, torch::kFloat64).to(R.scalar_type());
+}
+}  // namespace
+
+torch::Tensor inverse_softplus(const torch::Tensor& y) {
+  // log(exp(y) - 1) = y + log(1 - exp(-y)); exact for small y, no overflow for large y.
+  return y + torch::log(-torch::expm1(-y));
 }
 
 Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,

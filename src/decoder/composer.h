@@ -29,10 +29,6 @@ Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const t
                   const torch::Tensor& T_cw, const ComposerOptions& options);
 Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
 
-torch::Tensor srgb_to_linear(const torch::Tensor& x);
-torch::Tensor linear_to_srgb(const torch::Tensor& x);
-torch::Tensor inverse_softplus(const torch::Tensor& y);                             // overflow-safe for large y
-torch::Tensor quaternion_multiply(const torch::Tensor& a, const torch::Tensor& b);  // [...,4] wxyz
-torch::Tensor quaternion_from_matrix(const torch::Tensor& R);                       // [3,3] -> [4] wxyz
+torch::Tensor inverse_softplus(const torch::Tensor& y);  // overflow-safe for large y
 
 }  // namespace isplat

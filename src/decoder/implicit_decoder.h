@@ -11,7 +11,7 @@
 #include <torch/nn/modules/linear.h>
 #include <torch/nn/pimpl.h>
 
-#include "encoder/dual_encoder.h"
+#include "encoder/features.h"
 
 namespace isplat {
 

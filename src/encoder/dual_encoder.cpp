@@ -21,7 +21,9 @@ DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
   ISPLAT_CHECK(o.dino || o.cnn, "encoder: encoder.dino and encoder.cnn cannot both be false");
   if (o.dino) {
     vit = register_module("vit", DinoViT(o.vit));
-    if (o.vit.weights.empty()) {
+    if (!o.initial_weights_matter) {
+      // Loaded from a trained checkpoint by the caller.
+    } else if (o.vit.weights.empty()) {
       log_info("encoder: ViT-", o.vit.size,
                " starts from random weights (no DINOv3 checkpoint given in "
                "encoder.vit.weights; none ships with this project)");

@@ -3,8 +3,9 @@
 #include <torch/nn/module.h>
 #include <torch/nn/pimpl.h>
 
-#include "encoder/cnn.h"
+#include "encoder/features.h"
 #include "encoder/vit.h"
+#include "nets/cnn.h"
 
 namespace isplat {
 
@@ -15,12 +16,10 @@ struct EncoderOptions {
   bool cnn = true;   // ablation: encoder.cnn = false
   ViTOptions vit;
   CNNOptions cnn_options;
+  // Not a config key: false when the weights come from a trained checkpoint right after construction,
+  // so start-up does not claim the ViT starts from random weights.
+  bool initial_weights_matter = true;
   void visit(ConfigVisitor& v);
-};
-
-struct EncoderFeatures {
-  torch::Tensor dino;  // [B,C_d,H'/16,W'/16] or undefined when the branch is off
-  torch::Tensor cnn;   // [B,128,H'/4,W'/4] or undefined
 };
 
 struct DualEncoderImpl : torch::nn::Module {

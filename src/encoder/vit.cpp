@@ -8,22 +8,12 @@
 
 #include "core/config.h"
 #include "core/error.h"
-#include "encoder/imagenet.h"
 #include "io/checkpoint.h"
 #include "io/safetensors.h"
+#include "nets/imagenet.h"
 
 namespace isplat {
 namespace nn = torch::nn;
-
-torch::Tensor imagenet_mean() {
-  return torch::tensor({kImageNetMean[0], kImageNetMean[1], kImageNetMean[2]}).view({1, 3, 1, 1});
-}
-torch::Tensor imagenet_std() {
-  return torch::tensor({kImageNetStd[0], kImageNetStd[1], kImageNetStd[2]}).view({1, 3, 1, 1});
-}
-torch::Tensor imagenet_normalize(const torch::Tensor& x) {
-  return (x - imagenet_mean().to(x.dtype())) / imagenet_std().to(x.dtype());
-}
 
 void ViTOptions::visit(ConfigVisitor& v) {
   v.field("size", size, "ViT size: S (384-d, 12 blocks), B (768, 12), L (1024, 24; paper), or custom",

@@ -11,8 +11,8 @@
 
 #include "core/error.h"
 #include "decoder/composer.h"
-#include "encoder/imagenet.h"
 #include "io/atomic_file.h"
+#include "nets/imagenet.h"
 
 namespace isplat {
 namespace {

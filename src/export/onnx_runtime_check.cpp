@@ -12,6 +12,7 @@
 #include <torch/torch.h>
 
 #include "core/error.h"
+#include "core/paths.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -29,17 +30,33 @@ void write_raw(const std::string& path, const torch::Tensor& t) {
 }
 }  // namespace
 
+OrtRunner ort_runner_in(const std::string& root) {
+  const fs::path r(root);
+  return {(r / "scripts" / "ort_run.js").string(),
+          (r / "third_party" / "onnxruntime-node" / "node_modules" / "onnxruntime-node").string()};
+}
+
+OrtRunner find_ort_runner() {
+  // The checkout holding the executable (or the working directory) has scripts/ and third_party/.
+  OrtRunner runner{resolve_shipped_path("scripts/ort_run.js"),
+                   resolve_shipped_path("third_party/onnxruntime-node/node_modules/onnxruntime-node")};
+  if (const char* script = std::getenv("ISPLAT_ORT_SCRIPT")) runner.script = script;
+  if (const char* package = std::getenv("ISPLAT_ORT_NODE")) runner.package = package;
+  return runner;
+}
+
 std::optional<torch::Tensor> run_onnxruntime(const std::string& onnx_path, const torch::Tensor& image,
-                                             const torch::Tensor& uv, std::string& why) {
+                                             const torch::Tensor& uv, const OrtRunner& runner, std::string& why) {
   if (std::system("command -v node >/dev/null 2>&1") != 0) {
     why = "node is not installed";
     return std::nullopt;
   }
-  const fs::path root(ISPLAT_SOURCE_DIR);
-  const fs::path script = root / "scripts" / "ort_run.js";
-  const char* env = std::getenv("ISPLAT_ORT_NODE");
-  const fs::path package =
-      env ? fs::path(env) : root / "third_party" / "onnxruntime-node" / "node_modules" / "onnxruntime-node";
+  const fs::path script(runner.script), package(runner.package);
+  if (runner.script.empty() || !fs::exists(script)) {
+    why = "the runner script ort_run.js was not found" +
+          (runner.script.empty() ? std::string() : " at " + runner.script) + " (set ISPLAT_ORT_SCRIPT)";
+    return std::nullopt;
+  }
   if (!fs::exists(package / "package.json")) {
     why = "onnxruntime-node is not installed at " + package.string() + " (scripts/setup.sh installs it)";
     return std::nullopt;

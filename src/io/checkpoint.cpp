@@ -7,6 +7,10 @@
 #include "core/parse.h"
 #include "io/safetensors.h"
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
 namespace isplat {
 
 int64_t Checkpoint::step() const {
@@ -92,6 +96,48 @@ torch::Tensor bytes_to_tensor(const std::string& bytes) {
 std::string tensor_to_bytes(const torch::Tensor& t) {
   auto c = t.contiguous();
   return std::string(static_cast<const char*>(c.data_ptr()), static_cast<size_t>(c.numel()));
+}
+
+namespace fs = std::filesystem;
+
+CheckpointFolder::CheckpointFolder(std::string dir, int64_t keep_last) : dir_(std::move(dir)), keep_last_(keep_last) {
+  fs::create_directories(dir_);
+}
+
+std::string CheckpointFolder::path(const std::string& name) const {
+  return (fs::path(dir_) / (name + ".safetensors")).string();
+}
+
+void CheckpointFolder::save(const std::string& name, const Checkpoint& ck) {
+  save_checkpoint(path(name), ck);
+}
+
+void CheckpointFolder::alias(const std::string& from, const std::string& to) {
+  // Hard link under a temporary name, renamed into place: `to` is never missing or half-written.
+  const fs::path file = path(from), target = path(to);
+  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp");
+  std::error_code ec;
+  fs::remove(tmp, ec);
+  fs::create_hard_link(file, tmp, ec);
+  if (ec) fs::copy_file(file, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, target);
+}
+
+void CheckpointFolder::save_periodic(int64_t step, const Checkpoint& ck) {
+  char name[32];
+  std::snprintf(name, sizeof name, "step_%06lld", static_cast<long long>(step));
+  save(name, ck);
+  alias(name, "last");  // one file on disk for both names
+  std::vector<fs::path> periodic;
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    const std::string f = e.path().filename().string();
+    if (f.rfind("step_", 0) == 0 && e.path().extension() == ".safetensors") periodic.push_back(e.path());
+  }
+  std::sort(periodic.begin(), periodic.end());
+  while (static_cast<int64_t>(periodic.size()) > keep_last_) {
+    fs::remove(periodic.front());  // last/best keep their own links
+    periodic.erase(periodic.begin());
+  }
 }
 
 }  // namespace isplat

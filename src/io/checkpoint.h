@@ -40,4 +40,20 @@ Checkpoint load_checkpoint(const std::string& path);                  // checks 
 torch::Tensor bytes_to_tensor(const std::string& bytes);
 std::string tensor_to_bytes(const torch::Tensor& t);
 
+// A run's checkpoint folder: periodic `step_N` files (the newest `keep_last` kept) and the names `last`
+// and `best` as hard links to them (copies where the file system has none). Every write is atomic.
+class CheckpointFolder {
+ public:
+  CheckpointFolder(std::string dir, int64_t keep_last);
+  std::string path(const std::string& name) const;  // <dir>/<name>.safetensors
+  // Writes step_N, points `last` at it, and removes periodic files beyond keep_last.
+  void save_periodic(int64_t step, const Checkpoint& ck);
+  void save(const std::string& name, const Checkpoint& ck);    // e.g. "init", or "last" on Ctrl-C
+  void alias(const std::string& from, const std::string& to);  // `to` becomes the same bytes as `from`
+
+ private:
+  std::string dir_;
+  int64_t keep_last_;
+};
+
 }  // namespace isplat

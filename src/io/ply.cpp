@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "decoder/composer.h"
+#include "geometry/color.h"
 #include "io/atomic_file.h"
 
 namespace isplat {

@@ -35,10 +35,11 @@ std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string&
                                         const std::vector<std::string>& overrides) {
   ModelOptions options = model_options_from_checkpoint(ck, path, overrides);
   options.encoder.vit.weights.clear();  // the checkpoint already holds the ViT weights
+  options.encoder.initial_weights_matter = false;
   auto pipeline = std::make_unique<Pipeline>(options, &ck.tensors);
   load_module(ck, *pipeline->model(), path);
   pipeline->model()->eval();
-  log_info("model: ", path, " (step ", ck.step(), ", variant ", options.variant,
+  log_info("model: trained weights (encoder, decoder) from ", path, " (step ", ck.step(), ", variant ", options.variant,
            ", prior: ", pipeline->prior().describe(), ")");
   return pipeline;
 }

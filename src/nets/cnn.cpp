@@ -1,5 +1,5 @@
 // CNN feature branch: residual stages and multi-scale fusion at quarter resolution.
-#include "encoder/cnn.h"
+#include "nets/cnn.h"
 
 #include <torch/torch.h>
 

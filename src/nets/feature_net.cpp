@@ -1,5 +1,5 @@
 // torchvision feature stacks as plain layer lists with taps; weights from safetensors.
-#include "loss/feature_net.h"
+#include "nets/feature_net.h"
 
 #include <torch/torch.h>
 

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "encoder/cnn.h"
 #include "geometry/camera_torch.h"
+#include "nets/cnn.h"
 
 namespace isplat {
 namespace nn = torch::nn;
