@@ -4,7 +4,9 @@
 #include <filesystem>
 
 #include "core/config.h"
+#include "data/synth/generate.h"
 #include "eval/eval_config.h"
+#include "experiment/experiment.h"
 #include "train/train_config.h"
 
 using namespace isplat;
@@ -16,16 +18,25 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     if (e.path().extension() != ".json") continue;
     const std::string path = e.path().string();
     INFO(path);
-    if (e.path().filename().string().rfind("eval_", 0) == 0) {
+    const std::string name = e.path().filename().string();
+    const bool experiments = e.path().parent_path().filename() == "experiments";
+    if (name.rfind("eval", 0) == 0) {
       const auto c = load_config<EvalConfig>(path);
       CHECK_FALSE(c.datasets.empty());
+    } else if (experiments && name == "data.json") {
+      const auto c = load_config<GenerateConfig>(path);
+      CHECK(c.generate.train_scenes > 0);
+    } else if (experiments && name.rfind("ablation", 0) == 0) {
+      const auto c = load_config<ExperimentConfig>(path);
+      CHECK_FALSE(c.rows.empty());
+      CHECK_NOTHROW(Experiment(c));  // rows, reuse and the reference are consistent
     } else {
       const auto c = load_config<TrainConfig>(path);
       CHECK(c.train.steps > 0);
     }
     ++checked;
   }
-  CHECK(checked >= 12);
+  CHECK(checked >= 17);
   const auto rgb = load_config<TrainConfig>(std::string(ISPLAT_SOURCE_DIR) + "/configs/hypersim_rgb.json");
   CHECK(rgb.model.sampler.budget == 1500000);  // paper settings
   CHECK(rgb.model.encoder.vit.size == "L");

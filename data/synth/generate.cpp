@@ -37,6 +37,10 @@ void GenerateOptions::visit(ConfigVisitor& v) {
   v.field("test_scenes", test_scenes, "held-out test scenes (split 'test')", Range::at_least(0));
   v.field("cameras_per_scene", cameras_per_scene, "camera trajectories per training scene", Range::between(1, 9));
   v.field("frames", frames, "frames per training trajectory", Range::at_least(2));
+  v.field("room_max_step", room_max_step,
+          "largest step between consecutive room frames, metres (steps are stratified on a log scale from "
+          "0.04 m); 0.8 lets windows of 10 views fill the [2 m, inf) baseline bin",
+          Range::between(0.05, 5.0));
   v.field("width", width, "training image width (Hypersim native is 1024)", Range::at_least(16));
   v.field("height", height, "training image height (Hypersim native is 768)", Range::at_least(16));
   v.field("supersample", supersample, "n x n colour samples per pixel (antialiasing)", Range::between(1, 4));
@@ -155,7 +159,8 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
     double exposure = -1;
     for (int64_t c = 0; c < o.cameras_per_scene; ++c) {
       const std::string cam = cat("cam_0", c);
-      const auto poses = synth::make_trajectory(scene, static_cast<int>(o.frames), mix_seed(plan.seed, 77 + c));
+      const auto poses =
+          synth::make_trajectory(scene, static_cast<int>(o.frames), mix_seed(plan.seed, 77 + c), 0.04, o.room_max_step);
       std::vector<double> orient, pos;
       std::vector<int64_t> frame_ids;
       for (size_t f = 0; f < poses.size(); ++f) {
@@ -272,7 +277,7 @@ void write_eval_scene(const GenerateOptions& o, const std::string& dataset, cons
   const Scene scene = synth::build_scene(style, seed);
   const std::string dir = (fs::path(generated_eval_root(o.out, dataset)) / cat("scene_", index)).string();
   const Intrinsics intr = eval_intrinsics(o, style == "courtyard" ? 70.0 * kPi / 180 : 65.0 * kPi / 180);
-  const double max_step = style == "room" ? 0.5 : 0.9;  // open scenes: more pairs in the [2 m, inf) bin
+  const double max_step = style == "room" ? o.room_max_step : 0.9;  // open scenes: more pairs in [2 m, inf)
   const auto poses = synth::make_trajectory(scene, static_cast<int>(o.eval_frames), mix_seed(seed, 3), 0.04, max_step);
   std::vector<EvalFrame> frames;
   double exposure = -1;

@@ -17,6 +17,7 @@ struct GenerateOptions {
   int64_t train_scenes = 6, val_scenes = 1, test_scenes = 1;
   int64_t cameras_per_scene = 1;
   int64_t frames = 36;
+  double room_max_step = 0.8;  // largest camera step in rooms (m): windows of 10 views reach past 2 m
   int64_t width = 384, height = 288;
   int64_t supersample = 2;
   int64_t tilt_shift_every = 3;

@@ -1,0 +1,380 @@
+// Experiment runner: training rows, scoring variants, and the paired report.
+#include "experiment/experiment.h"
+
+#include <torch/torch.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "eval/evaluator.h"
+#include "eval/results_log.h"
+#include "io/atomic_file.h"
+#include "io/chart.h"
+#include "io/csv.h"
+#include "io/jsonl.h"
+#include "metrics/stats.h"
+#include "train/trainer.h"
+
+namespace isplat {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+bool wanted(const std::vector<std::string>& only, const std::string& name) {
+  return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
+}
+
+std::string fmt(double v, int digits) {
+  if (!std::isfinite(v)) return "n/a";
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(digits) << v;
+  return os.str();
+}
+
+std::string signed_fmt(double v, int digits) { return (v >= 0 ? "+" : "") + fmt(v, digits); }
+
+double mean_finite(const std::vector<double>& v) {
+  double s = 0;
+  int64_t n = 0;
+  for (double x : v)
+    if (std::isfinite(x)) s += x, ++n;
+  return n ? s / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+// One scored method's values on the experiment's pair list (NaN where not scored).
+struct Scores {
+  std::vector<double> psnr, ssim, lpips;
+  bool any = false;
+};
+
+}  // namespace
+
+Experiment::Experiment(ExperimentConfig config) : config_(std::move(config)) {
+  ISPLAT_CHECK(!config_.rows.empty(), "experiment: no rows (config key rows)");
+  ISPLAT_CHECK(!config_.train_config.empty(), "experiment: train_config is empty");
+  ISPLAT_CHECK(!config_.eval_config.empty(), "experiment: eval_config is empty");
+  std::set<std::string> names;
+  for (const auto& r : config_.rows) {
+    ISPLAT_CHECK(!r.name.empty() && r.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                               "0123456789-_") == std::string::npos,
+                 "experiment: row name '", r.name, "' must be letters, digits, - or _ (config key rows[].name)");
+    ISPLAT_CHECK(names.insert(r.name).second, "experiment: row '", r.name, "' appears twice");
+    ISPLAT_CHECK(!r.seeds.empty() || !r.from.empty(), "experiment: row '", r.name, "' has no seeds");
+  }
+  for (const auto& r : config_.rows)
+    ISPLAT_CHECK(r.from.empty() || names.count(r.from), "experiment: row '", r.name, "' reuses unknown row '", r.from,
+                 "' (config key rows[].from)");
+  ISPLAT_CHECK(names.count(config_.reference), "experiment: reference row '", config_.reference, "' is not a row");
+  if (config_.variants.empty()) config_.variants.push_back({"rgb", {}, {}});
+}
+
+const ExperimentRow& Experiment::row(const std::string& name) const {
+  for (const auto& r : config_.rows)
+    if (r.name == name) return r;
+  fail("experiment: no row '", name, "'");
+}
+
+std::vector<ExperimentRun> Experiment::runs(const ExperimentRow& r) const {
+  const ExperimentRow& src = r.from.empty() ? r : row(r.from);
+  std::vector<ExperimentRun> out;
+  for (int64_t seed : src.seeds) {
+    // A reusing row takes the source's runs with its own seeds (default: seed 0 only; e.g. base Gaussians
+    // from a zero-initialized head are the same for every seed).
+    if (!r.from.empty() && std::find(r.seeds.begin(), r.seeds.end(), seed) == r.seeds.end()) continue;
+    out.push_back({src.name, (fs::path(config_.out) / "runs" / cat(src.name, "_s", seed)).string(), seed});
+  }
+  return out;
+}
+
+bool Experiment::finished(const ExperimentRun& run) const {
+  const fs::path summary = fs::path(run.dir) / "summary.json";
+  if (!fs::exists(summary)) return false;
+  const TrainConfig tc = load_config<TrainConfig>((fs::path(run.dir) / "config.json").string());
+  const nlohmann::json s = read_json_file(summary.string());
+  return s.value("steps", int64_t{-1}) >= tc.train.steps;
+}
+
+bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
+  for (const auto& r : config_.rows) {
+    if (!r.from.empty() || !wanted(only, r.name)) continue;
+    for (const auto& run : runs(r)) {
+      if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), run.seed) == seeds.end()) continue;
+      const auto sets = concat(concat(config_.train_set, r.train_set),
+                               {cat("train.out=", run.dir), cat("runtime.seed=", run.seed),
+                                cat("runtime.threads=", config_.runtime.threads)});
+      TrainConfig tc = load_config<TrainConfig>(config_.train_config, sets);
+      if (fs::exists(fs::path(run.dir) / "summary.json") && finished(run)) {
+        log_info("experiment: ", r.name, " seed ", run.seed, " is trained (", run.dir, "); skipped");
+        continue;
+      }
+      log_info("experiment: training ", r.name, " seed ", run.seed, " -> ", run.dir);
+      Trainer trainer(tc);
+      trainer.resume("auto");
+      if (trainer.run() == 130) return false;
+    }
+  }
+  return true;
+}
+
+std::string Experiment::method_name(const ExperimentRow& r, int64_t seed, const ExperimentVariant& v) const {
+  const size_t seeds = runs(r).size();
+  return cat(r.name, seeds > 1 ? cat("-s", seed) : std::string(), "@", v.name);
+}
+
+void Experiment::evaluate(const std::vector<std::string>& only) {
+  EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
+  ec.runtime.threads = config_.runtime.threads;
+  ec.scoring.out = (fs::path(config_.out) / "eval").string();
+  ec.methods.clear();
+  for (const auto& b : config_.baselines) ec.methods.push_back({b, b, "", {}});
+  for (const auto& v : config_.variants)
+    for (const auto& r : config_.rows) {
+      if (!wanted(only, r.name) || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
+      for (const auto& run : runs(r)) {
+        const std::string ck = (fs::path(run.dir) / "checkpoints" / (r.checkpoint + ".safetensors")).string();
+        if (!fs::exists(ck) || (r.checkpoint != "init" && !finished(run))) {
+          log_warn("experiment: ", r.name, " seed ", run.seed, " is not trained yet (", ck, "); not scored");
+          continue;
+        }
+        ec.methods.push_back({method_name(r, run.seed, v), "model", ck, v.overrides});
+      }
+    }
+  Evaluator(ec).run();
+}
+
+void Experiment::report() {
+  EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
+  ec.scoring.out = (fs::path(config_.out) / "eval").string();
+  ec.scoring.lpips = {};  // the report reads scores; it computes none
+  Evaluator ev(ec);
+  const std::string lp = "squeeze";  // the LPIPS variant reported (the one with real weights here)
+
+  std::ostringstream md;
+  md << "# Ablation report\n\n"
+     << "Every row is trained from the same recipe (`" << config_.train_config << "`) and scored on the same pairs with "
+     << "the same masks. Delta = row minus `" << config_.reference
+     << "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval ("
+     << config_.bootstrap << " resamples); an interval that contains 0 is no difference.\n\n";
+  CsvTable csv;
+  csv.header = {"dataset", "variant", "row", "bin", "pairs", "psnr", "ssim", "lpips_" + lp, "delta_psnr",
+                "delta_psnr_lo", "delta_psnr_hi", "delta_lpips", "delta_lpips_lo", "delta_lpips_hi"};
+  nlohmann::ordered_json js = nlohmann::ordered_json::array();
+  std::vector<Chart> delta_charts;
+
+  for (size_t d = 0; d < ec.datasets.size(); ++d) {
+    const auto& ds = ec.datasets[d];
+    const std::string manifest_path = (fs::path(ec.scoring.out) / ds.name / "manifest.json").string();
+    if (!fs::exists(manifest_path)) {
+      md << "## " << ds.name << "\n\nNot evaluated yet (no " << manifest_path << ").\n\n";
+      continue;
+    }
+    const Manifest m = read_manifest(manifest_path);
+    const std::vector<int64_t> pairs = ev.select_pairs(m);
+    std::vector<std::string> bins;
+    for (size_t b = 0; b < m.bin_counts.size(); ++b) bins.push_back(m.bin_label(static_cast<int>(b)));
+    std::vector<int> pair_bin;
+    for (int64_t i : pairs) pair_bin.push_back(m.pairs[static_cast<size_t>(i)].bin);
+    auto load = [&](const std::string& method) {
+      Scores s;
+      const std::string path = ev.results_path(d, method);
+      if (!fs::exists(path)) return s;
+      const ResultsLog log(path);
+      for (int64_t i : pairs) {
+        auto it = log.done().find(i);
+        const bool ok = it != log.done().end();
+        s.any |= ok;
+        s.psnr.push_back(ok ? it->second.psnr : NAN);
+        s.ssim.push_back(ok ? it->second.ssim : NAN);
+        const double l = ok && it->second.lpips.count(lp) ? it->second.lpips.at(lp) : NAN;
+        s.lpips.push_back(l);
+      }
+      return s;
+    };
+    auto subset = [&](const std::vector<double>& v, int bin) {
+      if (bin < 0) return v;
+      std::vector<double> out;
+      for (size_t k = 0; k < v.size(); ++k) out.push_back(pair_bin[k] == bin ? v[k] : NAN);
+      return out;
+    };
+    md << "## " << ds.name << " (" << pairs.size() << " pairs; per bin:";
+    for (size_t b = 0; b < bins.size(); ++b) md << " " << bins[b] << " " << m.bin_counts[b];
+    md << ")\n\n";
+
+    for (const auto& v : config_.variants) {
+      // Reference: the reference row's seeds, averaged per pair.
+      const ExperimentRow& ref_row = row(config_.reference);
+      std::vector<Scores> ref_seeds;
+      for (const auto& run : runs(ref_row)) {
+        Scores s = load(method_name(ref_row, run.seed, v));
+        if (s.any) ref_seeds.push_back(s);
+      }
+      if (ref_seeds.empty()) {
+        md << "### " << v.name << "\n\nThe reference row `" << config_.reference << "` is not scored in this variant yet.\n\n";
+        continue;
+      }
+      Scores ref;
+      ref.any = true;
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        auto avg = [&](auto member) {
+          double sum = 0;
+          int n = 0;
+          for (const auto& s : ref_seeds)
+            if (std::isfinite((s.*member)[k])) sum += (s.*member)[k], ++n;
+          return n == static_cast<int>(ref_seeds.size()) ? sum / n : NAN;
+        };
+        ref.psnr.push_back(avg(&Scores::psnr));
+        ref.ssim.push_back(avg(&Scores::ssim));
+        ref.lpips.push_back(avg(&Scores::lpips));
+      }
+      md << "### " << v.name << (v.overrides.empty() ? "" : " (model overrides: ");
+      for (size_t k = 0; k < v.overrides.size(); ++k) md << (k ? ", " : "") << "`" << v.overrides[k] << "`";
+      md << (v.overrides.empty() ? "" : ")") << "\n\n| row | PSNR | SSIM | LPIPS (" << lp << ") | ΔPSNR [95% CI] | ΔLPIPS [95% CI] |";
+      for (const auto& b : bins) md << " " << b << " PSNR (Δ [CI]) |";
+      md << "\n|---|---|---|---|---|---|";
+      for (size_t b = 0; b < bins.size(); ++b) md << "---|";
+      md << "\n";
+
+      Chart chart;
+      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
+      chart.x_label = "baseline bin (0 = smallest)";
+      chart.y_label = "delta PSNR (dB), 95% CI";
+      // Rows: every trained row and seed, then the baselines.
+      struct Entry {
+        std::string name, label;
+        Scores s;
+        bool is_ref_seed = false;
+      };
+      std::vector<Entry> entries;
+      for (const auto& r : config_.rows) {
+        if (!v.rows.empty() && !wanted(v.rows, r.name)) continue;
+        for (const auto& run : runs(r)) {
+          const std::string name = method_name(r, run.seed, v);
+          Scores s = load(name);
+          if (!s.any) continue;
+          entries.push_back({name, r.label.empty() ? r.name : r.label, s, r.name == config_.reference});
+        }
+      }
+      for (const auto& b : config_.baselines) {
+        Scores s = load(b);
+        if (s.any) entries.push_back({b, b, s, false});
+      }
+      if (ref_seeds.size() > 1) {  // training noise: the reference's seeds against each other
+        entries.push_back({cat(config_.reference, " seed spread"), "seed 1 - seed 0 of the reference", ref_seeds[1],
+                           false});
+      }
+      for (size_t k = 0; k < entries.size(); ++k) {
+        const Entry& e = entries[k];
+        const bool spread = e.name.find("seed spread") != std::string::npos;
+        const Scores& base = spread ? ref_seeds[0] : ref;
+        const Interval dp = paired_bootstrap(e.s.psnr, base.psnr, config_.bootstrap);
+        const Interval dl = paired_bootstrap(e.s.lpips, base.lpips, config_.bootstrap);
+        const bool self = e.is_ref_seed && ref_seeds.size() == 1;
+        md << "| " << e.name << (e.label != e.name ? " (" + e.label + ")" : "") << " | " << fmt(mean_finite(e.s.psnr), 2)
+           << " | " << fmt(mean_finite(e.s.ssim), 3) << " | " << fmt(mean_finite(e.s.lpips), 3) << " | "
+           << (self ? "reference" : cat(signed_fmt(dp.mean, 2), " [", signed_fmt(dp.lo, 2), ", ", signed_fmt(dp.hi, 2), "]"))
+           << " | "
+           << (self ? "reference" : cat(signed_fmt(dl.mean, 3), " [", signed_fmt(dl.lo, 3), ", ", signed_fmt(dl.hi, 3), "]"))
+           << " |";
+        ChartSeries series;
+        series.name = e.name;
+        series.marker = static_cast<int>(k % 4);
+        auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
+                           const std::vector<double>& l, const Interval& ip, const Interval& il) {
+          int64_t n = 0;
+          for (double x : p) n += std::isfinite(x);
+          csv.rows.push_back({ds.name, v.name, e.name, bin, std::to_string(n), fmt(mean_finite(p), 4),
+                              fmt(mean_finite(s), 5), fmt(mean_finite(l), 5), fmt(ip.mean, 4), fmt(ip.lo, 4),
+                              fmt(ip.hi, 4), fmt(il.mean, 5), fmt(il.lo, 5), fmt(il.hi, 5)});
+          auto num = [](double x) { return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
+          js.push_back({{"dataset", ds.name}, {"variant", v.name}, {"row", e.name}, {"label", e.label}, {"bin", bin},
+                        {"pairs", n}, {"psnr", num(mean_finite(p))}, {"ssim", num(mean_finite(s))},
+                        {"lpips_" + lp, num(mean_finite(l))}, {"delta_psnr", num(ip.mean)},
+                        {"delta_psnr_ci", {num(ip.lo), num(ip.hi)}}, {"delta_lpips", num(il.mean)},
+                        {"delta_lpips_ci", {num(il.lo), num(il.hi)}}, {"reference", config_.reference}});
+        };
+        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl);
+        for (size_t b = 0; b < bins.size(); ++b) {
+          const int bi = static_cast<int>(b);
+          const auto p = subset(e.s.psnr, bi);
+          const Interval bp = paired_bootstrap(p, subset(base.psnr, bi), config_.bootstrap);
+          const Interval bl = paired_bootstrap(subset(e.s.lpips, bi), subset(base.lpips, bi), config_.bootstrap);
+          md << " " << fmt(mean_finite(p), 2);
+          if (!self && bp.n > 0) md << " (" << signed_fmt(bp.mean, 2) << " [" << signed_fmt(bp.lo, 2) << ", " << signed_fmt(bp.hi, 2) << "])";
+          md << " |";
+          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl);
+          series.x.push_back(static_cast<double>(b));
+          series.y.push_back(self ? 0.0 : bp.mean);
+        }
+        md << "\n";
+        if (!self && !spread) chart.series.push_back(series);
+      }
+      md << "\n";
+      delta_charts.push_back(chart);
+    }
+  }
+
+  // Training curves of every run: loss and validation PSNR against step and against CPU time.
+  Chart loss_step{"training loss (total) vs step", "step", "loss", false, {}};
+  Chart val_step{"validation masked PSNR vs step", "step", "PSNR (dB)", false, {}};
+  Chart loss_cpu{"training loss (total) vs CPU time", "CPU time (s)", "loss", false, {}};
+  Chart val_cpu{"validation masked PSNR vs CPU time", "CPU time (s)", "PSNR (dB)", false, {}};
+  md << "## Training runs\n\n| run | steps | mean step (ms) | CPU time (s) | final val PSNR (dB) |\n|---|---|---|---|---|\n";
+  int color = 0;
+  for (const auto& r : config_.rows) {
+    if (!r.from.empty()) continue;
+    for (const auto& run : runs(r)) {
+      const auto records = read_jsonl((fs::path(run.dir) / "train_log.jsonl").string());
+      if (records.empty()) continue;
+      ChartSeries ls{cat(r.name, "_s", run.seed), {}, {}, true, -1, color},
+          vs{cat(r.name, "_s", run.seed), {}, {}, true, 0, color};
+      ChartSeries lc = ls, vc = vs;
+      double last_val = NAN, cpu = 0, step_ms = 0;
+      int64_t steps = 0, timed = 0;
+      std::vector<double> window;
+      for (const auto& j : records) {
+        const double step = j.value("step", 0.0);
+        cpu = j.value("cpu_s", cpu);
+        if (j.contains("loss") && j["loss"].contains("total") && j["loss"]["total"].is_number()) {
+          window.push_back(j["loss"]["total"].get<double>());
+          if (window.size() > 20) window.erase(window.begin());
+          double sm = 0;
+          for (double x : window) sm += x;
+          ls.x.push_back(step), ls.y.push_back(sm / window.size());  // 20-step moving average
+          lc.x.push_back(cpu), lc.y.push_back(sm / window.size());
+          steps = static_cast<int64_t>(step);
+          if (j.contains("step_ms") && j["step_ms"].is_number()) step_ms += j["step_ms"].get<double>(), ++timed;
+        }
+        if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number()) {
+          last_val = j["val_psnr_masked"].get<double>();
+          vs.x.push_back(step), vs.y.push_back(last_val);
+          vc.x.push_back(cpu), vc.y.push_back(last_val);
+        }
+      }
+      loss_step.series.push_back(ls), val_step.series.push_back(vs);
+      loss_cpu.series.push_back(lc), val_cpu.series.push_back(vc);
+      md << "| " << r.name << "_s" << run.seed << " | " << steps << " | " << fmt(timed ? step_ms / timed : NAN, 0)
+         << " | " << fmt(cpu, 1) << " | " << fmt(last_val, 2) << " |\n";
+      ++color;
+    }
+  }
+  md << "\nCharts: `curves.png` (training curves), `deltas.png` (ΔPSNR per baseline bin).\n";
+  fs::create_directories(config_.out);
+  write_charts((fs::path(config_.out) / "curves.png").string(), {loss_step, val_step, loss_cpu, val_cpu});
+  write_charts((fs::path(config_.out) / "deltas.png").string(), delta_charts.empty() ? std::vector<Chart>{Chart{}} : delta_charts);
+  write_file_atomic((fs::path(config_.out) / "report.md").string(), md.str());
+  write_csv((fs::path(config_.out) / "report.csv").string(), csv);
+  write_file_atomic((fs::path(config_.out) / "report.json").string(), js.dump(2) + "\n");
+  log_info("experiment: report in ", config_.out, " (report.md, report.csv, report.json, curves.png, deltas.png)");
+}
+
+}  // namespace isplat

@@ -1,0 +1,39 @@
+// The experiment runner: trains every row of an ablation table from one recipe (resumable, finished runs
+// skipped), scores them all on the same manifests in every variant, and writes one report with paired
+// bootstrap intervals against the reference row and the training curves of every run.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "experiment/experiment_config.h"
+
+namespace isplat {
+
+struct ExperimentRun {
+  std::string row, dir;  // dir: <out>/runs/<row>_s<seed>
+  int64_t seed = 0;
+};
+
+class Experiment {
+ public:
+  explicit Experiment(ExperimentConfig config);
+
+  // Trains the runs of the rows in `only` (empty = all) with a seed in `seeds` (empty = all) that are not
+  // finished. Returns false when interrupted (Ctrl-C); the interrupted run resumes next time.
+  bool train(const std::vector<std::string>& only = {}, const std::vector<int64_t>& seeds = {});
+  // Scores every finished run in every variant, plus the baselines, on the evaluation's manifests.
+  void evaluate(const std::vector<std::string>& only = {});
+  // Writes report.md, report.csv, report.json, curves.png and deltas.png into the experiment folder.
+  void report();
+
+  std::vector<ExperimentRun> runs(const ExperimentRow& row) const;  // the runs a row trains or reuses
+  bool finished(const ExperimentRun& run) const;
+
+ private:
+  const ExperimentRow& row(const std::string& name) const;
+  std::string method_name(const ExperimentRow& row, int64_t seed, const ExperimentVariant& variant) const;
+
+  ExperimentConfig config_;
+};
+
+}  // namespace isplat
