@@ -7,7 +7,7 @@
 
 #include <torch/types.h>
 
-#include "loss/feature_net.h"
+#include "nets/feature_net.h"
 
 namespace isplat {
 
@@ -31,7 +31,7 @@ class Lpips {
   double operator()(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor& mask = torch::Tensor()) const;
   const std::string& net() const { return net_; }
 
-  // Finds the backbone and heads for `net` in a weights folder (e.g. ../shared/weights); returns nullptr
+  // Finds the backbone and heads for `net` in a weights folder (e.g. weights); returns nullptr
   // and sets `why` when they are not there.
   static std::unique_ptr<Lpips> from_folder(const std::string& net, const std::string& folder, std::string& why);
 
