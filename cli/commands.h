@@ -18,5 +18,6 @@ int run_generate(int argc, char** argv);
 int run_predict(int argc, char** argv);
 int run_render(int argc, char** argv);
 int run_export_onnx(int argc, char** argv);
+int run_export(int argc, char** argv);
 
 }  // namespace isplat::cli

@@ -7,7 +7,8 @@ PACKAGES=(
   libtorch-dev libopencv-dev libeigen3-dev nlohmann-json3-dev
   libopenexr-dev libimath-dev catch2 libhdf5-dev
   libonnx-dev libprotobuf-dev protobuf-compiler
-  libbenchmark-dev libopenblas0-pthread clang-format
+  libbenchmark-dev libopenblas0-pthread clang-format zlib1g-dev
+  chromium  # opens the exported HTML viewer headless in the tests
 )
 
 need_root() {
@@ -63,6 +64,19 @@ if command -v npm >/dev/null 2>&1; then
     mkdir -p "$ort_dir"
     (cd "$ort_dir" && npm install --silent --no-audit --no-fund --ignore-scripts "onnxruntime-node@$ORT_VERSION" >/dev/null) ||
       echo "setup.sh: WARNING npm install onnxruntime-node failed; the ONNX runtime check will be skipped" >&2
+  fi
+fi
+# splat-transform writes the HTML viewer export and, in the tests, reads back the .splat/.spz/PLY files we
+# write. 2.7.1 is the newest release that runs on Node 18 (Debian 12's nodejs); 3.x needs Node 22.
+SPLAT_TRANSFORM_VERSION=2.7.1
+st_dir="$root_dir/third_party/splat-transform"
+st_pkg="$st_dir/node_modules/@playcanvas/splat-transform/package.json"
+if command -v npm >/dev/null 2>&1; then
+  if [ ! -f "$st_pkg" ] || ! grep -q "\"version\": \"$SPLAT_TRANSFORM_VERSION\"" "$st_pkg"; then
+    mkdir -p "$st_dir"
+    (cd "$st_dir" && npm install --silent --no-audit --no-fund --ignore-scripts \
+      "@playcanvas/splat-transform@$SPLAT_TRANSFORM_VERSION" >/dev/null) ||
+      echo "setup.sh: WARNING npm install splat-transform failed; html export and its checks will be skipped" >&2
   fi
 fi
 echo "setup.sh: done"

@@ -67,23 +67,30 @@ double read_value(const char* p, PlyType t) {
 
 }  // namespace
 
-void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linear) {
+void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linear, const PlyOptions& options) {
   ISPLAT_CHECK(!g_in.batched(), path, ": write_ply takes one (unbatched) Gaussian set");
+  ISPLAT_CHECK(options.sh_degree >= 0 && options.sh_degree <= 3, path, ": PLY sh_degree ", options.sh_degree,
+               " is not in 0..3");
   const Gaussians g = g_in.detach().to(torch::kFloat32);
   const int64_t N = g.count();
+  const int64_t rest = 3 * ((options.sh_degree + 1) * (options.sh_degree + 1) - 1);
   auto colors = colors_linear ? linear_to_srgb(g.colors) : g.colors;
   auto quats = g.quats / torch::clamp_min(g.quats.norm(2, 1, true), 1e-12);
   auto opac = torch::clamp(g.opacities, 1e-6, 1 - 1e-6);
   auto cols =
-      torch::cat({g.means, torch::zeros({N, 3}), (colors - 0.5) / kShC0, torch::log(opac / (1 - opac)).unsqueeze(1),
-                  torch::log(torch::clamp_min(g.scales, 1e-12)), quats},
+      torch::cat({g.means, torch::zeros({N, 3}), (colors - 0.5) / kShC0, torch::zeros({N, rest}),
+                  torch::log(opac / (1 - opac)).unsqueeze(1), torch::log(torch::clamp_min(g.scales, 1e-12)), quats},
                  1)
           .contiguous();
   ISPLAT_CHECK(torch::isfinite(cols).all().item<bool>(), path, ": Gaussians have non-finite values; not written");
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n"
          << "element vertex " << N << "\n";
-  for (const char* p : kProps) header << "property float " << p << "\n";
+  for (int k = 0; k < 17; ++k) {
+    header << "property float " << kProps[k] << "\n";
+    if (k == 8)  // the higher SH bands follow the DC term in the 3DGS layout
+      for (int64_t r = 0; r < rest; ++r) header << "property float f_rest_" << r << "\n";
+  }
   header << "end_header\n";
   write_file_atomic(path, [&](std::ostream& os) {
     const std::string h = header.str();
