@@ -11,6 +11,8 @@ std::map<std::string, Command> all_commands() {
       {"export", {"a PLY scene as .splat, .spz, PLY with SH degree 3, or a self-contained HTML viewer", run_export}},
       {"export-onnx", {"a checkpoint's encoder + implicit decoder as an ONNX graph (opset 17)", run_export_onnx}},
       {"render", {"novel views of a PLY: orbit, dolly or a camera path, as PNG frames and MP4", run_render}},
+      {"eval-depth",
+       {"AbsRel and delta<1.25 of depth priors against datasets' depth, per depth range", run_eval_depth}},
   };
 }
 

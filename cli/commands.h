@@ -19,5 +19,6 @@ int run_predict(int argc, char** argv);
 int run_render(int argc, char** argv);
 int run_export_onnx(int argc, char** argv);
 int run_export(int argc, char** argv);
+int run_eval_depth(int argc, char** argv);
 
 }  // namespace isplat::cli

@@ -5,6 +5,7 @@
 
 #include "core/config.h"
 #include "data/synth/generate.h"
+#include "eval/depth_eval.h"
 #include "eval/eval_config.h"
 #include "experiment/experiment.h"
 #include "train/train_config.h"
@@ -20,10 +21,13 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     INFO(path);
     const std::string name = e.path().filename().string();
     const bool experiments = e.path().parent_path().filename() == "experiments";
-    if (name.rfind("eval", 0) == 0) {
+    if (name.rfind("depth_eval", 0) == 0) {
+      const auto c = load_config<DepthEvalConfig>(path);
+      CHECK_FALSE(c.priors.empty());
+    } else if (name.rfind("eval", 0) == 0) {
       const auto c = load_config<EvalConfig>(path);
       CHECK_FALSE(c.datasets.empty());
-    } else if (experiments && name == "data.json") {
+    } else if (name == "data.json") {
       const auto c = load_config<GenerateConfig>(path);
       CHECK(c.generate.train_scenes > 0);
     } else if (experiments && name.rfind("ablation", 0) == 0) {
@@ -36,7 +40,7 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     }
     ++checked;
   }
-  CHECK(checked >= 17);
+  CHECK(checked >= 21);
   const auto rgb = load_config<TrainConfig>(std::string(ISPLAT_SOURCE_DIR) + "/configs/hypersim_rgb.json");
   CHECK(rgb.model.sampler.budget == 1500000);  // paper settings
   CHECK(rgb.model.encoder.vit.size == "L");

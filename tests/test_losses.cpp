@@ -6,6 +6,7 @@
 
 #include "loss/knn.h"
 #include "loss/losses.h"
+#include "loss/objective.h"
 #include "nets/feature_net.h"
 #include "support/test_util.h"
 
@@ -90,4 +91,22 @@ TEST_CASE("losses: perceptual + Gram on the real SqueezeNet weights", "[loss]") 
   // More noise, larger loss.
   auto x2 = (y + 0.4 * torch::randn_like(y)).clamp(0, 1);
   CHECK(p(x2, y).item<float>() > loss.item<float>());
+}
+
+TEST_CASE("losses: the depth loss separates shape (scale-invariant) from the global metric scale", "[loss]") {
+  torch::manual_seed(2);
+  const auto depth = torch::rand({2, 8, 8}) * 5 + 0.5;
+  const auto valid = torch::ones({2, 8, 8});
+  const auto shape = torch::log(depth) + 0.1 * torch::randn({2, 8, 8});
+  LossOptions o;
+  o.depth_lambda = 1.0;  // pure shape
+  o.depth_scale = 1.0;
+  o.depth_l1 = 0.0;
+  const auto a = depth_log_losses(shape, depth, valid, o);
+  const auto b = depth_log_losses(shape + std::log(3.0), depth, valid, o);  // the same shape, 3x too far
+  CHECK(b.at("silog").item<double>() == Approx(a.at("silog").item<double>()).epsilon(1e-4));
+  CHECK(b.at("scale").item<double>() ==
+        Approx(std::log(3.0) + (shape - torch::log(depth)).mean().item<double>()).epsilon(1e-4));
+  CHECK(b.at("total").item<double>() > a.at("total").item<double>());
+  CHECK_THROWS_WITH(depth_log_losses(shape, depth, torch::zeros({2, 8, 8}), o), Catch::Contains("without valid depth"));
 }

@@ -6,6 +6,7 @@
 #include <torch/torch.h>
 
 #include "core/error.h"
+#include "geometry/camera_torch.h"
 #include "prior/depth_prior.h"
 #include "prior/learned_depth.h"
 #include "support/test_util.h"
@@ -98,4 +99,54 @@ TEST_CASE("prior: the learned net predicts positive metric depth at the input si
   CHECK(d.sizes() == torch::IntArrayRef({2, 1, 40, 56}));
   CHECK((d > 0).all().item<bool>());
   CHECK(d.mean().item<float>() == Approx(3.0f).epsilon(0.3));  // starts at room scale
+}
+
+TEST_CASE("prior: every learned-net option keeps the contract (shape, metric depth, invalid masked)", "[prior]") {
+  test::QuietLogs quiet;
+  const int64_t H = 48, W = 64;
+  for (const std::string arch : {"unet", "squeeze"})
+    for (const bool focal : {false, true}) {
+      INFO(arch << (focal ? " focal-normalized" : ""));
+      PriorOptions o;
+      o.type = "learned";
+      o.learned_arch = arch;
+      o.learned_focal = focal;
+      o.learned_width = 8;
+      o.learned_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+      auto prior = make_depth_prior(o);
+      PriorInput in;
+      in.image = torch::rand({3, H, W});
+      in.K = make_K(50.0, 50.0, W / 2.0, H / 2.0, torch::kFloat32);
+      const PriorOutput out = prior->predict(in);
+      CHECK(out.depth.sizes() == torch::IntArrayRef({H, W}));
+      CHECK(out.valid.sizes() == torch::IntArrayRef({H, W}));
+      CHECK(torch::isfinite(out.depth).all().item<bool>());
+      CHECK(((out.depth > 0) == (out.valid > 0)).all().item<bool>());  // invalid pixels are 0, never NaN
+      CHECK(out.depth.max().item<double>() < 1e3);
+      CHECK_THAT(prior->describe(), Catch::Contains(arch));
+    }
+}
+
+TEST_CASE("prior: focal normalization scales depth with the focal length, exactly", "[prior]") {
+  LearnedDepthNet net(LearnedDepthOptions{"unet", 8, true});
+  torch::NoGradGuard g;
+  const auto image = torch::rand({1, 3, 40, 56});
+  const auto K1 = make_K(40.0, 40.0, 28.0, 20.0, torch::kFloat32).unsqueeze(0);
+  const auto K2 = make_K(80.0, 80.0, 28.0, 20.0, torch::kFloat32).unsqueeze(0);
+  const auto d1 = net->forward(image, K1), d2 = net->forward(image, K2);
+  // Twice the focal length (half the field of view): the same picture shows a scene twice as far.
+  CHECK(torch::allclose(d2, 2.0 * d1, 1e-5, 1e-6));
+  CHECK_THROWS_WITH(net->forward(image), Catch::Contains("needs K"));
+}
+
+TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained encoder stays frozen", "[prior]") {
+  LearnedDepthNet net(
+      LearnedDepthOptions{"squeeze", 8, false, test::project_weights_dir() + "/squeezenet1_1_features.safetensors"});
+  int64_t count = 0;
+  for (const auto& p : net->parameters()) count += p.numel();
+  CHECK(count < 200000);  // the decoder only: SqueezeNet's 722k weights are not parameters
+  const auto x = torch::rand({1, 3, 48, 64});
+  const auto loss = net->forward_log(x).mean();
+  loss.backward();
+  CHECK(net->head->weight.grad().abs().sum().item<double>() > 0);
 }

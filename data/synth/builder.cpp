@@ -350,11 +350,139 @@ Scene build_atrium(uint64_t seed) {
   return s;
 }
 
+Scene build_desk(uint64_t seed) {
+  // A tabletop seen from close by: depths of 0.3-3 m, small objects, thin parts, a wall behind.
+  Rng rng(seed);
+  Scene s;
+  s.style = "desk";
+  s.step_scale = 0.12;  // centimetre steps: a close-up capture
+  const double W = rng.uniform(2.6, 3.4), D = rng.uniform(2.4, 3.0), H = rng.uniform(2.4, 2.8);
+  const int floor_m = s.add_material(
+      mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Tiles}), rng.uniform(0.3, 0.6), 0.35, 0.8));
+  const int wall_m = s.add_material(
+      mat(rng, rng.pick(std::vector<Pattern>{Pattern::Noise, Pattern::Stripes}), rng.uniform(0.2, 0.6), 0.5, 0.9));
+  s.add(quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, D, 0), floor_m));
+  s.add(quad(Vec3(0, 0, H), Vec3(0, D, 0), Vec3(W, 0, 0), wall_m));
+  s.add(quad(Vec3(0, D, 0), Vec3(W, 0, 0), Vec3(0, 0, H), wall_m));
+  s.add(quad(Vec3(0, 0, 0), Vec3(0, 0, H), Vec3(0, D, 0), wall_m));
+  s.add(quad(Vec3(W, 0, 0), Vec3(0, D, 0), Vec3(0, 0, H), wall_m));
+  s.add(quad(Vec3(0, 0, 0), Vec3(0, 0, H), Vec3(W, 0, 0), wall_m));
+  // The desk against the far wall, its top at 0.72-0.78 m.
+  const int top =
+      s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Marble, Pattern::Solid}),
+                         rng.uniform(0.08, 0.3), 0.3, 0.85, 0.15));
+  const double tw = rng.uniform(0.7, 1.0), td = rng.uniform(0.35, 0.45), th = rng.uniform(0.72, 0.78);
+  const Vec3 tc(W / 2, D - td - 0.05, 0);
+  s.add(box(tc + Vec3(0, 0, th), Vec3(tw, td, 0.02), 0.0, top));
+  for (int sx : {-1, 1}) s.add(box(tc + Vec3(sx * (tw - 0.04), 0, th / 2), Vec3(0.02, td - 0.03, th / 2), 0.0, top));
+  // Objects: books (thin boxes), mugs (cylinders), balls, a monitor, a pencil cup with thin pencils.
+  const std::vector<Pattern> fine = {Pattern::Dots, Pattern::Checker, Pattern::Stripes, Pattern::Noise, Pattern::Grid};
+  for (int k = 0; k < rng.integer(6, 11); ++k) {
+    const int m = s.add_material(mat(rng, rng.pick(fine), rng.uniform(0.01, 0.05), 0.1, 0.95, rng.uniform(0.0, 0.3)));
+    const Vec3 p(tc.x() + rng.uniform(-tw + 0.1, tw - 0.1), tc.y() + rng.uniform(-td + 0.08, td - 0.08), th + 0.02);
+    switch (rng.integer(0, 3)) {
+      case 0: {
+        const Vec3 half(rng.uniform(0.05, 0.12), rng.uniform(0.07, 0.15), rng.uniform(0.01, 0.04));
+        s.add(box(p + Vec3(0, 0, half.z()), half, rng.uniform(0, kPi), m));
+        break;
+      }
+      case 1:
+        s.add(cylinder(p, Vec3::UnitZ(), rng.uniform(0.03, 0.05), rng.uniform(0.08, 0.12), m));
+        break;
+      case 2: {
+        const double r = rng.uniform(0.03, 0.08);
+        s.add(sphere(p + Vec3(0, 0, r), r, m));
+        break;
+      }
+      default:
+        for (int q = 0; q < 4; ++q)
+          s.add(cylinder(p + Vec3(rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02), 0),
+                         Vec3(rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2), 1).normalized(), 0.004, 0.16, m));
+    }
+  }
+  const int screen = s.add_material(mat(rng, Pattern::Noise, 0.05, 0.02, 0.3, 0.4));
+  s.add(box(tc + Vec3(rng.uniform(-0.3, 0.3), td * 0.5, th + 0.32), Vec3(0.3, 0.015, 0.18), rng.uniform(-0.2, 0.2),
+            screen));
+  s.lights.push_back({Vec3(W * rng.uniform(0.3, 0.7), D * 0.5, H - 0.3), rng.color(6.0, 12.0)});
+  s.lights.push_back({tc + Vec3(rng.uniform(-0.5, 0.5), -0.2, th + 0.6), rng.color(0.5, 1.5)});  // desk lamp
+  s.ambient = Vec3::Constant(rng.uniform(0.05, 0.15));
+  // Cameras 0.35-1.2 m in front of the desk, at sitting or standing eye height, looking at its top.
+  s.walk_min = Vec3(tc.x() - 0.6, tc.y() - td - 1.0, 0.95);
+  s.walk_max = Vec3(tc.x() + 0.6, tc.y() - td - 0.3, 1.45);
+  s.focus_a = tc + Vec3(rng.uniform(-0.2, 0.2), 0, th + 0.05);
+  s.focus_b = tc + Vec3(rng.uniform(-0.2, 0.2), 0.1, th + 0.1);
+  s.build();
+  return s;
+}
+
+Scene build_street(uint64_t seed) {
+  // An urban street canyon: facades of varied height on both sides, parked cars, poles and trees, the
+  // street running 60-120 m into the distance and open sky: depths from 2 m to beyond 60 m.
+  Rng rng(seed);
+  Scene s;
+  s.style = "street";
+  s.step_scale = 2.5;  // metre steps: a walk or a drive
+  const double L = rng.uniform(60.0, 120.0), w = rng.uniform(10.0, 18.0);
+  const int road = s.add_material(mat(rng, Pattern::Noise, rng.uniform(0.5, 2.0), 0.15, 0.35));
+  const int pavement = s.add_material(
+      mat(rng, rng.pick(std::vector<Pattern>{Pattern::Tiles, Pattern::Bricks}), rng.uniform(0.4, 0.9), 0.4, 0.75));
+  s.add(quad(Vec3(-w / 2, -20, 0), Vec3(w, 0, 0), Vec3(0, L + 40, 0), road));
+  for (int side : {-1, 1}) {
+    s.add(quad(Vec3(side < 0 ? -w / 2 - 3.0 : w / 2, -20, 0.12), Vec3(3.0, 0, 0), Vec3(0, L + 40, 0), pavement));
+    // Facades: consecutive buildings with their own height, setback and window grid.
+    for (double y = -20; y < L + 20;) {
+      const double len = rng.uniform(6.0, 16.0), h = rng.uniform(6.0, 30.0), setback = rng.uniform(0.0, 1.5);
+      const int fm = s.add_material(
+          mat(rng, rng.pick(std::vector<Pattern>{Pattern::Grid, Pattern::Bricks}), rng.uniform(0.8, 2.5), 0.3, 0.9));
+      const double x = side * (w / 2 + 3.0 + setback + 5.0);
+      s.add(box(Vec3(x, y + len / 2, h / 2), Vec3(5.0, len / 2 - 0.05, h / 2), 0.0, fm));
+      y += len;
+    }
+  }
+  // A far building closes the street in half of the scenes; the others open onto the sky.
+  if (rng.chance(0.5)) {
+    const int fm = s.add_material(mat(rng, Pattern::Grid, rng.uniform(1.5, 3.0), 0.3, 0.9));
+    s.add(box(Vec3(0, L + 25, 15), Vec3(w, 5, 15), 0.0, fm));
+  }
+  const int metal = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.1, 0.4, 0.5));
+  const int trunk = s.add_material(mat(rng, Pattern::Wood, 0.2, 0.25, 0.45));
+  const int leaves = s.add_material([&] {
+    Material m = mat(rng, Pattern::Noise, 0.2, 0.1, 0.35);
+    m.a = Vec3(rng.uniform(0.1, 0.25), rng.uniform(0.35, 0.6), rng.uniform(0.05, 0.2));
+    return m;
+  }());
+  for (double y = rng.uniform(0, 10); y < L; y += rng.uniform(8.0, 16.0)) {
+    const int side = rng.chance(0.5) ? -1 : 1;
+    if (rng.chance(0.5))
+      tree(s, Vec3(side * (w / 2 + 1.5), y, 0.12), trunk, leaves, rng);
+    else
+      s.add(cylinder(Vec3(side * (w / 2 + 0.4), y, 0.12), Vec3::UnitZ(), 0.06, rng.uniform(4.0, 7.0), metal));
+  }
+  for (double y = rng.uniform(0, 8); y < L; y += rng.uniform(5.0, 14.0)) {  // parked cars: body and cabin
+    const int car = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.1, 0.9, 0.4));
+    const double x = (rng.chance(0.5) ? -1 : 1) * (w / 2 - 1.2);
+    s.add(box(Vec3(x, y, 0.55), Vec3(0.9, 2.2, 0.4), rng.uniform(-0.05, 0.05), car));
+    s.add(box(Vec3(x, y - 0.2, 1.2), Vec3(0.8, 1.2, 0.3), 0.0, car));
+  }
+  s.ambient = Vec3(0.22, 0.25, 0.3) * rng.uniform(0.6, 1.3);
+  s.sun_dir = Vec3(rng.uniform(-0.7, 0.7), rng.uniform(-0.7, 0.7), rng.uniform(0.3, 0.9)).normalized();
+  s.sun_radiance = Vec3(2.8, 2.6, 2.3) * rng.uniform(0.5, 1.2);
+  s.sky_zenith = Vec3(rng.uniform(0.15, 0.35), rng.uniform(0.3, 0.5), rng.uniform(0.7, 0.95));
+  s.walk_min = Vec3(-w / 2 + 1.0, 0.0, 1.4);
+  s.walk_max = Vec3(w / 2 - 1.0, L * 0.6, 1.9);
+  s.focus_a = Vec3(rng.uniform(-2, 2), L + 30, rng.uniform(2.0, 6.0));
+  s.focus_b = Vec3(rng.uniform(-2, 2), -30, rng.uniform(2.0, 6.0));
+  s.build();
+  return s;
+}
+
 Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "room") return build_room(seed);
   if (style == "courtyard") return build_courtyard(seed);
   if (style == "atrium") return build_atrium(seed);
-  fail("unknown scene style '", style, "' (room | courtyard | atrium)");
+  if (style == "desk") return build_desk(seed);
+  if (style == "street") return build_street(seed);
+  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street)");
 }
 
 Mat3 look_rotation(const Vec3& center, const Vec3& target) {

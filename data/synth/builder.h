@@ -1,4 +1,4 @@
-// Random scene layouts (indoor rooms for training; courtyards and atria for evaluation) and camera
+// Random scene layouts (rooms, desks and streets for training; courtyards and atria for evaluation) and camera
 // trajectories that walk through them with baselines from centimetres to metres.
 #pragma once
 #include <cstdint>
@@ -11,6 +11,8 @@ namespace isplat::synth {
 Scene build_room(uint64_t seed);       // Hypersim-style interiors: textured walls, windows, furniture
 Scene build_courtyard(uint64_t seed);  // outdoor yard: facades, arcades, trees, sky
 Scene build_atrium(uint64_t seed);     // tall hall: marble, balconies with railings, columns, skylight
+Scene build_desk(uint64_t seed);       // a tabletop from close by: 0.3-3 m, small and thin objects
+Scene build_street(uint64_t seed);     // an urban street canyon: facades, cars, poles, sky; 2 m to beyond 60 m
 Scene build_scene(const std::string& style, uint64_t seed);
 
 struct CameraPose {

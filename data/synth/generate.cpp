@@ -37,6 +37,13 @@ void GenerateOptions::visit(ConfigVisitor& v) {
   v.field("test_scenes", test_scenes, "held-out test scenes (split 'test')", Range::at_least(0));
   v.field("cameras_per_scene", cameras_per_scene, "camera trajectories per training scene", Range::between(1, 9));
   v.field("frames", frames, "frames per training trajectory", Range::at_least(2));
+  v.field("train_styles", train_styles,
+          "styles of the Hypersim-layout scenes, cycled: room | desk | street (courtyard and atrium are the "
+          "evaluation styles; training on them would not be cross-style)");
+  v.field("hfov_deg", hfov_deg,
+          "[min, max] horizontal field of view of Hypersim-layout cameras in degrees, drawn per scene "
+          "(Hypersim: 60)",
+          Range::between(10, 150));
   v.field("room_max_step", room_max_step,
           "largest step between consecutive room frames, metres (steps are stratified on a log scale from "
           "0.04 m); 0.8 lets windows of 10 views fill the [2 m, inf) baseline bin",
@@ -93,14 +100,15 @@ Pose pose_of(const CameraPose& c) {
 
 // ---------------------------------------------------------------- Hypersim layout
 struct HypersimScenePlan {
-  std::string name, split;
+  std::string name, split, style;
   uint64_t seed;
   bool tilt_shift;
   double mpau;
+  double hfov;  // radians
 };
 
-Eigen::Matrix3d camera_matrix(bool tilt_shift, int W, int H, std::mt19937_64& rng) {
-  const double a = std::tan(0.5 * kPi / 3.0);  // Hypersim's 60 degree horizontal field of view
+Eigen::Matrix3d camera_matrix(bool tilt_shift, double hfov, int W, int H, std::mt19937_64& rng) {
+  const double a = std::tan(0.5 * hfov);  // Hypersim: a 60 degree horizontal field of view
   Eigen::Matrix3d M;
   M << a, 0, 0, 0, a * H / W, 0, 0, 0, -1;
   if (tilt_shift) {  // V-Ray tilt-shift: shifted and tilted image plane
@@ -121,10 +129,19 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
   std::mt19937_64 rng(mix_seed(static_cast<uint64_t>(o.seed), 1000));
   const double units[] = {0.0254, 0.01, 0.02};
   const int64_t total = o.train_scenes + o.val_scenes + o.test_scenes;
+  ISPLAT_CHECK(!o.train_styles.empty(), "generate.train_styles is empty");
+  ISPLAT_CHECK(o.hfov_deg.size() == 2 && o.hfov_deg[0] <= o.hfov_deg[1], "generate.hfov_deg must be [min, max], got ",
+               o.hfov_deg.size(), " values");
   for (int64_t k = 0; k < total; ++k) {
     const std::string split = k < o.train_scenes ? "train" : k < o.train_scenes + o.val_scenes ? "val" : "test";
-    plans.push_back({scene_name(k), split, mix_seed(static_cast<uint64_t>(o.seed), static_cast<uint64_t>(k)),
-                     o.tilt_shift_every > 0 && k % o.tilt_shift_every == o.tilt_shift_every - 1, units[k % 3]});
+    // The field of view is drawn only when it varies, so the default (Hypersim's 60 degrees) keeps its draws.
+    const double hfov =
+        (o.hfov_deg[0] == o.hfov_deg[1] ? o.hfov_deg[0]
+                                        : std::uniform_real_distribution<double>(o.hfov_deg[0], o.hfov_deg[1])(rng)) *
+        kPi / 180.0;
+    plans.push_back({scene_name(k), split, o.train_styles[static_cast<size_t>(k) % o.train_styles.size()],
+                     mix_seed(static_cast<uint64_t>(o.seed), static_cast<uint64_t>(k)),
+                     o.tilt_shift_every > 0 && k % o.tilt_shift_every == o.tilt_shift_every - 1, units[k % 3], hfov});
   }
   CsvTable split_csv;
   split_csv.header = {"scene_name",     "camera_name",         "frame_id", "included_in_public_release",
@@ -143,9 +160,9 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
 
   for (size_t k = 0; k < plans.size(); ++k) {
     const auto& plan = plans[k];
-    const Scene scene = synth::build_room(plan.seed);
+    const Scene scene = synth::build_scene(plan.style, plan.seed);
     const std::string scene_dir = (fs::path(root) / plan.name).string();
-    const Eigen::Matrix3d M = camera_matrix(plan.tilt_shift, W, H, rng);
+    const Eigen::Matrix3d M = camera_matrix(plan.tilt_shift, plan.hfov, W, H, rng);
     add_camera_row(plan.name, plan.mpau, plan.tilt_shift, M);
     CsvTable meta;
     meta.header = {"parameter_name", "parameter_value"};
@@ -203,7 +220,7 @@ void write_hypersim(const GenerateOptions& o, ProgressBar& bar) {
   // A scene listed in the metadata but absent from disk, as for scenes without public images.
   for (int f = 0; f < 3; ++f)
     split_csv.rows.push_back({"ai_099_001", "cam_00", std::to_string(f), "True", "", "train"});
-  add_camera_row("ai_099_001", 0.0254, false, camera_matrix(false, W, H, rng));
+  add_camera_row("ai_099_001", 0.0254, false, camera_matrix(false, kPi / 3.0, W, H, rng));
   write_csv((fs::path(root) / "metadata_images_split_scene_v1.csv").string(), split_csv);
   write_csv((fs::path(root) / "metadata_camera_parameters.csv").string(), camera_csv);
 }

@@ -18,6 +18,8 @@ struct GenerateOptions {
   int64_t cameras_per_scene = 1;
   int64_t frames = 36;
   double room_max_step = 0.8;  // largest camera step in rooms (m): windows of 10 views reach past 2 m
+  std::vector<std::string> train_styles = {"room"};  // Hypersim-layout scene styles, cycled over the scenes
+  std::vector<double> hfov_deg = {60.0, 60.0};       // horizontal field of view range of Hypersim-layout cameras
   int64_t width = 384, height = 288;
   int64_t supersample = 2;
   int64_t tilt_shift_every = 3;

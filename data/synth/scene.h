@@ -51,7 +51,8 @@ struct Hit {
 };
 
 struct Scene {
-  std::string style;  // "room", "courtyard", "atrium"
+  std::string style;        // "room", "courtyard", "atrium", "desk", "street"
+  double step_scale = 1.0;  // camera step lengths relative to a room walk (desk < 1 < street)
   std::vector<Primitive> prims;
   std::vector<Material> materials;
   std::vector<PointLight> lights;

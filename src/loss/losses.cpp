@@ -27,6 +27,12 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("perceptual_weights", perceptual_weights,
           "safetensors of the perceptual network under torchvision names (e.g. weights/"
           "squeezenet1_1_features.safetensors); missing = the term is off");
+  v.field("depth_l1", depth_l1, "depth task: weight of the mean |log error| (metric, per pixel)", Range::at_least(0));
+  v.field("depth_lambda", depth_lambda,
+          "depth task: scale-invariant log loss lambda; 1 = pure shape (scale-free), 0 = plain log RMSE",
+          Range::unit());
+  v.field("depth_scale", depth_scale, "depth task: weight of |mean log error|, the global metric-scale term",
+          Range::at_least(0));
   v.field("allow_random_perceptual", allow_random_perceptual,
           "run the perceptual term on a random network "
           "(only for experiments; never the default)");

@@ -44,14 +44,17 @@ void GaussianObjective::add_total(LossTerms& t) const {
                o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth"));
 }
 
-LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid) {
+LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid,
+                           const LossOptions& o) {
   auto v = valid > 0.5;
   const int64_t n = v.sum().item<int64_t>();
   ISPLAT_CHECK(n > 0, "depth training: a batch without valid depth");
   auto d = pred_log.masked_select(v) - torch::log(depth.masked_select(v));
   auto l1 = d.abs().mean();
-  auto silog = torch::sqrt(torch::clamp_min((d * d).mean() - 0.85 * d.mean().pow(2), 1e-12));
-  return {{"l1_log", l1}, {"silog", silog}, {"total", l1 + silog}};
+  auto silog = torch::sqrt(torch::clamp_min((d * d).mean() - o.depth_lambda * d.mean().pow(2), 1e-12));
+  auto scale = d.mean().abs();
+  return {
+      {"l1_log", l1}, {"silog", silog}, {"scale", scale}, {"total", o.depth_l1 * l1 + silog + o.depth_scale * scale}};
 }
 
 }  // namespace isplat

@@ -40,8 +40,10 @@ class GaussianObjective {
   std::unique_ptr<PerceptualLoss> perceptual_;
 };
 
-// Depth prior: L1 and scale-invariant log loss (lambda 0.85) on log depth. pred_log [B,H,W]; depth and
-// valid [B,H,W]. Returns l1_log, silog and total.
-LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid);
+// Depth prior on log depth, d = pred_log - log(depth) over valid pixels: l1_log = mean|d| (metric, per
+// pixel), silog = sqrt(mean d^2 - lambda mean(d)^2) (lambda 1: shape only), scale = |mean d| (global
+// metric scale), total = depth_l1 * l1_log + silog + depth_scale * scale. pred_log, depth, valid [B,H,W].
+LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid,
+                           const LossOptions& options);
 
 }  // namespace isplat

@@ -39,7 +39,18 @@ void PriorOptions::visit(ConfigVisitor& v) {
           "safetensors of the learned depth net (train it with task: depth); "
           "empty = untrained, which the log says");
   v.field("learned_width", learned_width, "channel width of the learned depth net", Range::at_least(4));
+  v.field("learned_arch", learned_arch,
+          "learned depth net: a U-Net from scratch, or a decoder on the frozen pretrained SqueezeNet-1.1 "
+          "features (weights/)",
+          {"unet", "squeeze"});
+  v.field("learned_focal", learned_focal,
+          "focal-normalized learned depth: predict for a canonical 60-degree camera, scale by the image's fx/W");
+  v.field("learned_backbone", learned_backbone, "squeeze arch: SqueezeNet-1.1 features (torchvision names)");
   v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
+}
+
+LearnedDepthOptions learned_depth_options(const PriorOptions& o) {
+  return {o.learned_arch, o.learned_width, o.learned_focal, o.learned_backbone};
 }
 
 torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg) {
@@ -87,7 +98,7 @@ class DatasetPrior final : public DepthPrior {
 class LearnedPrior final : public DepthPrior {
  public:
   explicit LearnedPrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded = nullptr)
-      : o_(o), net_(o.learned_width) {
+      : o_(o), net_(learned_depth_options(o)) {
     if (embedded && embedded->count("prior/stem.weight")) {
       load_named_tensors(*net_, *embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
       source_ = "weights embedded in the checkpoint";
@@ -105,11 +116,13 @@ class LearnedPrior final : public DepthPrior {
   PriorOutput predict(const PriorInput& in) override {
     check_image(in);
     torch::NoGradGuard g;
-    auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32))[0][0];
-    return finish(d, intrinsics_for(in, o_.hfov_deg));
+    const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
+    auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32), K.to(torch::kFloat32).unsqueeze(0))[0][0];
+    return finish(d, K);
   }
   std::string describe() const override {
-    return source_.empty() ? "learned depth net (untrained)" : "learned depth net (" + source_ + ")";
+    const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "");
+    return source_.empty() ? kind + ", untrained)" : kind + ", " + source_ + ")";
   }
   const torch::nn::Module* embeddable_weights() const override { return source_.empty() ? nullptr : net_.get(); }
 

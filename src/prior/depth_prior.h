@@ -24,14 +24,20 @@ struct SparsePriorOptions {
 };
 
 struct PriorOptions {
-  std::string type = "dataset";  // dataset | sparse | torchscript | learned
-  double hfov_deg = 60.0;        // field of view assumed when no intrinsics are given
-  std::string torchscript;       // path of a traced model: input [1,3,H,W] in [0,1] -> metric depth [1,1,H,W]
-  std::string learned_weights;   // safetensors of the learned depth net (from `task: depth` training)
-  int64_t learned_width = 32;    // channel width of the learned depth net
+  std::string type = "dataset";       // dataset | sparse | torchscript | learned
+  double hfov_deg = 60.0;             // field of view assumed when no intrinsics are given
+  std::string torchscript;            // path of a traced model: input [1,3,H,W] in [0,1] -> metric depth [1,1,H,W]
+  std::string learned_weights;        // safetensors of the learned depth net (from `task: depth` training)
+  int64_t learned_width = 32;         // channel width of the learned depth net
+  std::string learned_arch = "unet";  // unet (from scratch) | squeeze (frozen pretrained SqueezeNet encoder)
+  bool learned_focal = false;         // the learned net predicts focal-normalized depth
+  std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
 };
+
+struct LearnedDepthOptions;
+LearnedDepthOptions learned_depth_options(const PriorOptions& options);  // the learned net's part
 
 struct PriorInput {
   torch::Tensor image;    // [3,H,W] sRGB in [0,1]
