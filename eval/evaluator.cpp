@@ -86,14 +86,60 @@ torch::Tensor points3d_prompts(const ColmapModel& model, const LoadedFrame& fram
 std::vector<int64_t> Evaluator::select_pairs(const Manifest& m) const {
   std::vector<int64_t> pairs;
   std::map<int, int64_t> per_bin;
+  int64_t position = 0;
   for (int64_t i = 0; i < static_cast<int64_t>(m.pairs.size()); ++i)  // the manifest's order is already random
-    if (config_.scoring.max_per_bin <= 0 || per_bin[m.pairs[i].bin]++ < config_.scoring.max_per_bin) pairs.push_back(i);
+    if (config_.scoring.max_per_bin <= 0 || per_bin[m.pairs[i].bin]++ < config_.scoring.max_per_bin)
+      if (position++ % shard_count_ == shard_index_) pairs.push_back(i);
   return pairs;
 }
 
+void Evaluator::set_shard(int64_t index, int64_t count) {
+  ISPLAT_CHECK(count >= 1 && index >= 0 && index < count, "eval: shard ", index, "/", count,
+               " is not one of 0/N .. N-1/N (--shard i/n)");
+  shard_index_ = index, shard_count_ = count;
+}
+
 std::string Evaluator::results_path(size_t d, const std::string& method) const {
-  return (fs::path(config_.scoring.out) / config_.datasets.at(d).name / ("results_" + safe(method) + ".jsonl"))
+  const std::string shard = shard_count_ > 1 ? cat(".shard-", shard_index_, "-of-", shard_count_) : std::string();
+  return (fs::path(config_.scoring.out) / config_.datasets.at(d).name / ("results_" + safe(method) + shard + ".jsonl"))
       .string();
+}
+
+std::vector<ReportRow> Evaluator::merge(int64_t count) {
+  ISPLAT_CHECK(count >= 1, "eval: --merge needs the shard count");
+  for (size_t d = 0; d < config_.datasets.size(); ++d) {
+    const auto& ds = config_.datasets[d];
+    const std::string manifest_path = (fs::path(config_.scoring.out) / ds.name / "manifest.json").string();
+    ISPLAT_CHECK(fs::exists(manifest_path), "eval --merge: ", manifest_path, " is missing; run the shards first");
+    const Manifest m = read_manifest(manifest_path);
+    set_shard(0, 1);
+    const std::vector<int64_t> all = select_pairs(m);
+    for (const auto& mo : config_.methods) {
+      std::map<int64_t, PairResult> merged;
+      for (int64_t k = 0; k < count; ++k) {
+        set_shard(k, count);
+        const std::string path = results_path(d, mo.name);
+        ISPLAT_CHECK(fs::exists(path), "eval --merge: shard ", k, "/", count, " has no results for ", ds.name, " / ",
+                     mo.name, " (", path, ")");
+        const ResultsLog shard(path);
+        for (int64_t i : select_pairs(m)) {
+          auto it = shard.done().find(i);
+          ISPLAT_CHECK(it != shard.done().end(), "eval --merge: ", path, " lacks pair ", i,
+                       " (that shard did not finish; rerun it)");
+          merged.emplace(i, it->second);
+        }
+      }
+      set_shard(0, 1);
+      ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.name, ": ", merged.size(),
+                   " pairs from the shards, the manifest selects ", all.size());
+      // Rewritten whole, in manifest order, so the merged file equals an unsharded run's.
+      std::ostringstream out;
+      for (int64_t i : all) out << result_json(merged.at(i)).dump() << "\n";
+      write_file_atomic(results_path(d, mo.name), out.str());
+    }
+  }
+  set_shard(0, 1);
+  return run();
 }
 
 std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
@@ -211,6 +257,11 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
       auto r = summarize(ds.name, mo.name, labels, requested, results, nets);
       rows.insert(rows.end(), r.begin(), r.end());
     }
+  }
+  if (shard_count_ > 1) {
+    log_info("eval: shard ", shard_index_, "/", shard_count_, " scored; combine the shards with --merge ",
+             shard_count_);
+    return rows;
   }
   if (!pairs_only) {
     write_reports(config_.scoring.out, rows, nets, notes_);

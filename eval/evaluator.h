@@ -17,7 +17,16 @@ class Evaluator {
  public:
   explicit Evaluator(EvalConfig config);
   // Writes manifests; unless pairs_only, scores every method and writes reports. Returns report rows.
+  // A shard (set_shard) scores its share into its own results files and writes no report.
   std::vector<ReportRow> run(bool pairs_only = false);
+
+  // Score only shard `index` of `count`: every count-th pair of each manifest's selection, starting at
+  // `index`, into results_<method>.shard-<index>-of-<count>.jsonl. Any machine can run any shard: the
+  // manifest (drawn deterministically) is the contract.
+  void set_shard(int64_t index, int64_t count);
+  // Combines the shard files of `count` shards into the usual results files (checking that every pair is
+  // there exactly once), then writes the reports as an unsharded run would.
+  std::vector<ReportRow> merge(int64_t count);
 
   // The manifest for dataset d: reused when <out>/<name>/manifest.json exists with the same protocol.
   // `models`: the COLMAP model per sequence (points3D give depth-free captures their overlap depth), or none.
@@ -39,6 +48,7 @@ class Evaluator {
   EvalConfig config_;
   std::map<std::string, std::unique_ptr<Lpips>> lpips_;  // available variants
   std::vector<std::string> notes_;
+  int64_t shard_index_ = 0, shard_count_ = 1;
 };
 
 }  // namespace isplat

@@ -8,14 +8,16 @@
 #include "core/log.h"
 
 namespace isplat {
-namespace {
-
 nlohmann::json result_json(const PairResult& r) {
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  nlohmann::json j = {{"index", r.index},       {"bin", r.bin},
-                      {"baseline", r.baseline}, {"psnr", num(r.psnr)},
-                      {"ssim", r.ssim},         {"infer_ms", r.infer_ms},
-                      {"render_ms", r.render_ms}, {"gaussians", r.gaussians},
+  nlohmann::json j = {{"index", r.index},
+                      {"bin", r.bin},
+                      {"baseline", r.baseline},
+                      {"psnr", num(r.psnr)},
+                      {"ssim", r.ssim},
+                      {"infer_ms", r.infer_ms},
+                      {"render_ms", r.render_ms},
+                      {"gaussians", r.gaussians},
                       {"mask_fraction", r.mask_fraction}};
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   return j;
@@ -41,10 +43,8 @@ PairResult result_from_json(const nlohmann::json& j) {
   return r;
 }
 
-}  // namespace
-
 ResultsLog::ResultsLog(const std::string& path) {
-  for (const auto& j : read_jsonl(path, [&](int64_t line, const std::string& why) {
+  for (const auto& j : read_jsonl(path, [&](int64_t line, const std::string&why) {
          log_warn("eval: ", path, ":", line, " is unreadable (", why, "); that pair is scored again");
        })) {
     try {

@@ -10,6 +10,10 @@
 
 namespace isplat {
 
+// One pair's record as a JSON object, and back (non-finite values are null; a PSNR of null reads as +inf).
+nlohmann::json result_json(const PairResult& r);
+PairResult result_from_json(const nlohmann::json& j);
+
 class ResultsLog {
  public:
   // Reads the finished pairs of `path` (a missing file is an empty log); unreadable lines are warned about

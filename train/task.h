@@ -38,9 +38,10 @@ class TrainTask {
   virtual ~TrainTask() = default;
   virtual torch::nn::Module& module() = 0;  // the trainable weights
   virtual std::string describe() const = 0;
-  // Loss terms including "total" (NaN when the prediction is non-finite) for a batch at `step`; adds
-  // timings and support counts to `stats`. With `views`, also returns each element's renders.
-  virtual LossTerms losses(const Batch& batch, int64_t step, bool train, StepStats& stats,
+  // Loss terms including "total" (NaN when the prediction is non-finite) for a batch whose first tuple has
+  // the global index `first_sample` (it seeds prompt draws); adds timings and support counts to `stats`.
+  // With `views`, also returns each element's renders.
+  virtual LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                            std::vector<RenderedViews>* views) = 0;
   virtual void add_to_checkpoint(Checkpoint& ck) const {}   // e.g. the embedded depth prior
   virtual void finish(const std::string& run_dir) const {}  // e.g. the depth net's own weights file

@@ -19,7 +19,9 @@ namespace isplat {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-bool finite(const torch::Tensor& t) { return torch::isfinite(t).all().item<bool>(); }
+bool finite(const torch::Tensor& t) {
+  return torch::isfinite(t).all().item<bool>();
+}
 
 class GaussianTask final : public TrainTask {
  public:
@@ -31,10 +33,9 @@ class GaussianTask final : public TrainTask {
     return cat("prior ", pipeline_.prior().describe(), "; perceptual loss ", objective_.describe());
   }
 
-  LossTerms losses(const Batch& batch, int64_t step, bool train, StepStats& stats,
+  LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                    std::vector<RenderedViews>* views) override {
-    const int64_t B = batch.size(), T = batch.targets(), H = batch.target_image.size(3),
-                  W = batch.target_image.size(4);
+    const int64_t B = batch.size(), T = batch.targets(), H = batch.target_image.size(3), W = batch.target_image.size(4);
     LossTerms acc = GaussianObjective::zero_terms();
     for (int64_t b = 0; b < B; ++b) {
       PriorInput in;
@@ -42,15 +43,14 @@ class GaussianTask final : public TrainTask {
       in.K = batch.context_K[b];
       in.depth = batch.context_depth[b];
       in.valid = batch.context_valid[b];
-      in.seed = mix_seed(static_cast<uint64_t>(config_.runtime.seed), static_cast<uint64_t>(step * B + b));
+      in.seed = mix_seed(static_cast<uint64_t>(config_.runtime.seed), static_cast<uint64_t>(first_sample + b));
       Prediction p = pipeline_.run(in, batch.context_T[b], train);
       for (const auto& [k, v] : p.timings_ms) stats.timings_ms[k] += v;
       stats.supports += p.supports.count();
       // Diverged weights give non-finite Gaussians, which the renderer rejects: report the step as
       // non-finite so the loop skips it (and stops after train.max_bad_steps).
       const auto& gs = p.gaussians;
-      if (!finite(gs.means) || !finite(gs.scales) || !finite(gs.quats) || !finite(gs.colors) ||
-          !finite(gs.opacities)) {
+      if (!finite(gs.means) || !finite(gs.scales) || !finite(gs.quats) || !finite(gs.colors) || !finite(gs.opacities)) {
         acc["total"] = torch::full({}, std::numeric_limits<float>::quiet_NaN());
         return acc;
       }
@@ -67,7 +67,8 @@ class GaussianTask final : public TrainTask {
       oi.target = batch.target_image[b];
       oi.mask = target_mask(batch, b, T, W, H);
       oi.gaussians = p.gaussians;
-      oi.depth = transform_points(batch.context_T[b].to(p.gaussians.means.scalar_type()), p.gaussians.means).select(1, 2);
+      oi.depth =
+          transform_points(batch.context_T[b].to(p.gaussians.means.scalar_type()), p.gaussians.means).select(1, 2);
       oi.support_uv = p.supports.uv;
       if (views) views->push_back({oi.render.detach(), oi.mask.squeeze(1)});
       for (auto& [k, v] : objective_.terms(oi)) acc[k] = acc[k] + v;
@@ -80,7 +81,8 @@ class GaussianTask final : public TrainTask {
 
   void add_to_checkpoint(Checkpoint& ck) const override {
     // Carry the learned depth prior's weights, so the checkpoint alone predicts from a photo.
-    if (const torch::nn::Module* prior_net = pipeline_.prior().embeddable_weights()) put_module(ck, *prior_net, "prior/");
+    if (const torch::nn::Module* prior_net = pipeline_.prior().embeddable_weights())
+      put_module(ck, *prior_net, "prior/");
   }
 
  private:
@@ -116,14 +118,18 @@ class GaussianTask final : public TrainTask {
 
 class DepthTask final : public TrainTask {
  public:
-  explicit DepthTask(const TrainConfig& config) : net_(config.model.prior.learned_width) {}
+  explicit DepthTask(const TrainConfig& config) : net_(learned_depth_options(config.model.prior)), loss_(config.loss) {}
 
   torch::nn::Module& module() override { return *net_; }
-  std::string describe() const override { return "learned depth prior (L1 + scale-invariant log loss)"; }
+  std::string describe() const override {
+    return cat("learned depth prior (", net_->options.arch, net_->options.focal_normalized ? ", focal-normalized" : "",
+               "; l1_log x ", loss_.depth_l1, " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
+               ")");
+  }
 
   LossTerms losses(const Batch& batch, int64_t, bool, StepStats&, std::vector<RenderedViews>*) override {
-    const auto pred = net_->forward_log(batch.context_image).squeeze(1);  // [B,H,W]
-    return depth_log_losses(pred, batch.context_depth, batch.context_valid);
+    const auto pred = net_->forward_log(batch.context_image, batch.context_K).squeeze(1);  // [B,H,W]
+    return depth_log_losses(pred, batch.context_depth, batch.context_valid, loss_);
   }
 
   void finish(const std::string& run_dir) const override {
@@ -135,6 +141,7 @@ class DepthTask final : public TrainTask {
 
  private:
   LearnedDepthNet net_;
+  LossOptions loss_;
 };
 }  // namespace
 

@@ -35,6 +35,10 @@ void LoopOptions::visit(ConfigVisitor& v) {
   v.field("checkpoint_every", checkpoint_every, "steps between checkpoints", Range::at_least(1));
   v.field("keep_last", keep_last, "periodic checkpoints kept (plus best and last)", Range::at_least(1));
   v.field("max_bad_steps", max_bad_steps, "consecutive non-finite steps before training stops", Range::at_least(1));
+  v.field("stop_at", stop_at,
+          "end this sitting after this step with a checkpoint, keeping the schedule of train.steps "
+          "(--resume auto continues); 0 = run to the end",
+          Range::at_least(0));
   v.field("target_mask", target_mask, "score target pixels that see the context's surface, or all pixels",
           {"projected", "none"});
   v.field("val_images", val_images, "validation tuples saved as PNG panels", Range::at_least(0));
@@ -49,6 +53,8 @@ void TrainConfig::visit(ConfigVisitor& v) {
   v.section("render", "the splatting renderer", render);
   v.section("optim", "optimizer and schedule", optim);
   v.section("train", "the training loop", train);
+  v.section("dist", "data-parallel training over c10d/Gloo (PyTorch's RANK, WORLD_SIZE, MASTER_ADDR, MASTER_PORT)",
+            dist);
 }
 
 double scheduled_lr(const OptimOptions& o, int64_t step, int64_t total) {

@@ -8,6 +8,7 @@
 #include "loss/losses.h"
 #include "model/infinisplat.h"
 #include "render/render.h"
+#include "train/data_parallel.h"
 
 namespace isplat {
 
@@ -42,6 +43,7 @@ struct LoopOptions {
   int64_t checkpoint_every = 200;
   int64_t keep_last = 3;
   int64_t max_bad_steps = 5;
+  int64_t stop_at = 0;  // end this sitting after this step (checkpointed; --resume auto continues); 0 = off
   std::string target_mask = "projected";  // projected | none
   int64_t val_images = 3;
   void visit(ConfigVisitor& v);
@@ -56,6 +58,7 @@ struct TrainConfig {
   RenderOptions render;
   OptimOptions optim;
   LoopOptions train;
+  DistOptions dist;
   void visit(ConfigVisitor& v);
 };
 

@@ -56,9 +56,12 @@ Trainer::Trainer(const TrainConfig& config)
       checkpoints_((fs::path(config.train.out) / "checkpoints").string(), config.train.keep_last) {
   torch::manual_seed(static_cast<uint64_t>(config.runtime.seed));
   cpu_start_ = process_cpu_seconds();
-  fs::create_directories(fs::path(run_dir_) / "val");
-  log_ = std::make_unique<JsonlWriter>((fs::path(run_dir_) / "train_log.jsonl").string());
-  write_file_atomic((fs::path(run_dir_) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
+  if (config.dist.world_size > 1) dp_ = std::make_unique<DataParallel>(config.dist);
+  if (writer()) {  // only rank 0 writes the run folder
+    fs::create_directories(fs::path(run_dir_) / "val");
+    log_ = std::make_unique<JsonlWriter>((fs::path(run_dir_) / "train_log.jsonl").string());
+    write_file_atomic((fs::path(run_dir_) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
+  }
 
   auto train_seqs = read_split(config.data.hypersim, config.data.hypersim.split);
   ISPLAT_CHECK(!train_seqs.empty(), "train: no usable trajectories in ", config.data.hypersim.root, " split '",
@@ -86,6 +89,17 @@ Trainer::Trainer(const TrainConfig& config)
   optimizer_ = std::make_unique<torch::optim::AdamW>(params, torch::optim::AdamWOptions(config.optim.lr)
                                                                  .betas({config.optim.beta1, config.optim.beta2})
                                                                  .weight_decay(config.optim.weight_decay));
+  if (dp_) {  // every rank starts from rank 0's weights (and buffers)
+    std::vector<torch::Tensor> state = params;
+    for (const auto& b : task_->module().buffers()) state.push_back(b);
+    dp_->broadcast(state);
+    log_info("train: rank ", dp_->rank(), " of ", dp_->world_size(), "; global batch ",
+             config.data.batch_size * dp_->world_size(), "; rank 0 writes ", run_dir_);
+  }
+}
+
+bool Trainer::writer() const {
+  return !dp_ || dp_->rank() == 0;
 }
 
 Trainer::~Trainer() = default;
@@ -102,32 +116,45 @@ double Trainer::cpu_seconds() const {
   return cpu_offset_ + process_cpu_seconds() - cpu_start_;
 }
 
-void Trainer::synchronize_gradients() {
-  // One process: the gradients are already the batch mean. Data-parallel training averages them here.
+void Trainer::synchronize_gradients(StepStats& s) {
+  // One process: the gradients are already the batch mean. Data-parallel: the mean over ranks.
+  if (!dp_) return;
+  dp_->average_gradients(trainable().parameters());
+  s.timings_ms["allreduce"] = dp_->last_allreduce_ms();
 }
 
 StepStats Trainer::train_step() {
   StepStats s;
   const auto t_step = Clock::now();
   auto t0 = Clock::now();
+  const int64_t rank = dp_ ? dp_->rank() : 0, world = dp_ ? dp_->world_size() : 1;
   if (!loader_)
     loader_ = std::make_unique<BatchLoader>(*train_sampler_, config_.data.batch_size, config_.data.workers,
-                                            config_.data.prefetch, step_);
+                                            config_.data.prefetch, step_, rank, world);
   const Batch batch = loader_->next();
   s.timings_ms["data"] = ms_since(t0);
   s.lr = scheduled_lr(config_.optim, step_, config_.train.steps);
   for (auto& g : optimizer_->param_groups()) static_cast<torch::optim::AdamWOptions&>(g.options()).lr(s.lr);
   trainable().train();
   optimizer_->zero_grad();
-  auto losses = task_->losses(batch, step_, /*train=*/true, s, nullptr);
+  // Global sample index of this rank's first tuple: rank r of W takes tuples r*B .. r*B+B-1 of each global batch.
+  const int64_t first_sample = (step_ * world + rank) * config_.data.batch_size;
+  auto losses = task_->losses(batch, first_sample, /*train=*/true, s, nullptr);
   for (const auto& [k, v] : losses) s.losses[k] = v.item<double>();
   auto& total = losses.at("total");
   bool ok = finite(total);
+  stop_ = g_stop;
+  if (dp_) {  // one decision for all ranks: skip when any rank's loss is non-finite, stop when any rank was asked to
+    const auto agreed = dp_->sum({ok ? 1.0 : 0.0, stop_ ? 1.0 : 0.0, ok ? s.losses["total"] : 0.0});
+    ok = agreed[0] == static_cast<double>(world);
+    stop_ = agreed[1] > 0;
+    if (ok) s.losses["total_all_ranks"] = agreed[2] / world;
+  }
   if (ok) {
     t0 = Clock::now();
     total.backward();
     s.timings_ms["backward"] = ms_since(t0);
-    synchronize_gradients();
+    synchronize_gradients(s);
     for (const auto& p : trainable().parameters())
       if (p.grad().defined() && !finite(p.grad())) {
         ok = false;
@@ -166,7 +193,7 @@ double Trainer::validate(bool write_images) {
     const Batch batch = collate({val_sampler_->sample(i)});
     StepStats s;
     std::vector<RenderedViews> views;
-    const auto losses = task_->losses(batch, step_, /*train=*/false, s, &views);
+    const auto losses = task_->losses(batch, i, /*train=*/false, s, &views);
     total += losses.at("total").item<double>();
     if (views.empty()) continue;
     for (int64_t t = 0; t < batch.targets(); ++t) {  // masked PSNR: only the pixels the loss scores
@@ -266,7 +293,7 @@ void Trainer::write_log(const StepStats& s) {
 }
 
 int Trainer::run() {
-  if (step_ == 0) checkpoints_.save("init", make_checkpoint(false));  // the untrained model, for comparisons
+  if (step_ == 0 && writer()) checkpoints_.save("init", make_checkpoint(false));  // the untrained model
   std::signal(SIGINT, [](int) { request_stop(); });
   std::signal(SIGTERM, [](int) { request_stop(); });
   ProgressBar bar("train", config_.train.steps - step_, "step");
@@ -274,7 +301,7 @@ int Trainer::run() {
   int64_t timed = 0;
   while (step_ < config_.train.steps) {
     const StepStats s = train_step();
-    if (step_ % config_.train.log_every == 0 || step_ == config_.train.steps) write_log(s);
+    if (writer() && (step_ % config_.train.log_every == 0 || step_ == config_.train.steps)) write_log(s);
     for (const auto& [k, v] : s.timings_ms) time_sum[k] += v;
     ++timed;
     std::string post = cat("loss ", std::setprecision(4), s.losses.at("total"));
@@ -284,26 +311,34 @@ int Trainer::run() {
     bar.tick();
     const bool periodic = step_ % config_.train.checkpoint_every == 0 || step_ == config_.train.steps;
     bool improved = false;
-    if (step_ % config_.train.val_every == 0 || step_ == config_.train.steps) {
+    if (writer() && (step_ % config_.train.val_every == 0 || step_ == config_.train.steps)) {
       const double v = validate(true);
       improved = std::isfinite(v) && v < best_val_;
       if (improved) best_val_ = v;  // before saving, so the checkpoint records it
     }
-    if (periodic) checkpoints_.save_periodic(step_, make_checkpoint(true));
+    if (periodic && writer()) checkpoints_.save_periodic(step_, make_checkpoint(true));
     if (improved) {
       if (periodic)
         checkpoints_.alias("last", "best");
       else
         checkpoints_.save("best", make_checkpoint(true));
     }
-    if (g_stop) {
+    if (config_.train.stop_at > 0 && step_ == config_.train.stop_at && step_ < config_.train.steps) {
       bar.finish();
+      if (writer() && !periodic) checkpoints_.save_periodic(step_, make_checkpoint(true));
+      log_info("train: stopped at step ", step_, " (train.stop_at); --resume auto continues to ", config_.train.steps);
+      return 0;
+    }
+    if (stop_) {
+      bar.finish();
+      if (!writer()) return 130;
       checkpoints_.save("last", make_checkpoint(true));
       log_warn("train: interrupted; checkpoint written to ", checkpoints_.path("last"), " (resume with --resume auto)");
       return 130;
     }
   }
   bar.finish();
+  if (!writer()) return 0;
   task_->finish(run_dir_);
   nlohmann::json summary = {{"steps", step_}, {"best_val_loss", best_val_}};
   for (auto& [k, v] : time_sum) summary["mean_step_time_ms"][k] = v / std::max<int64_t>(1, timed);

@@ -11,6 +11,7 @@
 #include "data/loader.h"
 #include "io/checkpoint.h"
 #include "io/jsonl.h"
+#include "train/data_parallel.h"
 #include "train/task.h"
 #include "train/train_config.h"
 
@@ -37,7 +38,8 @@ class Trainer {
 
  private:
   // Where gradients of all ranks are averaged before clipping (data-parallel training); one rank: nothing.
-  void synchronize_gradients();
+  void synchronize_gradients(StepStats& s);
+  bool writer() const;  // rank 0 (or the only process): the one that writes logs, images and checkpoints
   void write_log(const StepStats& s);
   void write_val_images(const Batch& batch, const RenderedViews& views, int64_t index);
   Checkpoint make_checkpoint(bool with_optimizer) const;
@@ -54,6 +56,8 @@ class Trainer {
   double cpu_offset_ = 0, cpu_start_ = 0;  // process CPU seconds: before this process (resume) and at start
   double cpu_seconds() const;              // CPU time spent on this run so far, across resumes
   std::unique_ptr<JsonlWriter> log_;
+  std::unique_ptr<DataParallel> dp_;  // null for one process
+  bool stop_ = false;                 // a stop request, agreed by all ranks
   CheckpointFolder checkpoints_;
 };
 

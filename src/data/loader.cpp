@@ -8,10 +8,12 @@
 namespace isplat {
 
 BatchLoader::BatchLoader(const TupleSampler& sampler, int64_t batch_size, int64_t workers, int64_t prefetch,
-                         int64_t first_batch)
+                         int64_t first_batch, int64_t rank, int64_t world)
     : sampler_(sampler),
       batch_size_(batch_size),
       prefetch_(std::max<int64_t>(1, prefetch)),
+      rank_(rank),
+      world_(world),
       consumer_(first_batch),
       dispatched_(first_batch) {
   ISPLAT_CHECK(batch_size > 0, "batch loader: batch size must be positive");
@@ -29,7 +31,7 @@ BatchLoader::~BatchLoader() {
 
 Batch BatchLoader::build(int64_t k) const {
   std::vector<TupleSample> samples;
-  for (int64_t i = 0; i < batch_size_; ++i) samples.push_back(sampler_.sample(k * batch_size_ + i));
+  for (int64_t i = 0; i < batch_size_; ++i) samples.push_back(sampler_.sample((k * world_ + rank_) * batch_size_ + i));
   return collate(samples);
 }
 

@@ -16,8 +16,10 @@ class BatchLoader {
  public:
   // Starts `workers` threads (0 = load synchronously in next()) that keep up to `prefetch` batches
   // ready, beginning at batch `first_batch` (for resumed runs).
+  // Batch k holds tuples (k * world + rank) * batch_size + i: with `world` data-parallel ranks each draws a
+  // disjoint, deterministic share of every global batch.
   BatchLoader(const TupleSampler& sampler, int64_t batch_size, int64_t workers, int64_t prefetch,
-              int64_t first_batch = 0);
+              int64_t first_batch = 0, int64_t rank = 0, int64_t world = 1);
   ~BatchLoader();
   BatchLoader(const BatchLoader&) = delete;
   BatchLoader& operator=(const BatchLoader&) = delete;
@@ -30,7 +32,7 @@ class BatchLoader {
   void worker_loop();
 
   const TupleSampler& sampler_;
-  int64_t batch_size_, prefetch_;
+  int64_t batch_size_, prefetch_, rank_ = 0, world_ = 1;
   int64_t consumer_;    // next batch handed out
   int64_t dispatched_;  // next batch a worker will build
   std::map<int64_t, Batch> ready_;
