@@ -11,12 +11,12 @@ namespace isplat {
 class ConfigVisitor;
 
 struct ExperimentRow {
-  std::string name;                   // run-folder and method name, e.g. "full", "pixel_supports"
-  std::string label;                  // the paper's wording, e.g. "w/o geometry-guided sampling"
+  std::string name;                    // run-folder and method name, e.g. "full", "pixel_supports"
+  std::string label;                   // the paper's wording, e.g. "w/o geometry-guided sampling"
   std::vector<std::string> train_set;  // overrides on the training recipe (key=value)
-  std::vector<int64_t> seeds = {0};   // one run per seed
-  std::string from;                   // reuse this row's runs instead of training (with checkpoint "init")
-  std::string checkpoint = "last";    // last | best | init (init = the untrained model, e.g. base Gaussians)
+  std::vector<int64_t> seeds = {0};    // one run per seed
+  std::string from;                    // reuse this row's runs instead of training (with checkpoint "init")
+  std::string checkpoint = "last";     // last | best | init (init = the untrained model, e.g. base Gaussians)
   void visit(ConfigVisitor& v);
 };
 
@@ -38,7 +38,7 @@ struct ExperimentConfig {
   std::string reference = "full";  // differences are taken against this row (its seeds averaged per pair)
   std::vector<ExperimentVariant> variants;
   std::vector<std::string> baselines = {"lift", "identity"};  // method types scored beside the rows
-  int64_t bootstrap = 2000;                                    // paired bootstrap resamples
+  int64_t bootstrap = 2000;                                   // paired bootstrap resamples
   void visit(ConfigVisitor& v);
 };
 

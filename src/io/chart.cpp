@@ -14,7 +14,7 @@ namespace isplat {
 namespace {
 
 // RGB order (write_image takes RGB): the matplotlib "tab10" palette.
-const cv::Scalar kPalette[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},  {148, 103, 189},
+const cv::Scalar kPalette[] = {{31, 119, 180}, {255, 127, 14},  {44, 160, 44},   {214, 39, 40},  {148, 103, 189},
                                {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207}};
 
 std::string label(double v) {
@@ -36,7 +36,8 @@ std::vector<double> ticks(double lo, double hi, int n = 5) {
       break;
     }
   std::vector<double> out;
-  for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) out.push_back(std::abs(t) < 1e-12 * step ? 0 : t);
+  for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step)
+    out.push_back(std::abs(t) < 1e-12 * step ? 0 : t);
   return out;
 }
 
@@ -139,7 +140,8 @@ void write_charts(const std::string& path, const std::vector<Chart>& charts, int
   const int rows = std::max(1, (n + cols - 1) / cols);
   cv::Mat canvas(rows * height, cols * width, CV_8UC3, cv::Scalar(255, 255, 255));
   for (int k = 0; k < n; ++k)
-    draw_chart(charts[k], width, height).copyTo(canvas(cv::Rect((k % cols) * width, (k / cols) * height, width, height)));
+    draw_chart(charts[k], width, height)
+        .copyTo(canvas(cv::Rect((k % cols) * width, (k / cols) * height, width, height)));
   write_image(path, canvas);  // 8-bit RGB
 }
 
