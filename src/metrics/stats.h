@@ -6,9 +6,9 @@
 namespace isplat {
 
 struct Interval {
-  double mean = 0;           // mean of the paired differences
-  double lo = 0, hi = 0;     // percentile bootstrap interval
-  int64_t n = 0;             // pairs used (both values finite)
+  double mean = 0;        // mean of the paired differences
+  double lo = 0, hi = 0;  // percentile bootstrap interval
+  int64_t n = 0;          // pairs used (both values finite)
   bool excludes_zero() const { return n > 0 && (lo > 0 || hi < 0); }
 };
 
