@@ -10,6 +10,7 @@
 
 #include "data/loader.h"
 #include "io/checkpoint.h"
+#include "io/folder_lock.h"
 #include "io/jsonl.h"
 #include "train/task.h"
 #include "train/train_config.h"
@@ -55,6 +56,7 @@ class Trainer {
   double cpu_seconds() const;              // CPU time spent on this run so far, across resumes
   std::unique_ptr<JsonlWriter> log_;
   CheckpointFolder checkpoints_;
+  std::unique_ptr<FolderLock> lock_;  // one trainer per run folder
 };
 
 }  // namespace isplat
