@@ -41,7 +41,9 @@ std::string fmt(double v, int digits) {
   return os.str();
 }
 
-std::string signed_fmt(double v, int digits) { return (v >= 0 ? "+" : "") + fmt(v, digits); }
+std::string signed_fmt(double v, int digits) {
+  return (v >= 0 ? "+" : "") + fmt(v, digits);
+}
 
 double mean_finite(const std::vector<double>& v) {
   double s = 0;
@@ -66,7 +68,7 @@ Experiment::Experiment(ExperimentConfig config) : config_(std::move(config)) {
   std::set<std::string> names;
   for (const auto& r : config_.rows) {
     ISPLAT_CHECK(!r.name.empty() && r.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                                               "0123456789-_") == std::string::npos,
+                                                             "0123456789-_") == std::string::npos,
                  "experiment: row name '", r.name, "' must be letters, digits, - or _ (config key rows[].name)");
     ISPLAT_CHECK(names.insert(r.name).second, "experiment: row '", r.name, "' appears twice");
     ISPLAT_CHECK(!r.seeds.empty() || !r.from.empty(), "experiment: row '", r.name, "' has no seeds");
@@ -101,7 +103,7 @@ bool Experiment::finished(const ExperimentRun& run) const {
   if (!fs::exists(summary)) return false;
   const TrainConfig tc = load_config<TrainConfig>((fs::path(run.dir) / "config.json").string());
   const nlohmann::json s = read_json_file(summary.string());
-  return s.value("steps", int64_t{-1}) >= tc.train.steps;
+  return guard_json(summary.string(), [&] { return s.value("steps", int64_t{-1}) >= tc.train.steps; });
 }
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
@@ -109,9 +111,9 @@ bool Experiment::train(const std::vector<std::string>& only, const std::vector<i
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     for (const auto& run : runs(r)) {
       if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), run.seed) == seeds.end()) continue;
-      const auto sets = concat(concat(config_.train_set, r.train_set),
-                               {cat("train.out=", run.dir), cat("runtime.seed=", run.seed),
-                                cat("runtime.threads=", config_.runtime.threads)});
+      const auto sets =
+          concat(concat(config_.train_set, r.train_set), {cat("train.out=", run.dir), cat("runtime.seed=", run.seed),
+                                                          cat("runtime.threads=", config_.runtime.threads)});
       TrainConfig tc = load_config<TrainConfig>(config_.train_config, sets);
       if (fs::exists(fs::path(run.dir) / "summary.json") && finished(run)) {
         log_info("experiment: ", r.name, " seed ", run.seed, " is trained (", run.dir, "); skipped");
@@ -161,19 +163,21 @@ void Experiment::report() {
 
   std::ostringstream md;
   md << "# Ablation report\n\n"
-     << "Every row is trained from the same recipe (`" << config_.train_config << "`) and scored on the same pairs with "
+     << "Every row is trained from the same recipe (`" << config_.train_config
+     << "`) and scored on the same pairs with "
      << "the same masks. Delta = row minus `" << config_.reference
-     << "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval ("
-     << config_.bootstrap << " resamples); an interval that contains 0 is no difference.\n\n";
+     << "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval (" << config_.bootstrap
+     << " resamples); an interval that contains 0 is no difference.\n\n";
   CsvTable csv;
-  csv.header = {"dataset", "variant", "row", "bin", "pairs", "psnr", "ssim", "lpips_" + lp, "delta_psnr",
-                "delta_psnr_lo", "delta_psnr_hi", "delta_lpips", "delta_lpips_lo", "delta_lpips_hi"};
+  csv.header = {"dataset",        "variant",       "row",        "bin",           "pairs",         "psnr",
+                "ssim",           "lpips_" + lp,   "delta_psnr", "delta_psnr_lo", "delta_psnr_hi", "delta_lpips",
+                "delta_lpips_lo", "delta_lpips_hi"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   std::vector<Chart> delta_charts;
 
   for (size_t d = 0; d < ec.datasets.size(); ++d) {
     const auto& ds = ec.datasets[d];
-    const std::string manifest_path = (fs::path(ec.scoring.out) / ds.name / "manifest.json").string();
+    const std::string manifest_path = (fs::path(ev.dataset_dir(d)) / "manifest.json").string();
     if (!fs::exists(manifest_path)) {
       md << "## " << ds.name << "\n\nNot evaluated yet (no " << manifest_path << ").\n\n";
       continue;
@@ -188,7 +192,7 @@ void Experiment::report() {
       Scores s;
       const std::string path = ev.results_path(d, method);
       if (!fs::exists(path)) return s;
-      const ResultsLog log(path);
+      const ResultsLog log(path, [&](const PairResult& r) { return check_against_manifest(r, m); });
       for (int64_t i : pairs) {
         auto it = log.done().find(i);
         const bool ok = it != log.done().end();
@@ -219,7 +223,8 @@ void Experiment::report() {
         if (s.any) ref_seeds.push_back(s);
       }
       if (ref_seeds.empty()) {
-        md << "### " << v.name << "\n\nThe reference row `" << config_.reference << "` is not scored in this variant yet.\n\n";
+        md << "### " << v.name << "\n\nThe reference row `" << config_.reference
+           << "` is not scored in this variant yet.\n\n";
         continue;
       }
       Scores ref;
@@ -238,7 +243,8 @@ void Experiment::report() {
       }
       md << "### " << v.name << (v.overrides.empty() ? "" : " (model overrides: ");
       for (size_t k = 0; k < v.overrides.size(); ++k) md << (k ? ", " : "") << "`" << v.overrides[k] << "`";
-      md << (v.overrides.empty() ? "" : ")") << "\n\n| row | PSNR | SSIM | LPIPS (" << lp << ") | ΔPSNR [95% CI] | ΔLPIPS [95% CI] |";
+      md << (v.overrides.empty() ? "" : ")") << "\n\n| row | PSNR | SSIM | LPIPS (" << lp
+         << ") | ΔPSNR [95% CI] | ΔLPIPS [95% CI] |";
       for (const auto& b : bins) md << " " << b << " PSNR (Δ [CI]) |";
       md << "\n|---|---|---|---|---|---|";
       for (size_t b = 0; b < bins.size(); ++b) md << "---|";
@@ -269,8 +275,8 @@ void Experiment::report() {
         if (s.any) entries.push_back({b, b, s, false});
       }
       if (ref_seeds.size() > 1) {  // training noise: the reference's seeds against each other
-        entries.push_back({cat(config_.reference, " seed spread"), "seed 1 - seed 0 of the reference", ref_seeds[1],
-                           false});
+        entries.push_back(
+            {cat(config_.reference, " seed spread"), "seed 1 - seed 0 of the reference", ref_seeds[1], false});
       }
       for (size_t k = 0; k < entries.size(); ++k) {
         const Entry& e = entries[k];
@@ -279,11 +285,14 @@ void Experiment::report() {
         const Interval dp = paired_bootstrap(e.s.psnr, base.psnr, config_.bootstrap);
         const Interval dl = paired_bootstrap(e.s.lpips, base.lpips, config_.bootstrap);
         const bool self = e.is_ref_seed && ref_seeds.size() == 1;
-        md << "| " << e.name << (e.label != e.name ? " (" + e.label + ")" : "") << " | " << fmt(mean_finite(e.s.psnr), 2)
-           << " | " << fmt(mean_finite(e.s.ssim), 3) << " | " << fmt(mean_finite(e.s.lpips), 3) << " | "
-           << (self ? "reference" : cat(signed_fmt(dp.mean, 2), " [", signed_fmt(dp.lo, 2), ", ", signed_fmt(dp.hi, 2), "]"))
+        md << "| " << e.name << (e.label != e.name ? " (" + e.label + ")" : "") << " | "
+           << fmt(mean_finite(e.s.psnr), 2) << " | " << fmt(mean_finite(e.s.ssim), 3) << " | "
+           << fmt(mean_finite(e.s.lpips), 3) << " | "
+           << (self ? "reference"
+                    : cat(signed_fmt(dp.mean, 2), " [", signed_fmt(dp.lo, 2), ", ", signed_fmt(dp.hi, 2), "]"))
            << " | "
-           << (self ? "reference" : cat(signed_fmt(dl.mean, 3), " [", signed_fmt(dl.lo, 3), ", ", signed_fmt(dl.hi, 3), "]"))
+           << (self ? "reference"
+                    : cat(signed_fmt(dl.mean, 3), " [", signed_fmt(dl.lo, 3), ", ", signed_fmt(dl.hi, 3), "]"))
            << " |";
         ChartSeries series;
         series.name = e.name;
@@ -295,12 +304,23 @@ void Experiment::report() {
           csv.rows.push_back({ds.name, v.name, e.name, bin, std::to_string(n), fmt(mean_finite(p), 4),
                               fmt(mean_finite(s), 5), fmt(mean_finite(l), 5), fmt(ip.mean, 4), fmt(ip.lo, 4),
                               fmt(ip.hi, 4), fmt(il.mean, 5), fmt(il.lo, 5), fmt(il.hi, 5)});
-          auto num = [](double x) { return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
-          js.push_back({{"dataset", ds.name}, {"variant", v.name}, {"row", e.name}, {"label", e.label}, {"bin", bin},
-                        {"pairs", n}, {"psnr", num(mean_finite(p))}, {"ssim", num(mean_finite(s))},
-                        {"lpips_" + lp, num(mean_finite(l))}, {"delta_psnr", num(ip.mean)},
-                        {"delta_psnr_ci", {num(ip.lo), num(ip.hi)}}, {"delta_lpips", num(il.mean)},
-                        {"delta_lpips_ci", {num(il.lo), num(il.hi)}}, {"reference", config_.reference}});
+          auto num = [](double x) {
+            return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
+          };
+          js.push_back({{"dataset", ds.name},
+                        {"variant", v.name},
+                        {"row", e.name},
+                        {"label", e.label},
+                        {"bin", bin},
+                        {"pairs", n},
+                        {"psnr", num(mean_finite(p))},
+                        {"ssim", num(mean_finite(s))},
+                        {"lpips_" + lp, num(mean_finite(l))},
+                        {"delta_psnr", num(ip.mean)},
+                        {"delta_psnr_ci", {num(ip.lo), num(ip.hi)}},
+                        {"delta_lpips", num(il.mean)},
+                        {"delta_lpips_ci", {num(il.lo), num(il.hi)}},
+                        {"reference", config_.reference}});
         };
         add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl);
         for (size_t b = 0; b < bins.size(); ++b) {
@@ -309,7 +329,9 @@ void Experiment::report() {
           const Interval bp = paired_bootstrap(p, subset(base.psnr, bi), config_.bootstrap);
           const Interval bl = paired_bootstrap(subset(e.s.lpips, bi), subset(base.lpips, bi), config_.bootstrap);
           md << " " << fmt(mean_finite(p), 2);
-          if (!self && bp.n > 0) md << " (" << signed_fmt(bp.mean, 2) << " [" << signed_fmt(bp.lo, 2) << ", " << signed_fmt(bp.hi, 2) << "])";
+          if (!self && bp.n > 0)
+            md << " (" << signed_fmt(bp.mean, 2) << " [" << signed_fmt(bp.lo, 2) << ", " << signed_fmt(bp.hi, 2)
+               << "])";
           md << " |";
           add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl);
           series.x.push_back(static_cast<double>(b));
@@ -328,12 +350,14 @@ void Experiment::report() {
   Chart val_step{"validation masked PSNR vs step", "step", "PSNR (dB)", false, {}};
   Chart loss_cpu{"training loss (total) vs CPU time", "CPU time (s)", "loss", false, {}};
   Chart val_cpu{"validation masked PSNR vs CPU time", "CPU time (s)", "PSNR (dB)", false, {}};
-  md << "## Training runs\n\n| run | steps | mean step (ms) | CPU time (s) | final val PSNR (dB) |\n|---|---|---|---|---|\n";
+  md << "## Training runs\n\n| run | steps | mean step (ms) | CPU time (s) | final val PSNR (dB) "
+        "|\n|---|---|---|---|---|\n";
   int color = 0;
   for (const auto& r : config_.rows) {
     if (!r.from.empty()) continue;
     for (const auto& run : runs(r)) {
-      const auto records = read_jsonl((fs::path(run.dir) / "train_log.jsonl").string());
+      const std::string log_path = (fs::path(run.dir) / "train_log.jsonl").string();
+      const auto records = read_jsonl(log_path);
       if (records.empty()) continue;
       ChartSeries ls{cat(r.name, "_s", run.seed), {}, {}, true, -1, color},
           vs{cat(r.name, "_s", run.seed), {}, {}, true, 0, color};
@@ -341,25 +365,26 @@ void Experiment::report() {
       double last_val = NAN, cpu = 0, step_ms = 0;
       int64_t steps = 0, timed = 0;
       std::vector<double> window;
-      for (const auto& j : records) {
-        const double step = j.value("step", 0.0);
-        cpu = j.value("cpu_s", cpu);
-        if (j.contains("loss") && j["loss"].contains("total") && j["loss"]["total"].is_number()) {
-          window.push_back(j["loss"]["total"].get<double>());
-          if (window.size() > 20) window.erase(window.begin());
-          double sm = 0;
-          for (double x : window) sm += x;
-          ls.x.push_back(step), ls.y.push_back(sm / window.size());  // 20-step moving average
-          lc.x.push_back(cpu), lc.y.push_back(sm / window.size());
-          steps = static_cast<int64_t>(step);
-          if (j.contains("step_ms") && j["step_ms"].is_number()) step_ms += j["step_ms"].get<double>(), ++timed;
-        }
-        if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number()) {
-          last_val = j["val_psnr_masked"].get<double>();
-          vs.x.push_back(step), vs.y.push_back(last_val);
-          vc.x.push_back(cpu), vc.y.push_back(last_val);
-        }
-      }
+      for (const auto& j : records)
+        guard_json(log_path, [&] {
+          const double step = j.value("step", 0.0);
+          cpu = j.value("cpu_s", cpu);
+          if (j.contains("loss") && j["loss"].contains("total") && j["loss"]["total"].is_number()) {
+            window.push_back(j["loss"]["total"].get<double>());
+            if (window.size() > 20) window.erase(window.begin());
+            double sm = 0;
+            for (double x : window) sm += x;
+            ls.x.push_back(step), ls.y.push_back(sm / window.size());  // 20-step moving average
+            lc.x.push_back(cpu), lc.y.push_back(sm / window.size());
+            steps = static_cast<int64_t>(step);
+            if (j.contains("step_ms") && j["step_ms"].is_number()) step_ms += j["step_ms"].get<double>(), ++timed;
+          }
+          if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number()) {
+            last_val = j["val_psnr_masked"].get<double>();
+            vs.x.push_back(step), vs.y.push_back(last_val);
+            vc.x.push_back(cpu), vc.y.push_back(last_val);
+          }
+        });
       loss_step.series.push_back(ls), val_step.series.push_back(vs);
       loss_cpu.series.push_back(lc), val_cpu.series.push_back(vc);
       md << "| " << r.name << "_s" << run.seed << " | " << steps << " | " << fmt(timed ? step_ms / timed : NAN, 0)
@@ -370,7 +395,8 @@ void Experiment::report() {
   md << "\nCharts: `curves.png` (training curves), `deltas.png` (ΔPSNR per baseline bin).\n";
   fs::create_directories(config_.out);
   write_charts((fs::path(config_.out) / "curves.png").string(), {loss_step, val_step, loss_cpu, val_cpu});
-  write_charts((fs::path(config_.out) / "deltas.png").string(), delta_charts.empty() ? std::vector<Chart>{Chart{}} : delta_charts);
+  write_charts((fs::path(config_.out) / "deltas.png").string(),
+               delta_charts.empty() ? std::vector<Chart>{Chart{}} : delta_charts);
   write_file_atomic((fs::path(config_.out) / "report.md").string(), md.str());
   write_csv((fs::path(config_.out) / "report.csv").string(), csv);
   write_file_atomic((fs::path(config_.out) / "report.json").string(), js.dump(2) + "\n");
