@@ -179,7 +179,7 @@ std::optional<CheckpointFolder::Found> CheckpointFolder::newest_intact() const {
         fail(p, ": holds no optimizer or RNG state");
       return Found{p, std::move(ck)};
     } catch (const Error& e) {
-      log_warn("train: passing over ", p, ": ", e.what());
+      log_warn("train: passing over a checkpoint: ", e.what());  // the message names the file
       return std::nullopt;
     }
   };
