@@ -22,6 +22,7 @@
 #include "geometry/trajectory.h"
 #include "io/atomic_file.h"
 #include "io/checkpoint.h"
+#include "io/csv.h"
 #include "io/folder_lock.h"
 #include "io/hdf5_io.h"
 #include "io/image_io.h"
@@ -365,6 +366,12 @@ TEST_CASE("reliability: COLMAP and nerfstudio cameras with focal 0, NaN or a sin
   zero["fl_x"] = 0.0;
   test::write_bytes(path, zero.dump());
   CHECK_THAT(error_of([&] { nerfstudio_sequence(scene, "x"); }), Catch::Contains("focal length"));
+
+  // CSV numbers (Hypersim's camera parameters) parse "nan" and "inf" too: refused by the reader.
+  const std::string csv = dir + "/camera_parameters.csv";
+  test::write_bytes(csv, "scene_name,settings_output_img_width\nai_001_001,nan\n");
+  CHECK_THAT(error_of([&] { read_csv(csv).number(0, "settings_output_img_width"); }),
+             Catch::Contains(csv) && Catch::Contains("expected a finite number"));
 }
 
 TEST_CASE("reliability: results logs drop out-of-range or foreign records, appends refuse symlinks, names are safe",
