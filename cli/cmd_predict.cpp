@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/scene_camera.h"
 #include "core/args.h"
+#include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
@@ -30,14 +31,19 @@ namespace fs = std::filesystem;
 namespace {
 // The working size: the training resolution's area at the photo's aspect, in multiples of 16.
 std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, int64_t override_w, int64_t override_h) {
-  if (override_w > 0 && override_h > 0) return {static_cast<int>(override_w), static_cast<int>(override_h)};
-  int tw = 256, th = 192;
-  try {
-    const auto cfg = nlohmann::json::parse(ck.config_json());
-    tw = cfg.at("data").at("tuples").at("width").get<int>();
-    th = cfg.at("data").at("tuples").at("height").get<int>();
-  } catch (const std::exception&) {
+  if (override_w > 0 && override_h > 0) {
+    ISPLAT_CHECK(override_w <= max_image_pixels() / override_h, "predict: --width x --height = ", override_w, "x",
+                 override_h, " is above runtime.max_image_pixels");
+    return {static_cast<int>(override_w), static_cast<int>(override_h)};
   }
+  int64_t tw = 256, th = 192;
+  try {
+    const auto cfg = parse_json(ck.config_json(), "stored config");
+    tw = cfg.at("data").at("tuples").at("width").get<int64_t>();
+    th = cfg.at("data").at("tuples").at("height").get<int64_t>();
+  } catch (const std::exception&) {  // no training size stored (e.g. a converted checkpoint): the default
+  }
+  if (tw < 16 || th < 16 || tw > max_image_pixels() / th) tw = 256, th = 192;
   const double area = static_cast<double>(tw) * th, aspect = static_cast<double>(width) / height;
   auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
   return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
@@ -142,6 +148,8 @@ int run_predict(int argc, char** argv) {
     g = g.index(keep);
   }
   const int64_t faint = prune_opacity > 0 ? prune_by_opacity(g, prune_opacity) : 0;
+  ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
+               " below opacity ", prune_opacity, "); not writing an empty scene to ", out);
   write_ply(out, g, pipeline->model()->options.composer.linear_rgb);
   const double typical_depth = pred.supports.depth.median().item<double>();
   write_scene_camera(camera_sidecar_path(out), view, typical_depth);

@@ -95,8 +95,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
                         counted ? delta1 / counted : nan});
       for (size_t r = 0; r < edges.size(); ++r) {
         const auto& e = ranges[r];
-        scores.push_back({ds.name, np.name, label(r), counted, e.pixels,
-                          e.pixels ? e.abs_rel_sum / e.pixels : nan, e.pixels ? e.delta1_count / e.pixels : nan});
+        scores.push_back({ds.name, np.name, label(r), counted, e.pixels, e.pixels ? e.abs_rel_sum / e.pixels : nan,
+                          e.pixels ? e.delta1_count / e.pixels : nan});
       }
     }
   }
@@ -137,8 +137,13 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
     csv.rows.push_back({s.dataset, s.prior, s.range, std::to_string(s.frames), std::to_string(s.pixels),
                         fmt(s.abs_rel, 5), fmt(s.delta1, 5)});
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
-    js.push_back({{"dataset", s.dataset}, {"prior", s.prior}, {"range", s.range}, {"frames", s.frames},
-                  {"pixels", s.pixels}, {"abs_rel", num(s.abs_rel)}, {"delta1", num(s.delta1)}});
+    js.push_back({{"dataset", s.dataset},
+                  {"prior", s.prior},
+                  {"range", s.range},
+                  {"frames", s.frames},
+                  {"pixels", s.pixels},
+                  {"abs_rel", num(s.abs_rel)},
+                  {"delta1", num(s.delta1)}});
   }
   write_file_atomic((fs::path(c.out) / "report.md").string(), md.str());
   write_csv((fs::path(c.out) / "report.csv").string(), csv);

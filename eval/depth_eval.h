@@ -22,7 +22,7 @@ struct DepthEvalConfig {
   RuntimeOptions runtime;
   std::vector<EvalDatasetOptions> datasets;
   std::vector<NamedPrior> priors;
-  int64_t frames = 24;                                   // frames per dataset, evenly spaced
+  int64_t frames = 24;                                  // frames per dataset, evenly spaced
   std::vector<double> range_edges = {0, 2, 5, 10, 20};  // metres; the last range is open
   std::string out = "out/depth_eval";
   void visit(ConfigVisitor& v);

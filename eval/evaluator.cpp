@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/paths.h"
 #include "core/progress.h"
 #include "data/colmap.h"
 #include "eval/results_log.h"
@@ -35,7 +36,7 @@ Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
 
 Manifest Evaluator::manifest(size_t d, const std::vector<Sequence>& sequences, const std::vector<ColmapModel>& models) {
   const auto& ds = config_.datasets[d];
-  const std::string path = (fs::path(config_.scoring.out) / ds.name / "manifest.json").string();
+  const std::string path = (fs::path(dataset_dir(d)) / "manifest.json").string();
   if (fs::exists(path)) {
     Manifest m = read_manifest(path);
     if (config_to_json(m.protocol) == config_to_json(config_.protocol)) {
@@ -56,13 +57,6 @@ bool dataset_has_depth(const std::vector<Sequence>& sequences) {
     for (const auto& f : s.frames)
       if (f.depth != DepthSource::None) return true;
   return false;
-}
-
-std::string safe(const std::string& s) {
-  std::string o = s;
-  for (char& c : o)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-  return o;
 }
 
 // COLMAP points3D seen by the source frame as sparse prompts [P,3] (u, v, z) at evaluation size, or
@@ -99,17 +93,20 @@ void Evaluator::set_shard(int64_t index, int64_t count) {
   shard_index_ = index, shard_count_ = count;
 }
 
+std::string Evaluator::dataset_dir(size_t d) const {
+  return (fs::path(config_.scoring.out) / safe_name(config_.datasets.at(d).name)).string();
+}
+
 std::string Evaluator::results_path(size_t d, const std::string& method) const {
   const std::string shard = shard_count_ > 1 ? cat(".shard-", shard_index_, "-of-", shard_count_) : std::string();
-  return (fs::path(config_.scoring.out) / config_.datasets.at(d).name / ("results_" + safe(method) + shard + ".jsonl"))
-      .string();
+  return (fs::path(dataset_dir(d)) / ("results_" + safe_name(method) + shard + ".jsonl")).string();
 }
 
 std::vector<ReportRow> Evaluator::merge(int64_t count) {
   ISPLAT_CHECK(count >= 1, "eval: --merge needs the shard count");
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto& ds = config_.datasets[d];
-    const std::string manifest_path = (fs::path(config_.scoring.out) / ds.name / "manifest.json").string();
+    const std::string manifest_path = (fs::path(dataset_dir(d)) / "manifest.json").string();
     ISPLAT_CHECK(fs::exists(manifest_path), "eval --merge: ", manifest_path, " is missing; run the shards first");
     const Manifest m = read_manifest(manifest_path);
     set_shard(0, 1);
@@ -146,8 +143,8 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
                                          const std::vector<int64_t>& pairs, const MethodOptions& mo,
                                          const std::vector<ColmapModel>& points) {
   const auto& ds = config_.datasets[d];
-  const fs::path dir = fs::path(config_.scoring.out) / ds.name;
-  ResultsLog log(results_path(d, mo.name));
+  const fs::path dir = dataset_dir(d);
+  ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
     if (!log.done().count(i)) todo.push_back(i);
@@ -201,7 +198,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
       r.gaussians = o.gaussians;
       log.append(r);
       if (examples++ < config_.scoring.examples)
-        write_panel((dir / "examples" / cat(safe(mo.name), "_pair", i, ".png")).string(),
+        write_panel((dir / "examples" / cat(safe_name(mo.name), "_pair", i, ".png")).string(),
                     {{src.image, tgt.image, outline_mask(o.image, mask), mask.unsqueeze(0)}});
       bar.postfix(cat("PSNR ", std::setprecision(3), r.psnr));
       bar.tick();

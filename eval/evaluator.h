@@ -35,6 +35,7 @@ class Evaluator {
   // one place that cuts the work (a shard of the pairs would be chosen here).
   std::vector<int64_t> select_pairs(const Manifest& m) const;
   // <out>/<dataset>/results_<method>.jsonl, the method name made file-safe.
+  std::string dataset_dir(size_t d) const;  // <scoring.out>/<dataset name, sanitized>
   std::string results_path(size_t d, const std::string& method) const;
   // Scores one method on the given pairs of a manifest, appending to results_<method>.jsonl and skipping
   // pairs already there. `points` holds each sequence's COLMAP model when the dataset's prompts are

@@ -320,8 +320,12 @@ Manifest Manifest::from_json(const nlohmann::json& j, const std::string& source)
       p.baseline = e.at("baseline").get<double>();
       p.overlap = e.at("overlap").get<double>();
       p.rotation_deg = e.at("rotation_deg").get<double>();
-      p.bin = e.at("bin").get<int>();
+      const int64_t bin = e.at("bin").get<int64_t>();
+      p.bin = bin >= 0 && bin <= 1000 ? static_cast<int>(bin) : -1;  // -1 fails the range check below
       p.overlap_depth = e.value("overlap_depth", std::string("dataset"));
+      if (p.bin < 0 || p.bin >= static_cast<int>(m.bin_counts.size()) || !std::isfinite(p.baseline) || p.baseline < 0)
+        fail(source, ": manifest pair ", m.pairs.size(), " has bin ", p.bin, " and baseline ", p.baseline,
+             "; expected a bin in [0, ", m.bin_counts.size(), ") and a finite baseline >= 0");
       m.pairs.push_back(p);
     }
   } catch (const nlohmann::json::exception& e) {

@@ -8,6 +8,7 @@
 #include "core/log.h"
 
 namespace isplat {
+
 nlohmann::json result_json(const PairResult& r) {
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json j = {{"index", r.index},
@@ -23,32 +24,53 @@ nlohmann::json result_json(const PairResult& r) {
   return j;
 }
 
+namespace {
+// Values a real evaluation can produce; anything else is a damaged or edited line (PSNR 1e308 would
+// dominate every average of the report).
+void check_range(const char* key, double v, double lo, double hi) {
+  ISPLAT_CHECK(std::isfinite(v) && v >= lo && v <= hi, "'", key, "' = ", v, " is outside [", lo, ", ", hi, "]");
+}
+}  // namespace
+
 PairResult result_from_json(const nlohmann::json& j) {
   PairResult r;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   r.index = j.at("index").get<int64_t>();
-  r.bin = j.at("bin").get<int>();
+  ISPLAT_CHECK(r.index >= 0, "negative pair index ", r.index);
+  const int64_t bin = j.at("bin").get<int64_t>();
+  ISPLAT_CHECK(bin >= 0 && bin < 1000, "'bin' = ", bin, " is not a bin index");
+  r.bin = static_cast<int>(bin);
   r.baseline = j.at("baseline").get<double>();
+  check_range("baseline", r.baseline, 0, 1e6);
   // PSNR of identical images is +inf, which JSON cannot hold: it is written as null.
   r.psnr = j.at("psnr").is_null() ? std::numeric_limits<double>::infinity() : j.at("psnr").get<double>();
+  if (!j.at("psnr").is_null()) check_range("psnr", r.psnr, 0, 1000);
   r.ssim = j.at("ssim").get<double>();
+  check_range("ssim", r.ssim, -1, 1);
   r.infer_ms = j.at("infer_ms").get<double>();
   r.render_ms = j.at("render_ms").get<double>();
+  check_range("infer_ms", r.infer_ms, 0, 1e9);
+  check_range("render_ms", r.render_ms, 0, 1e9);
   r.gaussians = j.at("gaussians").get<int64_t>();
+  ISPLAT_CHECK(r.gaussians >= 0, "'gaussians' = ", r.gaussians, " is negative");
   r.mask_fraction = j.at("mask_fraction").get<double>();
+  check_range("mask_fraction", r.mask_fraction, 0, 1);
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key().rfind("lpips_", 0) == 0)
+    if (it.key().rfind("lpips_", 0) == 0) {
       r.lpips[it.key().substr(6)] = it.value().is_null() ? nan : it.value().get<double>();
-  ISPLAT_CHECK(r.index >= 0, "negative pair index ", r.index);
+      if (!it.value().is_null()) check_range(it.key().c_str(), r.lpips[it.key().substr(6)], 0, 10);
+    }
   return r;
 }
 
-ResultsLog::ResultsLog(const std::string& path) {
+ResultsLog::ResultsLog(const std::string& path, const std::function<std::string(const PairResult&)>& check) {
   for (const auto& j : read_jsonl(path, [&](int64_t line, const std::string&why) {
          log_warn("eval: ", path, ":", line, " is unreadable (", why, "); that pair is scored again");
        })) {
     try {
       PairResult r = result_from_json(j);
+      const std::string why = check ? check(r) : "";
+      if (!why.empty()) fail(why);
       done_.emplace(r.index, r);
     } catch (const std::exception& e) {
       log_warn("eval: ", path, ": a record is unusable (", e.what(), "); that pair is scored again");
@@ -60,6 +82,16 @@ ResultsLog::ResultsLog(const std::string& path) {
 void ResultsLog::append(const PairResult& r) {
   writer_->write(result_json(r));
   done_.emplace(r.index, r);
+}
+
+std::string check_against_manifest(const PairResult& r, const Manifest& m) {
+  if (r.index < 0 || r.index >= static_cast<int64_t>(m.pairs.size()))
+    return cat("pair ", r.index, " is not in the manifest (", m.pairs.size(), " pairs)");
+  const Pair& p = m.pairs[static_cast<size_t>(r.index)];
+  if (r.bin != p.bin) return cat("pair ", r.index, " has bin ", r.bin, "; the manifest says ", p.bin);
+  if (std::fabs(r.baseline - p.baseline) > 1e-6 * std::max(1.0, std::fabs(p.baseline)))
+    return cat("pair ", r.index, " has baseline ", r.baseline, "; the manifest says ", p.baseline);
+  return "";
 }
 
 }  // namespace isplat

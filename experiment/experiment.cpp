@@ -103,7 +103,7 @@ bool Experiment::finished(const ExperimentRun& run) const {
   if (!fs::exists(summary)) return false;
   const TrainConfig tc = load_config<TrainConfig>((fs::path(run.dir) / "config.json").string());
   const nlohmann::json s = read_json_file(summary.string());
-  return s.value("steps", int64_t{-1}) >= tc.train.steps;
+  return guard_json(summary.string(), [&] { return s.value("steps", int64_t{-1}) >= tc.train.steps; });
 }
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
@@ -177,7 +177,7 @@ void Experiment::report() {
 
   for (size_t d = 0; d < ec.datasets.size(); ++d) {
     const auto& ds = ec.datasets[d];
-    const std::string manifest_path = (fs::path(ec.scoring.out) / ds.name / "manifest.json").string();
+    const std::string manifest_path = (fs::path(ev.dataset_dir(d)) / "manifest.json").string();
     if (!fs::exists(manifest_path)) {
       md << "## " << ds.name << "\n\nNot evaluated yet (no " << manifest_path << ").\n\n";
       continue;
@@ -192,7 +192,7 @@ void Experiment::report() {
       Scores s;
       const std::string path = ev.results_path(d, method);
       if (!fs::exists(path)) return s;
-      const ResultsLog log(path);
+      const ResultsLog log(path, [&](const PairResult& r) { return check_against_manifest(r, m); });
       for (int64_t i : pairs) {
         auto it = log.done().find(i);
         const bool ok = it != log.done().end();
@@ -356,7 +356,8 @@ void Experiment::report() {
   for (const auto& r : config_.rows) {
     if (!r.from.empty()) continue;
     for (const auto& run : runs(r)) {
-      const auto records = read_jsonl((fs::path(run.dir) / "train_log.jsonl").string());
+      const std::string log_path = (fs::path(run.dir) / "train_log.jsonl").string();
+      const auto records = read_jsonl(log_path);
       if (records.empty()) continue;
       ChartSeries ls{cat(r.name, "_s", run.seed), {}, {}, true, -1, color},
           vs{cat(r.name, "_s", run.seed), {}, {}, true, 0, color};
@@ -364,25 +365,26 @@ void Experiment::report() {
       double last_val = NAN, cpu = 0, step_ms = 0;
       int64_t steps = 0, timed = 0;
       std::vector<double> window;
-      for (const auto& j : records) {
-        const double step = j.value("step", 0.0);
-        cpu = j.value("cpu_s", cpu);
-        if (j.contains("loss") && j["loss"].contains("total") && j["loss"]["total"].is_number()) {
-          window.push_back(j["loss"]["total"].get<double>());
-          if (window.size() > 20) window.erase(window.begin());
-          double sm = 0;
-          for (double x : window) sm += x;
-          ls.x.push_back(step), ls.y.push_back(sm / window.size());  // 20-step moving average
-          lc.x.push_back(cpu), lc.y.push_back(sm / window.size());
-          steps = static_cast<int64_t>(step);
-          if (j.contains("step_ms") && j["step_ms"].is_number()) step_ms += j["step_ms"].get<double>(), ++timed;
-        }
-        if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number()) {
-          last_val = j["val_psnr_masked"].get<double>();
-          vs.x.push_back(step), vs.y.push_back(last_val);
-          vc.x.push_back(cpu), vc.y.push_back(last_val);
-        }
-      }
+      for (const auto& j : records)
+        guard_json(log_path, [&] {
+          const double step = j.value("step", 0.0);
+          cpu = j.value("cpu_s", cpu);
+          if (j.contains("loss") && j["loss"].contains("total") && j["loss"]["total"].is_number()) {
+            window.push_back(j["loss"]["total"].get<double>());
+            if (window.size() > 20) window.erase(window.begin());
+            double sm = 0;
+            for (double x : window) sm += x;
+            ls.x.push_back(step), ls.y.push_back(sm / window.size());  // 20-step moving average
+            lc.x.push_back(cpu), lc.y.push_back(sm / window.size());
+            steps = static_cast<int64_t>(step);
+            if (j.contains("step_ms") && j["step_ms"].is_number()) step_ms += j["step_ms"].get<double>(), ++timed;
+          }
+          if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number()) {
+            last_val = j["val_psnr_masked"].get<double>();
+            vs.x.push_back(step), vs.y.push_back(last_val);
+            vc.x.push_back(cpu), vc.y.push_back(last_val);
+          }
+        });
       loss_step.series.push_back(ls), val_step.series.push_back(vs);
       loss_cpu.series.push_back(lc), val_cpu.series.push_back(vc);
       md << "| " << r.name << "_s" << run.seed << " | " << steps << " | " << fmt(timed ? step_ms / timed : NAN, 0)

@@ -5,7 +5,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libtorch-dev libopencv-dev libeigen3-dev nlohmann-json3-dev
-  libopenexr-dev libimath-dev catch2 libhdf5-dev
+  libopenexr-dev libimath-dev catch2 libhdf5-dev libjpeg62-turbo-dev zlib1g-dev
   libonnx-dev libprotobuf-dev protobuf-compiler
   libbenchmark-dev libopenblas0-pthread clang-format zlib1g-dev
   chromium  # opens the exported HTML viewer headless in the tests

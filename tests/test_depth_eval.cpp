@@ -15,12 +15,12 @@ namespace fs = std::filesystem;
 
 TEST_CASE("depth eval: AbsRel and delta1 on hand-built maps", "[eval][depth]") {
   const auto depth = torch::tensor({{1.0f, 2.0f}, {4.0f, 8.0f}});
-  const auto pred = torch::tensor({{1.1f, 2.0f}, {2.0f, 8.0f}});  // +10 %, exact, half, exact
+  const auto pred = torch::tensor({{1.1f, 2.0f}, {2.0f, 8.0f}});   // +10 %, exact, half, exact
   const auto valid = torch::tensor({{1.0f, 1.0f}, {1.0f, 0.0f}});  // the last pixel does not count
   const DepthErrors e = depth_errors(pred, depth, valid);
   CHECK(e.pixels == 3);
   CHECK(e.abs_rel_sum == Approx(0.1 + 0.0 + 0.5));
-  CHECK(e.delta1_count == Approx(2.0));  // 1.1 and 1.0 pass; 2.0 does not
+  CHECK(e.delta1_count == Approx(2.0));                                 // 1.1 and 1.0 pass; 2.0 does not
   const DepthErrors near = depth_errors(pred, depth, valid, 0.0, 3.0);  // only depths in [0, 3) m
   CHECK(near.pixels == 2);
   CHECK(near.abs_rel_sum == Approx(0.1));

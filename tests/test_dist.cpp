@@ -30,7 +30,8 @@ int free_port() {
 
 // Runs `ranks` processes of infinisplat-train on `config` with `sets`; returns the shell's exit status.
 int train_ranks(int ranks, const std::string& config, const std::string& sets, const std::string& log) {
-  if (ranks == 1) return std::system(cat(kTrain, " --config ", config, " --threads 1 ", sets, " > ", log, " 2>&1").c_str());
+  if (ranks == 1)
+    return std::system(cat(kTrain, " --config ", config, " --threads 1 ", sets, " > ", log, " 2>&1").c_str());
   const int port = free_port();
   std::string cmd = "sh -c '";
   for (int r = 0; r < ranks; ++r)
@@ -89,7 +90,8 @@ TEST_CASE("dist: 2 ranks x batch 1 equal 1 rank x batch 2, and a resumed 2-rank 
   // Resume: 5 steps in two sittings (stop at 3, then --resume auto) equal 5 steps straight.
   const std::string five = "--set train.steps=5 --set train.checkpoint_every=5 --set data.batch_size=1";
   REQUIRE(train_ranks(2, cfg, cat(five, " --set train.out=", dir, "/straight"), dir + "/s.log") == 0);
-  REQUIRE(train_ranks(2, cfg, cat(five, " --set train.stop_at=3 --set train.out=", dir, "/split"), dir + "/a.log") == 0);
+  REQUIRE(train_ranks(2, cfg, cat(five, " --set train.stop_at=3 --set train.out=", dir, "/split"), dir + "/a.log") ==
+          0);
   CHECK(load_checkpoint(dir + "/split/checkpoints/last.safetensors").step() == 3);
   REQUIRE(train_ranks(2, cfg, cat(five, " --resume auto --set train.out=", dir, "/split"), dir + "/b.log") == 0);
   CHECK(load_checkpoint(dir + "/split/checkpoints/last.safetensors").step() == 5);
@@ -115,14 +117,17 @@ TEST_CASE("dist: an unreachable store or a mismatched world size fails clearly w
   CHECK_THAT(lonely, Catch::Contains("rank 1") && Catch::Contains(cat("127.0.0.1:", port)));
   // Two ranks that disagree on the world size.
   const int port2 = free_port();
-  std::system(cat("sh -c 'RANK=0 WORLD_SIZE=2 MASTER_ADDR=127.0.0.1 MASTER_PORT=", port2, " ", kTrain, " --config ", dir,
-                  "/tiny.json --threads 1 > ", dir, "/w0.log 2>&1 & RANK=1 WORLD_SIZE=3 MASTER_ADDR=127.0.0.1 MASTER_PORT=",
-                  port2, " ", kTrain, " --config ", dir, "/tiny.json --threads 1 > ", dir, "/w1.log 2>&1; wait'")
+  std::system(cat("sh -c 'RANK=0 WORLD_SIZE=2 MASTER_ADDR=127.0.0.1 MASTER_PORT=", port2, " ", kTrain, " --config ",
+                  dir, "/tiny.json --threads 1 > ", dir,
+                  "/w0.log 2>&1 & RANK=1 WORLD_SIZE=3 MASTER_ADDR=127.0.0.1 MASTER_PORT=", port2, " ", kTrain,
+                  " --config ", dir, "/tiny.json --threads 1 > ", dir, "/w1.log 2>&1; wait'")
                   .c_str());
   const std::string both = test::read_bytes(dir + "/w0.log") + test::read_bytes(dir + "/w1.log");
   CHECK_THAT(both, Catch::Contains("world size"));
   // A rank outside the world is refused before anything starts.
-  CHECK(std::system(cat("RANK=2 WORLD_SIZE=2 ", kTrain, " --config ", dir, "/tiny.json > ", dir, "/out.log 2>&1").c_str()) != 0);
+  CHECK(std::system(
+            cat("RANK=2 WORLD_SIZE=2 ", kTrain, " --config ", dir, "/tiny.json > ", dir, "/out.log 2>&1").c_str()) !=
+        0);
   CHECK_THAT(test::read_bytes(dir + "/out.log"), Catch::Contains("rank 2 is not in [0, world size 2)"));
 }
 
@@ -148,7 +153,7 @@ TEST_CASE("eval: 3 shards merged give the unsharded reports (timings aside)", "[
     part.run();
     CHECK(fs::exists(s.scoring.out + cat("/courtyard/results_lift.shard-", k, "-of-3.jsonl")));
   }
-  CHECK_FALSE(fs::exists(s.scoring.out + "/report.md"));  // shards write no report
+  CHECK_FALSE(fs::exists(s.scoring.out + "/report.md"));                                  // shards write no report
   CHECK_THROWS_WITH(Evaluator(s).merge(4), Catch::Contains("shard 0/4 has no results"));  // only 3 were run
   Evaluator(s).merge(3);
   // The reports agree once the timing columns are dropped.

@@ -73,7 +73,7 @@ TEST_CASE("encoder: parameters carry the official DINOv3 names and a checkpoint 
   const std::string msg = test::error_of([&] { load_dinov3_safetensors(b, dir + "/bad.safetensors"); });
   CHECK_THAT(msg, Catch::Contains("missing keys: norm.bias"));
   CHECK_THAT(msg, Catch::Contains("unexpected keys: blocks.7.attn.qkv.weight"));
-  CHECK_THAT(msg, Catch::Contains("shape mismatches: blocks.0.ls1.gamma (file [31], model [32])"));
+  CHECK_THAT(msg, Catch::Contains("shape or type mismatches: blocks.0.ls1.gamma (file [31], model [32])"));
 }
 
 TEST_CASE("decoder: grid_sample query matches hand-computed bilinear values", "[decoder]") {

@@ -91,7 +91,7 @@ TEST_CASE("trajectory: orbit, dolly and camera-path files", "[use]") {
   CHECK(ns.views[0].intr.fy == Approx(12.0));
   CHECK(camera_center(ns.views[0].T_cw).z() == Approx(2.0));
   test::write_bytes(dir + "/bad.json", R"({"frames": [{"T_cw": [[1,0,0]]}]})");
-  CHECK_THROWS_WITH(load_camera_path(dir + "/bad.json", base), Catch::Contains("frames[0].T_cw must be a 4x4 matrix"));
+  CHECK_THROWS_WITH(load_camera_path(dir + "/bad.json", base), Catch::Contains("frames[0].T_cw must have 4 rows"));
 }
 
 TEST_CASE("use: predict writes a PLY that render turns into frames and a video", "[use]") {

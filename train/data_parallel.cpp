@@ -1,11 +1,11 @@
 // c10d/Gloo data parallelism: store rendezvous with clear failures, bucketed gradient averaging.
 #include "train/data_parallel.h"
 
+#include <torch/torch.h>
 #include <torch/csrc/distributed/c10d/FileStore.hpp>
 #include <torch/csrc/distributed/c10d/PrefixStore.hpp>
 #include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
 #include <torch/csrc/distributed/c10d/TCPStore.hpp>
-#include <torch/torch.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -88,13 +88,13 @@ DataParallel::DataParallel(const DistOptions& o) : options_(o), state_(std::make
     const std::string size = std::to_string(o.world_size);
     prefix->set(cat("world_size/", o.rank), std::vector<uint8_t>(size.begin(), size.end()));
     const int64_t joined = prefix->add("joined", 1);
-    ISPLAT_CHECK(joined <= o.world_size, "data parallel: rank ", o.rank, " is rank number ", joined,
-                 " to join ", where(o), ", but the world size is ", o.world_size, " (WORLD_SIZE differs between ranks?)");
+    ISPLAT_CHECK(joined <= o.world_size, "data parallel: rank ", o.rank, " is rank number ", joined, " to join ",
+                 where(o), ", but the world size is ", o.world_size, " (WORLD_SIZE differs between ranks?)");
     for (int64_t r = 0; r < o.world_size; ++r) {
       const auto v = prefix->get(cat("world_size/", r));  // waits (up to the timeout) for rank r
       const std::string theirs(v.begin(), v.end());
-      ISPLAT_CHECK(theirs == size, "data parallel: rank ", r, " was started with world size ", theirs, ", rank ", o.rank,
-                   " with ", size, " (", where(o), ")");
+      ISPLAT_CHECK(theirs == size, "data parallel: rank ", r, " was started with world size ", theirs, ", rank ",
+                   o.rank, " with ", size, " (", where(o), ")");
     }
     auto opts = c10d::ProcessGroupGloo::Options::create(timeout);
     // Loopback for one machine; across machines the interface named by GLOO_SOCKET_IFNAME, or the address
@@ -106,9 +106,9 @@ DataParallel::DataParallel(const DistOptions& o) : options_(o), state_(std::make
       opts->devices.push_back(local ? c10d::ProcessGroupGloo::createDeviceForHostname("127.0.0.1")
                                     : c10d::ProcessGroupGloo::createDefaultDevice());
     opts->threads = 1;
-    state_->group = c10::make_intrusive<c10d::ProcessGroupGloo>(c10::make_intrusive<c10d::PrefixStore>("gloo", state_->store),
-                                                               static_cast<int>(o.rank),
-                                                               static_cast<int>(o.world_size), opts);
+    state_->group =
+        c10::make_intrusive<c10d::ProcessGroupGloo>(c10::make_intrusive<c10d::PrefixStore>("gloo", state_->store),
+                                                    static_cast<int>(o.rank), static_cast<int>(o.world_size), opts);
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {

@@ -14,7 +14,7 @@ namespace isplat {
 class ConfigVisitor;
 
 struct DistOptions {
-  int64_t rank = 0, world_size = 1;  // also from RANK / WORLD_SIZE
+  int64_t rank = 0, world_size = 1;       // also from RANK / WORLD_SIZE
   std::string master_addr = "127.0.0.1";  // MASTER_ADDR: rank 0's host (its TCPStore)
   int64_t master_port = 29500;            // MASTER_PORT
   std::string file_store;                 // rendezvous through this file in a shared folder instead of TCP
@@ -35,7 +35,7 @@ class DataParallel {
   int64_t rank() const { return options_.rank; }
   int64_t world_size() const { return options_.world_size; }
 
-  void broadcast(std::vector<torch::Tensor> tensors);      // from rank 0, in place
+  void broadcast(std::vector<torch::Tensor> tensors);                    // from rank 0, in place
   void average_gradients(const std::vector<torch::Tensor>& parameters);  // flat buckets, in place
   // Sums small per-step values (flags, losses) over ranks.
   std::vector<double> sum(const std::vector<double>& values);

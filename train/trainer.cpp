@@ -17,6 +17,7 @@
 #include "core/progress.h"
 #include "io/atomic_file.h"
 #include "io/checkpoint.h"
+#include "io/folder_lock.h"
 #include "io/panel.h"
 #include "io/safetensors.h"
 #include "metrics/metrics.h"
@@ -57,8 +58,16 @@ Trainer::Trainer(const TrainConfig& config)
   torch::manual_seed(static_cast<uint64_t>(config.runtime.seed));
   cpu_start_ = process_cpu_seconds();
   if (config.dist.world_size > 1) dp_ = std::make_unique<DataParallel>(config.dist);
-  if (writer()) {  // only rank 0 writes the run folder
-    fs::create_directories(fs::path(run_dir_) / "val");
+  if (writer()) {  // only rank 0 writes (and locks) the run folder
+    lock_ = std::make_unique<FolderLock>(run_dir_);
+    const std::string val_dir = (fs::path(run_dir_) / "val").string();
+    std::error_code ec;
+    fs::create_directories(val_dir, ec);
+    if (ec) fail(val_dir, ": cannot create the folder: ", ec.message());
+    // Under the lock nobody else writes here: any temporary is what a killed write left behind.
+    const int64_t stale = remove_stale_temporaries(run_dir_) + remove_stale_temporaries(val_dir) +
+                          checkpoints_.remove_stale_temporaries();
+    if (stale > 0) log_info("train: removed ", stale, " temporary file(s) of interrupted writes in ", run_dir_);
     log_ = std::make_unique<JsonlWriter>((fs::path(run_dir_) / "train_log.jsonl").string());
     write_file_atomic((fs::path(run_dir_) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
   }
@@ -251,26 +260,41 @@ void Trainer::save(const std::string& path, bool with_optimizer) const {
 
 void Trainer::resume(const std::string& requested) {
   std::string path = requested;
+  Checkpoint ck;
   if (path == "auto") {
-    path = checkpoints_.path("last");
-    if (!fs::exists(path)) {
-      log_info("train: --resume auto: no checkpoint in ", run_dir_, "; starting from scratch");
+    auto found = checkpoints_.newest_intact();
+    if (!found) {
+      log_info("train: --resume auto: no intact checkpoint in ", run_dir_, "; starting from scratch");
       return;
     }
+    path = found->path;
+    ck = std::move(found->checkpoint);
+  } else {
+    ck = load_checkpoint(path);
   }
-  const Checkpoint ck = load_checkpoint(path);
   auto it = ck.metadata.find("task");
   if (it != ck.metadata.end() && it->second != config_.task)
     fail(path, ": checkpoint is for task '", it->second, "', the config says '", config_.task, "'");
   load_module(ck, trainable(), path);
   if (!ck.tensors.count("optim/state"))
     fail(path, ": holds no optimizer state (a weights-only checkpoint such as init); it cannot be resumed");
-  torch::serialize::InputArchive archive;
-  std::istringstream bytes(tensor_to_bytes(ck.tensors.at("optim/state")));
-  archive.load_from(bytes);
-  optimizer_->load(archive);
-  at::Generator gen = at::detail::getDefaultCPUGenerator();
-  gen.set_state(ck.tensors.at("rng/torch"));
+  if (!ck.tensors.count("rng/torch")) fail(path, ": holds no RNG state ('rng/torch'); it cannot be resumed");
+  try {
+    torch::serialize::InputArchive archive;
+    std::istringstream bytes(tensor_to_bytes(ck.tensors.at("optim/state")));
+    archive.load_from(bytes);
+    optimizer_->load(archive);
+  } catch (const c10::Error& e) {
+    fail(path, ": optimizer state ('optim/state') is unreadable: ", e.what_without_backtrace());
+  } catch (const std::exception& e) {  // the archive reader also throws plain exceptions on garbage
+    fail(path, ": optimizer state ('optim/state') is unreadable: ", e.what());
+  }
+  try {
+    at::Generator gen = at::detail::getDefaultCPUGenerator();
+    gen.set_state(ck.tensors.at("rng/torch"));
+  } catch (const c10::Error& e) {
+    fail(path, ": RNG state ('rng/torch') is unusable: ", e.what_without_backtrace());
+  }
   step_ = ck.step();
   auto cpu = ck.metadata.find("cpu_s");
   if (cpu != ck.metadata.end()) cpu_offset_ = parse_double(cpu->second).value_or(0.0);

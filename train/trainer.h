@@ -10,6 +10,7 @@
 
 #include "data/loader.h"
 #include "io/checkpoint.h"
+#include "io/folder_lock.h"
 #include "io/jsonl.h"
 #include "train/data_parallel.h"
 #include "train/task.h"
@@ -59,6 +60,7 @@ class Trainer {
   std::unique_ptr<DataParallel> dp_;  // null for one process
   bool stop_ = false;                 // a stop request, agreed by all ranks
   CheckpointFolder checkpoints_;
+  std::unique_ptr<FolderLock> lock_;  // one trainer per run folder
 };
 
 }  // namespace isplat

@@ -65,14 +65,31 @@ std::string ConfigDocument::source_of(const std::string& key) const {
   }
 }
 
-json read_json_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail(path, fs::exists(path) ? ": cannot open (permission denied)" : ": no such file");
+json parse_json(const std::string& text, const std::string& source) {
+  const json::parser_callback_t limit_depth = [&](int depth, json::parse_event_t event, json&) {
+    if (depth > kMaxJsonDepth &&
+        (event == json::parse_event_t::object_start || event == json::parse_event_t::array_start))
+      fail(source, ": JSON nested deeper than ", kMaxJsonDepth, " levels");
+    return true;
+  };
   try {
-    return json::parse(in);
+    return json::parse(text, limit_depth);
   } catch (const json::parse_error& e) {
-    fail(path, ": invalid JSON: ", e.what());
+    fail(source, ": invalid JSON at byte ", e.byte, ": ", e.what());
+  } catch (const json::exception& e) {  // e.g. out_of_range: a number such as 1e400
+    fail(source, ": invalid JSON: ", e.what());
   }
+}
+
+json read_json_file(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) fail(path, ": is a folder, not a JSON file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, fs::exists(path, ec) ? ": cannot open (permission denied)" : ": no such file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) fail(path, ": read error");
+  return parse_json(text.str(), path);
 }
 
 static void record_origins(const json& node, const std::string& prefix, const std::string& source,
@@ -93,7 +110,9 @@ static void merge_into(json& dst, const json& src) {
 }
 
 static void merge_file(const std::string& path, ConfigDocument& doc, std::vector<std::string>& chain) {
-  const std::string canonical = fs::weakly_canonical(path).string();
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(path, ec);
+  const std::string canonical = ec ? path : resolved.string();
   for (const auto& seen : chain)
     if (seen == canonical) fail(path, ": \"base\" chain loops back to itself");
   chain.push_back(canonical);
@@ -117,8 +136,8 @@ void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overri
     const std::string key = item.substr(0, eq), text = item.substr(eq + 1);
     json value;
     try {
-      value = json::parse(text);
-    } catch (const json::parse_error&) {
+      value = parse_json(text, source);
+    } catch (const Error&) {
       value = text;  // bare words are strings: --set sampler.mode=pixel
     }
     json* node = &doc.json;
@@ -249,6 +268,14 @@ class JsonReader final : public ConfigVisitor {
       }
       value = out;
     }
+  }
+
+  void require(const char* key, bool ok, const char* expect) override {
+    if (ok) return;
+    const std::string full = path(key);
+    const json* node = stack_.back().node;
+    const std::string got = node && node->contains(key) ? cat("; got ", short_json((*node)[key])) : "";
+    fail(doc_.source_of(full), ": key '", full, "' ", expect, got);
   }
 
   void finish() { check_unknown(stack_.back()); }

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/error.h"
+
 namespace isplat {
 
 // Closed/open numeric bounds for a config value.
@@ -75,6 +77,11 @@ class ConfigVisitor {
   virtual void begin_element(int64_t index) = 0;
   virtual void end_element() = 0;
   virtual void end_list() = 0;
+
+ public:
+  // A constraint on a field already visited that its Range cannot say (a list's length, an order).
+  // Readers throw Error naming the file and key when `ok` is false; other visitors ignore it.
+  virtual void require(const char* key, bool ok, const char* expect) {}
 };
 
 // A merged JSON document (base files, the config file, then --set overrides) and where each key came from.
@@ -89,8 +96,27 @@ struct ConfigDocument {
 ConfigDocument merge_config(const std::string& path, const std::vector<std::string>& overrides);
 // Applies "a.b=value" / "list[0].key=value" overrides to an existing document.
 void apply_overrides(ConfigDocument& doc, const std::vector<std::string>& overrides);
-// Parses any JSON file; a missing file or invalid JSON throws Error naming the path.
+// Parses any JSON file; a missing file, a folder or invalid JSON throws Error naming the path.
 nlohmann::json read_json_file(const std::string& path);
+
+// Deeper nesting than this is refused while parsing: no file we read needs more than a few levels, and
+// recursive code (dump, merging, readers) must not exhaust the stack on a hostile file.
+constexpr int kMaxJsonDepth = 512;
+// Parses JSON text read from `source` (a file name or e.g. "--set k=v"). Syntax errors, nesting deeper
+// than kMaxJsonDepth and numbers beyond the double range throw Error naming `source` and the byte offset.
+nlohmann::json parse_json(const std::string& text, const std::string& source);
+
+// Runs `read` over a parsed document and turns nlohmann's exceptions (a value of the wrong type, a
+// missing key, a number that does not fit) into an Error naming `source`: the safety net under each
+// reader's own key checks, so no malformed document escapes as an abort.
+template <class F>
+auto guard_json(const std::string& source, F&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const nlohmann::json::exception& e) {
+    fail(source, ": malformed content: ", e.what());
+  }
+}
 
 // Visitor plumbing; use the templates below.
 void read_options(const ConfigDocument& doc, const std::function<void(ConfigVisitor&)>& visit);

@@ -1,6 +1,7 @@
 // Shipped-file lookup: working directory first, then the folders above the executable.
 #include "core/paths.h"
 
+#include <cctype>
 #include <filesystem>
 
 namespace isplat {
@@ -16,6 +17,13 @@ std::string resolve_shipped_path(const std::string& path) {
     if (dir == dir.root_path()) break;
   }
   return path;
+}
+
+std::string safe_name(const std::string& name) {
+  std::string out = name.empty() ? "_" : name;
+  for (char& c : out)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  return out;
 }
 
 }  // namespace isplat

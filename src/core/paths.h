@@ -9,4 +9,8 @@ namespace isplat {
 // finds the checkout's weights/ from any working directory); otherwise `path` unchanged.
 std::string resolve_shipped_path(const std::string& path);
 
+// A name from a config (a dataset, a method) made safe as one file or folder name: letters, digits, '-'
+// and '_' stay, anything else (separators, dots, "..") becomes '_'. Outputs never land outside their folder.
+std::string safe_name(const std::string& name);
+
 }  // namespace isplat

@@ -7,23 +7,44 @@
 #include <torch/torch.h>
 #include <torch/version.h>
 
+#include <atomic>
 #include <fstream>
 #include <iomanip>
 #include <set>
 #include <thread>
 
 #include "core/config.h"
+#include "core/error.h"
 #include "core/log.h"
 
 namespace isplat {
 
 void RuntimeOptions::visit(ConfigVisitor& v) {
-  v.field("threads", threads, "intra-op threads for LibTorch and our kernels; 0 = all cores", Range::at_least(0));
+  v.field("threads", threads, "intra-op threads for LibTorch and our kernels; 0 = all cores",
+          Range::between(0, kMaxThreads));
   v.field("seed", seed, "seed for every random choice (data, init, sampling)", Range::at_least(0));
+  v.field("max_image_pixels", max_image_pixels,
+          "largest image (width x height) any reader decodes; larger ones are refused from their header",
+          Range::at_least(1));
   v.field("log_level", log_level, "verbosity of stderr logging", {"debug", "info", "warn", "error", "quiet"});
 }
 
+namespace {
+std::atomic<int64_t> g_max_image_pixels{kDefaultMaxImagePixels};
+}
+
+int64_t max_image_pixels() {
+  return g_max_image_pixels.load();
+}
+
+void set_max_image_pixels(int64_t pixels) {
+  ISPLAT_CHECK(pixels > 0, "max_image_pixels must be positive, got ", pixels);
+  g_max_image_pixels = pixels;
+}
+
 int configure_threads(int64_t requested) {
+  ISPLAT_CHECK(requested <= kMaxThreads, "threads: ", requested, " is more than ", kMaxThreads,
+               " (runtime.threads / --threads)");
   int n = requested > 0 ? static_cast<int>(requested) : static_cast<int>(std::thread::hardware_concurrency());
   if (n <= 0) n = 1;
   at::set_num_threads(n);
@@ -38,6 +59,7 @@ void apply_runtime(const RuntimeOptions& options) {
                                                          {"quiet", LogLevel::Quiet}};
   set_log_level(levels.at(options.log_level));
   configure_threads(options.threads);
+  set_max_image_pixels(options.max_image_pixels);
   torch::manual_seed(static_cast<uint64_t>(options.seed));
 }
 

@@ -7,9 +7,17 @@ namespace isplat {
 
 class ConfigVisitor;
 
+// More threads than any machine here has cores only thrashes (100000 hung at start-up).
+constexpr int64_t kMaxThreads = 1024;
+
+// Images larger than this are refused from their header, before decoding (a 20000x20000 JPEG header
+// otherwise costs gigabytes). 2^27 pixels is 11585x11585, beyond any camera the readers serve.
+constexpr int64_t kDefaultMaxImagePixels = int64_t{1} << 27;
+
 struct RuntimeOptions {
   int64_t threads = 0;  // 0 = all cores
   int64_t seed = 0;
+  int64_t max_image_pixels = kDefaultMaxImagePixels;
   std::string log_level = "info";
   void visit(ConfigVisitor& v);
 };
@@ -18,7 +26,11 @@ struct RuntimeOptions {
 // requested <= 0 means all hardware threads. Returns the count in effect.
 int configure_threads(int64_t requested);
 
-// Applies threads, seeds (torch + std RNGs used by the project) and the log level.
+// The image size limit in effect (process-wide; apply_runtime sets it from runtime.max_image_pixels).
+int64_t max_image_pixels();
+void set_max_image_pixels(int64_t pixels);
+
+// Applies threads, seeds (torch + std RNGs used by the project), the image size limit and the log level.
 void apply_runtime(const RuntimeOptions& options);
 
 // Which BLAS library libtorch resolved at load time, e.g. ".../openblas-pthread/libblas.so.3 (OpenBLAS 0.3.21 ...)".

@@ -2,6 +2,7 @@
 #include "data/colmap.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/parse.h"
+#include "core/runtime.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -69,12 +71,23 @@ bool is_comment_or_blank(const std::string& line) {
   return p == std::string::npos || line[p] == '#';
 }
 
+// Models with one focal length store f, cx, cy first; the others fx, fy, cx, cy.
+bool single_focal(int64_t model_id) {
+  return model_id == 0 || model_id == 2 || model_id == 3 || model_id == 8 || model_id == 9;
+}
+
 void check_params(const ColmapCamera& c, const std::string& where) {
   const ColmapModelInfo* m = colmap_model_by_id(c.model_id);
   if (!m) fail(where, ": camera ", c.id, " has unknown model id ", c.model_id);
   if (static_cast<int>(c.params.size()) != m->num_params)
     fail(where, ": camera ", c.id, " model ", m->name, " needs ", m->num_params, " parameters, got ", c.params.size());
-  if (c.width <= 0 || c.height <= 0) fail(where, ": camera ", c.id, " has size ", c.width, "x", c.height);
+  if (c.width <= 0 || c.height <= 0 || c.width > max_image_pixels() / c.height)
+    fail(where, ": camera ", c.id, " has size ", c.width, "x", c.height);
+  for (double p : c.params)
+    if (!std::isfinite(p)) fail(where, ": camera ", c.id, " has a non-finite parameter");
+  // A focal length of 0 projects everything to the centre: every pair would fail the overlap test silently.
+  const bool ok = c.params[0] > 0 && (single_focal(c.model_id) || c.params[1] > 0);
+  if (!ok) fail(where, ": camera ", c.id, " has a focal length that is not positive");
 }
 
 // ---- binary helpers
@@ -371,8 +384,7 @@ Intrinsics colmap_intrinsics(const ColmapCamera& c, std::vector<double>& distort
   check_params(c, "COLMAP");
   const ColmapModelInfo* info = colmap_model_by_id(c.model_id);
   const auto& p = c.params;
-  // Models with one focal length store f, cx, cy first; the others fx, fy, cx, cy.
-  const bool single_f = c.model_id == 0 || c.model_id == 2 || c.model_id == 3 || c.model_id == 8 || c.model_id == 9;
+  const bool single_f = single_focal(c.model_id);
   const size_t first_extra = single_f ? 3 : 4;
   const Intrinsics intr = single_f ? Intrinsics{p[0], p[0], p[1], p[2], int(c.width), int(c.height)}
                                    : Intrinsics{p[0], p[1], p[2], p[3], int(c.width), int(c.height)};
@@ -431,6 +443,8 @@ Sequence colmap_sequence(const std::string& scene_dir, const std::string& datase
       fail(sparse.string(), ": camera ", cam.id, " (", colmap_model_by_id(cam.model_id)->name,
            ") is distorted and undistortion is off");
     f.view.T_cw = pose_from_colmap(img->qvec, img->tvec);
+    if (!f.view.T_cw.allFinite() || img->qvec.norm() < 1e-9)
+      fail(sparse.string(), ": image '", img->name, "' has a pose that is not finite (or a zero quaternion)");
     if (depth_kind != DepthSource::None) {
       std::string name = img->name;
       if (!layout.depth_replace_from.empty()) {

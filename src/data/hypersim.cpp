@@ -7,6 +7,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/runtime.h"
 #include "io/csv.h"
 #include "io/hdf5_io.h"
 
@@ -71,8 +72,11 @@ std::map<std::string, SceneCamera> read_camera_parameters(const std::string& pat
   std::map<std::string, SceneCamera> out;
   for (size_t r = 0; r < t.size(); ++r) {
     SceneCamera c;
-    c.width = static_cast<int>(t.number(r, "settings_output_img_width"));
-    c.height = static_cast<int>(t.number(r, "settings_output_img_height"));
+    const double w = t.number(r, "settings_output_img_width"), h = t.number(r, "settings_output_img_height");
+    if (!(w >= 1 && h >= 1 && w * h <= static_cast<double>(max_image_pixels())))
+      fail(path, ": data row ", r + 1, ": image size ", w, "x", h,
+           " is not positive or above runtime.max_image_pixels");
+    c.width = static_cast<int>(w), c.height = static_cast<int>(h);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) c.M(i, j) = t.number(r, cat("M_cam_from_uv_", i, j));
     out[t.cell(r, "scene_name")] = c;
@@ -112,6 +116,7 @@ Keyframes read_keyframes(const std::string& cam_dir) {
       for (int j = 0; j < 3; ++j) R(i, j) = o.values[n * 9 + i * 3 + j];
     k.R.push_back(R);
     k.p.emplace_back(p.values[n * 3], p.values[n * 3 + 1], p.values[n * 3 + 2]);
+    if (!R.allFinite() || !k.p.back().allFinite()) fail(opath, ": keyframe ", n, " has a pose that is not finite");
   }
   const std::string ipath = (fs::path(cam_dir) / "camera_keyframe_frame_indices.hdf5").string();
   if (fs::exists(ipath)) {
@@ -158,6 +163,7 @@ HypersimIndex read_hypersim(const HypersimOptions& opt) {
       continue;
     }
     const double fid = split.number(r, split.header[c_frame]);
+    if (!(fid >= 0 && fid < 1e9)) fail(split_path, ": data row ", r + 1, ": frame_id ", fid, " is not a frame index");
     wanted[scene][row[c_cam]].push_back(static_cast<int>(fid));
   }
 

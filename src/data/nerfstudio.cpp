@@ -6,13 +6,13 @@
 #include <filesystem>
 #include <functional>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/runtime.h"
 #include "geometry/convert.h"
 #include "io/atomic_file.h"
+#include "io/image_io.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -37,6 +37,8 @@ Eigen::Matrix4d matrix(const json& j, int rows, const std::string& where, const 
     }
   }
   if (!M.allFinite()) fail(where, ": '", key, "' is not finite");
+  // A singular rotation part maps every camera onto a plane or a point: "0 pairs" and no error otherwise.
+  if (!(std::fabs(M.topLeftCorner<3, 3>().determinant()) > 1e-12)) fail(where, ": '", key, "' is singular");
   return M;
 }
 
@@ -47,13 +49,14 @@ Intrinsics intrinsics(const json& global, const json& frame, const std::string& 
   auto pick = [&](const char* key) -> const json& { return frame.contains(key) ? frame : global; };
   Intrinsics k;
   if (pick("w").contains("w") && pick("h").contains("h")) {
-    k.width = static_cast<int>(number(pick("w"), "w", where));
-    k.height = static_cast<int>(number(pick("h"), "h", where));
+    const double w = number(pick("w"), "w", where), h = number(pick("h"), "h", where);
+    if (!(w >= 1 && h >= 1 && w * h <= static_cast<double>(max_image_pixels())))
+      fail(where, ": image size ", w, "x", h, " is not positive or above runtime.max_image_pixels");
+    k.width = static_cast<int>(w), k.height = static_cast<int>(h);
   } else {
     const cv::Size size = image_size();
     k.width = size.width, k.height = size.height;
   }
-  if (k.width <= 0 || k.height <= 0) fail(where, ": image size ", k.width, "x", k.height, " is not positive");
   if (pick("fl_x").contains("fl_x")) {
     k.fx = number(pick("fl_x"), "fl_x", where);
   } else if (pick("camera_angle_x").contains("camera_angle_x")) {
@@ -76,7 +79,12 @@ Intrinsics intrinsics(const json& global, const json& frame, const std::string& 
     fail(where, ": focal length fx ", k.fx, ", fy ", k.fy, " must be finite and positive");
   k.cx = pick("cx").contains("cx") ? number(pick("cx"), "cx", where) : k.width / 2.0;
   k.cy = pick("cy").contains("cy") ? number(pick("cy"), "cy", where) : k.height / 2.0;
-  const std::string model = pick("camera_model").value("camera_model", std::string("OPENCV"));
+  std::string model = "OPENCV";
+  if (pick("camera_model").contains("camera_model")) {
+    const json& m = pick("camera_model")["camera_model"];
+    if (!m.is_string()) fail(where, ": key 'camera_model' must be a string, got ", m.dump());
+    model = m.get<std::string>();
+  }
   auto coef = [&](const char* key) { return pick(key).contains(key) ? number(pick(key), key, where) : 0.0; };
   dist.clear();
   if (model == "OPENCV") {
@@ -91,12 +99,9 @@ Intrinsics intrinsics(const json& global, const json& frame, const std::string& 
   return k;
 }
 
-}  // namespace
-
-Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset,
-                             const std::string& transforms_name) {
-  const std::string path = (fs::path(scene_dir) / transforms_name).string();
-  json j = read_json_file(path);
+// The frames of a parsed transforms.json; `path` names the file in errors.
+Sequence read_sequence(const json& j, const std::string& scene_dir, const std::string& dataset,
+                       const std::string& path) {
   if (!j.is_object() || !j.contains("frames") || !j["frames"].is_array()) fail(path, ": missing 'frames' list");
   if (j["frames"].empty()) fail(path, ": 'frames' is empty (empty sequence)");
   Eigen::Matrix4d undo = Eigen::Matrix4d::Identity();
@@ -132,9 +137,7 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
     const std::string image_path = f.image_path;
     auto image_size = [&]() {
       if (first_size.area() == 0) {
-        const cv::Mat img = cv::imread(image_path, cv::IMREAD_UNCHANGED);
-        if (img.empty()) fail(where, ": cannot read ", image_path, " to find the image size (no 'w'/'h' given)");
-        first_size = img.size();
+        first_size = read_image(image_path).size();  // no 'w'/'h' given: the checked reader finds the size
       }
       return first_size;
     };
@@ -144,6 +147,7 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
     f.view.intr = intrinsics(j, fr, where, f.distortion, image_size);
     f.rescale_to_image = true;
     if (fr.contains("depth_file_path")) {
+      if (!fr["depth_file_path"].is_string()) fail(where, ": key 'depth_file_path' must be a string");
       const std::string d = (fs::path(scene_dir) / fr["depth_file_path"].get<std::string>()).string();
       const std::string ext = fs::path(d).extension().string();
       if (fs::exists(d)) {
@@ -159,6 +163,14 @@ Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& da
              ": no depth files, so nothing fixes the poses' scale; baselines and the protocol's bins assume "
              "metres. Unless the poses are metric (a metric SLAM or LiDAR capture), scale them first.");
   return seq;
+}
+}  // namespace
+
+Sequence nerfstudio_sequence(const std::string& scene_dir, const std::string& dataset,
+                             const std::string& transforms_name) {
+  const std::string path = (fs::path(scene_dir) / transforms_name).string();
+  const json j = read_json_file(path);
+  return guard_json(path, [&] { return read_sequence(j, scene_dir, dataset, path); });
 }
 
 void write_nerfstudio(const std::string& scene_dir, const Intrinsics& intr,

@@ -20,7 +20,8 @@ void DecoderOptions::visit(ConfigVisitor& v) {
           "implicit (paper), dense (pixel-aligned conv head: 'w/o implicit decoder'), none "
           "(base Gaussians only: 'w/o learned updates')",
           {"implicit", "dense", "none"});
-  v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C", Range::at_least(1));
+  v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C",
+          Range::between(1, 16384));
   v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
 }
 

@@ -18,10 +18,10 @@ namespace nn = torch::nn;
 void ViTOptions::visit(ConfigVisitor& v) {
   v.field("size", size, "ViT size: S (384-d, 12 blocks), B (768, 12), L (1024, 24; paper), or custom",
           {"S", "B", "L", "custom"});
-  v.field("embed_dim", embed_dim, "custom size: token width (multiple of 4 x heads)", Range::at_least(0));
-  v.field("depth", depth, "custom size: number of blocks", Range::at_least(0));
-  v.field("heads", heads, "custom size: attention heads", Range::at_least(0));
-  v.field("registers", registers, "register (storage) tokens; DINOv3 uses 4", Range::at_least(0));
+  v.field("embed_dim", embed_dim, "custom size: token width (multiple of 4 x heads)", Range::between(0, 4096));
+  v.field("depth", depth, "custom size: number of blocks", Range::between(0, 64));
+  v.field("heads", heads, "custom size: attention heads", Range::between(0, 64));
+  v.field("registers", registers, "register (storage) tokens; DINOv3 uses 4", Range::between(0, 64));
   v.field("layerscale_init", layerscale_init, "LayerScale initial gamma", Range::above(0));
   v.field("rope_base", rope_base, "RoPE period base", Range::above(1));
   v.field("weights", weights,

@@ -2,6 +2,8 @@
 #include "io/atomic_file.h"
 
 #include <fcntl.h>
+#include <linux/fs.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -16,11 +18,14 @@
 namespace isplat {
 namespace fs = std::filesystem;
 
+// Temporaries are ".<stem>.tmp<pid>_<n><ext>" beside the target; remove_stale_temporaries matches this.
+static const char* const kTempMarker = ".tmp";
+
 static std::string temp_name_for(const std::string& path) {
   static std::atomic<uint64_t> counter{0};
   fs::path p(path);
   const std::string stem = p.stem().string(), ext = p.extension().string();
-  return (p.parent_path() / cat(".", stem, ".tmp", getpid(), "_", counter++, ext)).string();
+  return (p.parent_path() / cat(".", stem, kTempMarker, getpid(), "_", counter++, ext)).string();
 }
 
 static void ensure_parent(const std::string& path) {
@@ -97,6 +102,39 @@ std::string read_file_bytes(const std::string& path) {
   ss << in.rdbuf();
   if (in.bad()) fail(path, ": read error");
   return ss.str();
+}
+
+void copy_file_atomic(const std::string& from, const std::string& to) {
+  AtomicPath target(to);
+  const int src = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
+  if (src < 0) fail(from, ": cannot open for copying: ", std::strerror(errno));
+  const int dst = ::open(target.temp().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (dst < 0) {
+    const std::string why = std::strerror(errno);
+    ::close(src);
+    fail(to, ": cannot create: ", why);
+  }
+  const bool cloned = ::ioctl(dst, FICLONE, src) == 0;
+  ::close(src);
+  ::close(dst);
+  if (!cloned) {
+    std::error_code ec;
+    fs::copy_file(from, target.temp(), fs::copy_options::overwrite_existing, ec);
+    if (ec) fail(to, ": cannot copy from ", from, ": ", ec.message());
+  }
+  target.commit();
+}
+
+int64_t remove_stale_temporaries(const std::string& dir) {
+  int64_t removed = 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() > 1 && name[0] == '.' && name.find(kTempMarker) != std::string::npos && it->is_regular_file(ec) &&
+        fs::remove(it->path(), ec))
+      ++removed;
+  }
+  return removed;
 }
 
 }  // namespace isplat

@@ -29,4 +29,12 @@ class AtomicPath {
 
 std::string read_file_bytes(const std::string& path);  // throws Error naming the path
 
+// Copies `from` to `to` atomically: a reflink (shared blocks, copy-on-write) where the file system has
+// them, else a byte copy. Either way the two are separate files: writing one never changes the other.
+void copy_file_atomic(const std::string& from, const std::string& to);
+
+// Removes the temporaries that writes above leave behind when killed, in `dir` (not below). Only safe when
+// no other process writes there (e.g. under the run folder's lock). Returns how many were removed.
+int64_t remove_stale_temporaries(const std::string& dir);
+
 }  // namespace isplat

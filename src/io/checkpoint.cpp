@@ -2,14 +2,18 @@
 #include "io/checkpoint.h"
 
 #include <torch/torch.h>
-
-#include "core/error.h"
-#include "core/parse.h"
-#include "io/safetensors.h"
+#include <zlib.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/parse.h"
+#include "io/atomic_file.h"
+#include "io/safetensors.h"
 
 namespace isplat {
 
@@ -45,6 +49,9 @@ void load_named_tensors(torch::nn::Module& module, const std::map<std::string, t
       missing.push_back(name);
     else if (it->second.sizes() != t.sizes())
       mismatched.push_back(cat(name, " (file ", it->second.sizes(), ", model ", t.sizes(), ")"));
+    else if (at::isFloatingType(it->second.scalar_type()) != at::isFloatingType(t.scalar_type()))
+      // Float16 into float32 is a conversion; integers into weights are a corrupt or foreign file.
+      mismatched.push_back(cat(name, " (file ", it->second.scalar_type(), ", model ", t.scalar_type(), ")"));
   }
   for (const auto& [key, t] : tensors) {
     if (key.rfind(prefix, 0) != 0) continue;
@@ -60,7 +67,7 @@ void load_named_tensors(torch::nn::Module& module, const std::map<std::string, t
     std::string msg = what;
     if (!missing.empty()) msg += "\n  missing keys: " + list(missing);
     if (!unexpected.empty()) msg += "\n  unexpected keys: " + list(unexpected);
-    if (!mismatched.empty()) msg += "\n  shape mismatches: " + list(mismatched);
+    if (!mismatched.empty()) msg += "\n  shape or type mismatches: " + list(mismatched);
     fail(msg);
   }
   torch::NoGradGuard g;
@@ -72,9 +79,24 @@ void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::str
   load_named_tensors(module, ck.tensors, prefix, source + ": checkpoint does not fit the model built from its config.");
 }
 
+std::string tensors_checksum(const std::map<std::string, torch::Tensor>& tensors) {
+  uLong crc = crc32_z(0L, Z_NULL, 0);
+  auto add = [&](const void* p, size_t n) { crc = crc32_z(crc, static_cast<const Bytef*>(p), n); };
+  for (const auto& [name, tensor] : tensors) {
+    const auto t = tensor.detach().to(torch::kCPU).contiguous();
+    const std::string head = cat(name, '\0', t.scalar_type(), '\0', t.sizes(), '\0');
+    add(head.data(), head.size());
+    add(t.data_ptr(), static_cast<size_t>(t.numel()) * t.element_size());
+  }
+  char hex[9];
+  std::snprintf(hex, sizeof hex, "%08lx", static_cast<unsigned long>(crc & 0xFFFFFFFFul));
+  return hex;
+}
+
 void save_checkpoint(const std::string& path, const Checkpoint& ck) {
   auto meta = ck.metadata;
   meta["format"] = kCheckpointFormat;
+  meta["checksum"] = tensors_checksum(ck.tensors);
   write_safetensors(path, ck.tensors, meta);
 }
 
@@ -84,6 +106,13 @@ Checkpoint load_checkpoint(const std::string& path) {
   if (it == st.metadata.end() || it->second != kCheckpointFormat)
     fail(path, ": not an InfiniSplat checkpoint (metadata 'format' is '",
          it == st.metadata.end() ? std::string("<none>") : it->second, "', expected '", kCheckpointFormat, "')");
+  auto sum = st.metadata.find("checksum");
+  if (sum != st.metadata.end()) {
+    const std::string actual = tensors_checksum(st.tensors);
+    if (actual != sum->second)
+      fail(path, ": checksum mismatch (metadata says ", sum->second, ", the tensors give ", actual,
+           "): the file was damaged or edited after it was written");
+  }
   return {std::move(st.tensors), std::move(st.metadata)};
 }
 
@@ -101,7 +130,9 @@ std::string tensor_to_bytes(const torch::Tensor& t) {
 namespace fs = std::filesystem;
 
 CheckpointFolder::CheckpointFolder(std::string dir, int64_t keep_last) : dir_(std::move(dir)), keep_last_(keep_last) {
-  fs::create_directories(dir_);
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec) fail(dir_, ": cannot create the checkpoint folder: ", ec.message());
 }
 
 std::string CheckpointFolder::path(const std::string& name) const {
@@ -113,21 +144,18 @@ void CheckpointFolder::save(const std::string& name, const Checkpoint& ck) {
 }
 
 void CheckpointFolder::alias(const std::string& from, const std::string& to) {
-  // Hard link under a temporary name, renamed into place: `to` is never missing or half-written.
-  const fs::path file = path(from), target = path(to);
-  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp");
-  std::error_code ec;
-  fs::remove(tmp, ec);
-  fs::create_hard_link(file, tmp, ec);
-  if (ec) fs::copy_file(file, tmp, fs::copy_options::overwrite_existing);
-  fs::rename(tmp, target);
+  copy_file_atomic(path(from), path(to));
+}
+
+int64_t CheckpointFolder::remove_stale_temporaries() const {
+  return isplat::remove_stale_temporaries(dir_);
 }
 
 void CheckpointFolder::save_periodic(int64_t step, const Checkpoint& ck) {
   char name[32];
   std::snprintf(name, sizeof name, "step_%06lld", static_cast<long long>(step));
   save(name, ck);
-  alias(name, "last");  // one file on disk for both names
+  alias(name, "last");
   std::vector<fs::path> periodic;
   for (const auto& e : fs::directory_iterator(dir_)) {
     const std::string f = e.path().filename().string();
@@ -135,9 +163,42 @@ void CheckpointFolder::save_periodic(int64_t step, const Checkpoint& ck) {
   }
   std::sort(periodic.begin(), periodic.end());
   while (static_cast<int64_t>(periodic.size()) > keep_last_) {
-    fs::remove(periodic.front());  // last/best keep their own links
+    std::error_code ec;
+    fs::remove(periodic.front(), ec);  // a failed removal costs disk, not state
     periodic.erase(periodic.begin());
   }
+}
+
+std::optional<CheckpointFolder::Found> CheckpointFolder::newest_intact() const {
+  auto try_load = [](const std::string& p) -> std::optional<Found> {
+    std::error_code ec;
+    if (!fs::exists(p, ec)) return std::nullopt;
+    try {
+      Checkpoint ck = load_checkpoint(p);
+      if (!ck.tensors.count("optim/state") || !ck.tensors.count("rng/torch"))
+        fail(p, ": holds no optimizer or RNG state");
+      return Found{p, std::move(ck)};
+    } catch (const Error& e) {
+      log_warn("train: passing over a checkpoint: ", e.what());  // the message names the file
+      return std::nullopt;
+    }
+  };
+  if (auto last = try_load(path("last"))) return last;
+  // `last` is missing or damaged: the newest periodic file that loads, or `best` when it is newer.
+  std::vector<std::string> periodic;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string f = it->path().filename().string();
+    if (f.rfind("step_", 0) == 0 && it->path().extension() == ".safetensors") periodic.push_back(it->path().string());
+  }
+  std::sort(periodic.rbegin(), periodic.rend());
+  std::optional<Found> found;
+  for (const auto& p : periodic)
+    if ((found = try_load(p))) break;
+  auto best = try_load(path("best"));
+  if (best && (!found || best->checkpoint.step() > found->checkpoint.step())) found = std::move(best);
+  if (found) log_warn("train: ", path("last"), " is missing or damaged; falling back to ", found->path);
+  return found;
 }
 
 }  // namespace isplat

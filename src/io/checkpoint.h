@@ -3,6 +3,7 @@
 #pragma once
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 
 #include <torch/nn/module.h>
@@ -33,23 +34,41 @@ void put_module(Checkpoint& ck, const torch::nn::Module& module, const std::stri
 void load_module(const Checkpoint& ck, torch::nn::Module& module, const std::string& source,
                  const std::string& prefix = "model/");
 
-void save_checkpoint(const std::string& path, const Checkpoint& ck);  // atomic
-Checkpoint load_checkpoint(const std::string& path);                  // checks the format tag
+// Atomic. The metadata gets a checksum ("checksum") of every tensor's name, dtype, shape and bytes.
+void save_checkpoint(const std::string& path, const Checkpoint& ck);
+// Checks the format tag and, when present (checkpoints before it have none), the checksum: a flipped bit
+// or an edited dtype is an Error naming the file, never loaded.
+Checkpoint load_checkpoint(const std::string& path);
+// The checksum save_checkpoint records: CRC-32 over names, dtypes, shapes and data, as 8 hex digits.
+std::string tensors_checksum(const std::map<std::string, torch::Tensor>& tensors);
 
 // Opaque bytes (e.g. a serialized optimizer) carried as a uint8 tensor.
 torch::Tensor bytes_to_tensor(const std::string& bytes);
 std::string tensor_to_bytes(const torch::Tensor& t);
 
-// A run's checkpoint folder: periodic `step_N` files (the newest `keep_last` kept) and the names `last`
-// and `best` as hard links to them (copies where the file system has none). Every write is atomic.
+// A run's checkpoint folder: periodic `step_N` files (the newest `keep_last` kept) and `last` and `best`.
+// Every name is its own file (a reflink where the file system shares blocks copy-on-write, else a copy),
+// so one damaged file never takes the others with it. Every write is atomic. One writer per folder: the
+// trainer holds the run folder's lock.
 class CheckpointFolder {
  public:
   CheckpointFolder(std::string dir, int64_t keep_last);
   std::string path(const std::string& name) const;  // <dir>/<name>.safetensors
-  // Writes step_N, points `last` at it, and removes periodic files beyond keep_last.
+  // Writes step_N, copies it to `last`, and removes periodic files beyond keep_last.
   void save_periodic(int64_t step, const Checkpoint& ck);
   void save(const std::string& name, const Checkpoint& ck);    // e.g. "init", or "last" on Ctrl-C
-  void alias(const std::string& from, const std::string& to);  // `to` becomes the same bytes as `from`
+  void alias(const std::string& from, const std::string& to);  // `to` becomes a copy of `from`, atomically
+  // Removes temporaries of writes that were killed (only safe while holding the run folder's lock).
+  // Returns how many were removed.
+  int64_t remove_stale_temporaries() const;
+
+  // For --resume auto: `last` if it loads, else the newest of `best` and `step_N` that loads and holds an
+  // optimizer state. Each file passed over is logged with its reason. None: nothing to resume.
+  struct Found {
+    std::string path;
+    Checkpoint checkpoint;
+  };
+  std::optional<Found> newest_intact() const;
 
  private:
   std::string dir_;

@@ -29,7 +29,9 @@ const std::string& CsvTable::cell(size_t row, const std::string& name) const {
 double CsvTable::number(size_t row, const std::string& name) const {
   const std::string& s = cell(row, name);
   const auto v = parse_double(s);
-  if (!v) fail(source, ": data row ", row + 1, ", column '", name, "': expected a number, got '", s, "'");
+  // NaN and infinity parse too, but no column we read may hold them (sizes, matrices, depths).
+  if (!v || !std::isfinite(*v))
+    fail(source, ": data row ", row + 1, ", column '", name, "': expected a finite number, got '", s, "'");
   return *v;
 }
 

@@ -50,6 +50,9 @@ hid_t make_half_type() {
   return t;
 }
 
+// 2^28 elements: 1 GiB as float32, 100x a Hypersim frame.
+constexpr uint64_t kMaxHdf5Elements = uint64_t{1} << 28;
+
 struct Opened {
   std::vector<int64_t> shape;
   H5Type type;
@@ -96,12 +99,19 @@ Opened read_raw(const std::string& path, const std::string& dataset, std::vector
   if (rank < 0) fail(path, ": dataset '", dataset, "' has an unreadable shape");
   std::vector<hsize_t> dims(rank);
   H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-  size_t count = 1;
-  for (hsize_t d : dims) {
-    out.shape.push_back(static_cast<int64_t>(d));
-    count *= d;
-  }
+  // Sizes come from the file: an empty extent or a declared 2^36 elements is refused here, before any
+  // allocation, instead of failing later in OpenCV or in the allocator.
   const size_t elem = H5Tget_size(dtype);
+  uint64_t count = 1;
+  std::string shape_text;
+  for (hsize_t d : dims) shape_text += (shape_text.empty() ? "" : "x") + std::to_string(d);
+  for (hsize_t d : dims) {
+    if (d == 0) fail(path, ": dataset '", dataset, "' is empty (shape [", shape_text, "])");
+    if (__builtin_mul_overflow(count, static_cast<uint64_t>(d), &count) || count > kMaxHdf5Elements)
+      fail(path, ": dataset '", dataset, "' declares shape [", shape_text, "], more than the ", kMaxHdf5Elements,
+           " elements a dataset may hold here");
+    out.shape.push_back(static_cast<int64_t>(d));
+  }
   bytes.resize(count * elem);
   // Read in the stored type (no conversion): the memory type is the file type itself.
   if (count > 0 && H5Dread(dset, dtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) < 0)

@@ -1,13 +1,19 @@
-// Image I/O over OpenCV: whole-file read, format sanity checks, decode, convert to float RGB.
+// Image I/O: whole-file read, format sanity checks, size limits from the header, JPEG through libjpeg
+// (corrupt data is an error), other formats through OpenCV, conversion to float RGB.
 #include "io/image_io.h"
+
+#include <jpeglib.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <csetjmp>
+#include <cstdio>
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/runtime.h"
 #include "io/atomic_file.h"
 
 namespace isplat {
@@ -42,17 +48,110 @@ void check_container(const std::string& path, const std::string& bytes) {
     fail(path, ": not a valid ", ext.substr(1), " file (bad signature)");
 }
 
+// "" when width x height is a size we decode, else why not.
+std::string pixel_limit_problem(int64_t width, int64_t height) {
+  const int64_t limit = max_image_pixels();
+  if (width <= 0 || height <= 0) return cat("image header declares a size of ", width, "x", height);
+  if (width > limit / height)
+    return cat("image header declares ", width, "x", height, " pixels, more than the limit of ", limit,
+               " (runtime.max_image_pixels)");
+  return "";
+}
+
+void check_pixels(const std::string& path, int64_t width, int64_t height) {
+  const std::string why = pixel_limit_problem(width, height);
+  if (!why.empty()) fail(path, ": ", why);
+}
+
+// libjpeg reports corrupt scan data as a warning and fills the rest with grey; OpenCV hides those warnings.
+// This error manager turns every warning into an error, so a damaged JPEG never decodes silently.
+struct JpegErrors {
+  jpeg_error_mgr mgr;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+void jpeg_fail(j_common_ptr cinfo) {
+  auto* errors = reinterpret_cast<JpegErrors*>(cinfo->err);
+  cinfo->err->format_message(cinfo, errors->message);
+  std::longjmp(errors->jump, 1);
+}
+
+void jpeg_message(j_common_ptr cinfo, int level) {
+  if (level < 0) jpeg_fail(cinfo);  // a warning: corrupt data, premature end, extraneous bytes
+}
+
+// Decodes into `out` (8-bit BGR or grey, as cv::imdecode gives). Returns "" or the decoder's complaint.
+// No object with a destructor lives between setjmp and the libjpeg calls that may longjmp back.
+std::string decode_jpeg(const std::string& bytes, cv::Mat& out) {
+  jpeg_decompress_struct cinfo;
+  JpegErrors errors;
+  cinfo.err = jpeg_std_error(&errors.mgr);
+  errors.mgr.error_exit = jpeg_fail;
+  errors.mgr.emit_message = jpeg_message;
+  errors.message[0] = '\0';
+  if (setjmp(errors.jump)) {
+    jpeg_destroy_decompress(&cinfo);
+    return errors.message[0] ? errors.message : "corrupt JPEG data";
+  }
+  jpeg_create_decompress(&cinfo);
+  jpeg_mem_src(&cinfo, reinterpret_cast<const unsigned char*>(bytes.data()), static_cast<unsigned long>(bytes.size()));
+  jpeg_read_header(&cinfo, TRUE);
+  {  // refused from the header, before a pixel is allocated; the string is gone before libjpeg runs again
+    const std::string too_large = pixel_limit_problem(cinfo.image_width, cinfo.image_height);
+    if (!too_large.empty()) {
+      jpeg_destroy_decompress(&cinfo);
+      return too_large;
+    }
+  }
+  const bool grey = cinfo.num_components == 1;
+  cinfo.out_color_space = grey ? JCS_GRAYSCALE : JCS_EXT_BGR;
+  jpeg_start_decompress(&cinfo);
+  out.create(static_cast<int>(cinfo.output_height), static_cast<int>(cinfo.output_width), grey ? CV_8UC1 : CV_8UC3);
+  while (cinfo.output_scanline < cinfo.output_height) {
+    JSAMPROW row = out.ptr<unsigned char>(static_cast<int>(cinfo.output_scanline));
+    jpeg_read_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_decompress(&cinfo);
+  jpeg_destroy_decompress(&cinfo);
+  return "";
+}
+
+bool is_jpeg(const std::string& bytes) {
+  return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF &&
+         static_cast<unsigned char>(bytes[1]) == 0xD8;
+}
+
+// PNG's IHDR chunk holds the size right after the signature: check it before OpenCV allocates.
+void check_png_header(const std::string& path, const std::string& bytes) {
+  if (bytes.size() < 24 || bytes.compare(12, 4, "IHDR") != 0) fail(path, ": PNG without an IHDR header chunk");
+  auto be32 = [&](size_t at) {
+    return (static_cast<int64_t>(static_cast<unsigned char>(bytes[at])) << 24) |
+           (static_cast<int64_t>(static_cast<unsigned char>(bytes[at + 1])) << 16) |
+           (static_cast<int64_t>(static_cast<unsigned char>(bytes[at + 2])) << 8) |
+           static_cast<int64_t>(static_cast<unsigned char>(bytes[at + 3]));
+  };
+  check_pixels(path, be32(16), be32(20));
+}
+
 cv::Mat decode(const std::string& path, int flags) {
   const std::string bytes = read_file_bytes(path);
   check_container(path, bytes);
-  cv::Mat buf(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
   cv::Mat img;
+  if (is_jpeg(bytes)) {
+    const std::string why = decode_jpeg(bytes, img);
+    if (!why.empty()) fail(path, ": ", why.rfind("image header", 0) == 0 ? "" : "corrupt JPEG: ", why);
+    return img;
+  }
+  if (bytes.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0) check_png_header(path, bytes);
+  cv::Mat buf(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
   try {
     img = cv::imdecode(buf, flags);
   } catch (const cv::Exception& e) {
     fail(path, ": cannot decode image: ", e.what());
   }
   if (img.empty()) fail(path, ": cannot decode image (corrupt or unsupported format)");
+  check_pixels(path, img.cols, img.rows);
   return img;
 }
 

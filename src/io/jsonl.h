@@ -11,7 +11,7 @@ namespace isplat {
 
 // Appends records to `path`, flushing and checking each one, so a crash loses at most the record being
 // written and a full disk is an Error naming the file. A half-written last line left by a killed writer
-// is terminated first, so it never merges with the next record.
+// is terminated first, so it never merges with the next record. A symlink at `path` is refused.
 class JsonlWriter {
  public:
   explicit JsonlWriter(std::string path);

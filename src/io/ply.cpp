@@ -3,6 +3,7 @@
 
 #include <torch/torch.h>
 
+#include <cmath>
 #include <cstring>
 #include <sstream>
 
@@ -116,8 +117,8 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
       ls >> format;
     } else if (word == "element") {
       std::string name;
-      int64_t count;
-      ls >> name >> count;
+      int64_t count = -1;
+      if (!(ls >> name >> count) || count < 0) fail(path, ": bad element line '", line, "'");
       in_vertex = name == "vertex";
       if (in_vertex)
         n = count;
@@ -148,15 +149,22 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   for (int k = 0; k < 17; ++k)
     if (col[k] < 0 && (k < 3 || k > 5)) fail(path, ": missing property '", kProps[k], "' (3DGS layout)");
   const size_t data = end + std::strlen("end_header\n");
-  if (bytes.size() < data + static_cast<size_t>(n) * stride)
-    fail(path, ": truncated: ", n, " vertices need ", n * stride, " bytes, the file has ", bytes.size() - data);
+  // Divide rather than multiply: a declared count such as 2^62 must not wrap around the size check.
+  if (static_cast<uint64_t>(n) > (bytes.size() - data) / stride)
+    fail(path, ": truncated: ", n, " vertices of ", stride, " bytes each do not fit in the ", bytes.size() - data,
+         " bytes after the header (at byte ", data, ")");
   auto out = torch::empty({n, 17});
   float* o = out.data_ptr<float>();
   for (int64_t v = 0; v < n; ++v) {
     const char* rec = bytes.data() + data + v * stride;
-    for (int k = 0; k < 17; ++k)
-      o[v * 17 + k] =
+    for (int k = 0; k < 17; ++k) {
+      const float x =
           col[k] < 0 ? 0.0f : static_cast<float>(read_value(rec + offset[col[k]], props[col[k]].second->type));
+      if (!std::isfinite(x))
+        fail(path, ": vertex ", v, " property '", kProps[k], "' is not finite (at byte ",
+             data + v * stride + offset[col[k]], ")");
+      o[v * 17 + k] = x;
+    }
   }
   Gaussians g;
   g.means = out.narrow(1, 0, 3).contiguous();

@@ -12,6 +12,7 @@
 
 #include <torch/torch.h>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 
@@ -88,12 +89,8 @@ SafeTensors read_safetensors(const std::string& path) {
   for (int i = 7; i >= 0; --i) header_len = (header_len << 8) | file.data[i];
   if (header_len == 0 || header_len > file.size - 8 || header_len > (100u << 20))
     fail(path, ": corrupt safetensors header length ", header_len, " for a ", file.size, "-byte file");
-  nlohmann::json header;
-  try {
-    header = nlohmann::json::parse(file.data + 8, file.data + 8 + header_len);
-  } catch (const nlohmann::json::parse_error& e) {
-    fail(path, ": safetensors header is not valid JSON: ", e.what());
-  }
+  const nlohmann::json header =
+      parse_json(std::string(reinterpret_cast<const char*>(file.data) + 8, header_len), path + " (safetensors header)");
   if (!header.is_object()) fail(path, ": safetensors header must be a JSON object");
   const uint8_t* data = file.data + 8 + header_len;
   const size_t data_size = file.size - 8 - header_len;
@@ -118,13 +115,19 @@ SafeTensors read_safetensors(const std::string& path) {
     const DtypeInfo* dt = by_name(e["dtype"].get<std::string>());
     if (!dt) fail(path, ": tensor '", name, "' has unsupported dtype ", e["dtype"].dump());
     std::vector<int64_t> shape;
-    size_t numel = 1;
+    uint64_t numel = 1;
     if (!e["shape"].is_array()) fail(path, ": tensor '", name, "' shape is not a list");
     for (const auto& d : e["shape"]) {
-      if (!d.is_number_unsigned()) fail(path, ": tensor '", name, "' has a bad dimension ", d.dump());
+      // A dimension beyond int64 or a product that wraps around would pass the size check below.
+      if (!d.is_number_unsigned() || d.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX))
+        fail(path, ": tensor '", name, "' has a bad dimension ", d.dump());
       shape.push_back(d.get<int64_t>());
-      numel *= d.get<size_t>();
+      if (__builtin_mul_overflow(numel, d.get<uint64_t>(), &numel) || numel > static_cast<uint64_t>(INT64_MAX))
+        fail(path, ": tensor '", name, "' shape ", e["shape"].dump(), " has more elements than fit in 64 bits");
     }
+    uint64_t need = 0;
+    if (__builtin_mul_overflow(numel, static_cast<uint64_t>(dt->size), &need))
+      fail(path, ": tensor '", name, "' shape ", e["shape"].dump(), " needs more bytes than fit in 64 bits");
     const auto& off = e["data_offsets"];
     if (!off.is_array() || off.size() != 2 || !off[0].is_number_unsigned() || !off[1].is_number_unsigned())
       fail(path, ": tensor '", name, "' data_offsets must be [begin, end]");
@@ -132,10 +135,16 @@ SafeTensors read_safetensors(const std::string& path) {
     if (begin > end || end > data_size)
       fail(path, ": tensor '", name, "' data [", begin, ", ", end, ") lies outside the ", data_size,
            "-byte data section (truncated file?)");
-    if (end - begin != numel * dt->size)
-      fail(path, ": tensor '", name, "' has ", end - begin, " bytes but shape and dtype need ", numel * dt->size);
+    if (end - begin != need)
+      fail(path, ": tensor '", name, "' has ", end - begin, " bytes (at byte ", 8 + header_len + begin,
+           ") but shape and dtype need ", need);
     spans.emplace_back(begin, end);
-    auto t = torch::empty(shape, torch::TensorOptions().dtype(dt->dtype));
+    torch::Tensor t;
+    try {
+      t = torch::empty(shape, torch::TensorOptions().dtype(dt->dtype));
+    } catch (const c10::Error& err) {
+      fail(path, ": tensor '", name, "' shape ", e["shape"].dump(), " is unusable: ", err.what_without_backtrace());
+    }
     if (numel > 0) std::memcpy(t.data_ptr(), data + begin, end - begin);
     out.tensors.emplace(name, t);
   }
@@ -143,7 +152,8 @@ SafeTensors read_safetensors(const std::string& path) {
   size_t cursor = 0;
   for (const auto& s : spans) {
     if (s.first < cursor) fail(path, ": tensors overlap in the data section");
-    if (s.first > cursor) fail(path, ": gap in the data section at byte ", cursor, " (corrupt header)");
+    if (s.first > cursor)
+      fail(path, ": gap in the data section at byte ", 8 + header_len + cursor, " (corrupt header)");
     cursor = s.second;
   }
   if (cursor != data_size) fail(path, ": data section has ", data_size - cursor, " unindexed trailing bytes");

@@ -22,6 +22,8 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)",
           Range::at_least(0));
   v.field("scale_bounds", scale_bounds, "hinge bounds [lo, hi] on log(scale / depth) (paper: [-8, -3])");
+  v.require("scale_bounds", scale_bounds.size() == 2 && scale_bounds[0] < scale_bounds[1],
+            "must be two increasing numbers [lo, hi]");
   v.field("knn", knn, "neighbours per support for smoothness (paper: 8)", Range::at_least(1));
   v.field("perceptual_net", perceptual_net, "frozen perceptual network", {"squeezenet1_1", "vgg16", "vgg19"});
   v.field("perceptual_weights", perceptual_weights,

@@ -11,8 +11,8 @@ namespace nn = torch::nn;
 namespace F = torch::nn::functional;
 
 void CNNOptions::visit(ConfigVisitor& v) {
-  v.field("width", width, "base channel width; the four stages use 1x, 2x, 3x, 4x", Range::at_least(4));
-  v.field("out_channels", out_channels, "output feature channels (paper/release: 128)", Range::at_least(1));
+  v.field("width", width, "base channel width; the four stages use 1x, 2x, 3x, 4x", Range::between(4, 1024));
+  v.field("out_channels", out_channels, "output feature channels (paper/release: 128)", Range::between(1, 4096));
 }
 
 torch::Tensor instance_norm(const torch::Tensor& x) {

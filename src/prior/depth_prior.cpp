@@ -38,7 +38,7 @@ void PriorOptions::visit(ConfigVisitor& v) {
   v.field("learned_weights", learned_weights,
           "safetensors of the learned depth net (train it with task: depth); "
           "empty = untrained, which the log says");
-  v.field("learned_width", learned_width, "channel width of the learned depth net", Range::at_least(4));
+  v.field("learned_width", learned_width, "channel width of the learned depth net", Range::between(4, 1024));
   v.field("learned_arch", learned_arch,
           "learned depth net: a U-Net from scratch, or a decoder on the frozen pretrained SqueezeNet-1.1 "
           "features (weights/)",

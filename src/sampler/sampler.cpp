@@ -23,10 +23,11 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.field("budget_mode", budget_mode, "fixed count, or adaptive: per image pixel, or per steradian of valid surface",
           {"fixed", "per_pixel", "solid_angle"});
   v.field("budget", budget, "number of supports when budget_mode = fixed (paper: 1.5M at 1536x1024)",
-          Range::at_least(1));
+          Range::between(1, kMaxSupports));
   v.field("density", density, "supports per pixel (per_pixel) or per steradian (solid_angle)", Range::above(0));
-  v.field("min_budget", min_budget, "lower bound for adaptive budgets", Range::at_least(1));
-  v.field("max_budget", max_budget, "upper bound for adaptive budgets", Range::at_least(1));
+  v.field("min_budget", min_budget, "lower bound for adaptive budgets", Range::between(1, kMaxSupports));
+  v.field("max_budget", max_budget, "upper bound for adaptive budgets", Range::between(1, kMaxSupports));
+  v.require("max_budget", min_budget <= max_budget, "must be >= sampler.min_budget");
   v.field("vertex_fraction", vertex_fraction, "vertex_face: fraction of supports on gradient-priority vertices",
           Range::unit());
 }

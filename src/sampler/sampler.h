@@ -10,6 +10,9 @@ namespace isplat {
 
 class ConfigVisitor;
 
+// Upper bound on any support budget: 4M is the paper's 1.5M with room; 2e7 ran 4.5 min at 9.3 GB.
+constexpr int64_t kMaxSupports = 4000000;
+
 struct SamplerOptions {
   std::string mode = "area";          // area | pixel | vertex_face
   std::string budget_mode = "fixed";  // fixed | per_pixel | solid_angle

@@ -1,0 +1,43 @@
+// FolderLock: flock(2) on a lock file that records the holder's pid.
+#include "io/folder_lock.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "core/error.h"
+
+namespace isplat {
+
+FolderLock::FolderLock(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) fail(dir, ": cannot create the folder: ", ec.message());
+  const std::string path = (std::filesystem::path(dir) / ".lock").string();
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd_ < 0) fail(dir, ": cannot create the lock file ", path, ": ", std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    char pid[32] = {0};
+    const ssize_t n = ::pread(fd_, pid, sizeof pid - 1, 0);
+    ::close(fd_);
+    fd_ = -1;
+    if (err == EWOULDBLOCK)
+      fail(dir, ": another process (pid ", n > 0 ? std::string(pid, static_cast<size_t>(n)) : std::string("?"),
+           ") is writing into this folder; wait for it to finish or choose another output folder");
+    fail(dir, ": cannot lock ", path, ": ", std::strerror(err));
+  }
+  const std::string me = std::to_string(::getpid());
+  // The pid only serves a second process's message; the lock holds without it.
+  if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, me.data(), me.size(), 0);
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the lock
+}
+
+}  // namespace isplat

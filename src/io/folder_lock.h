@@ -1,0 +1,20 @@
+// An exclusive lock on an output folder, so two processes never write one run at the same time.
+#pragma once
+#include <string>
+
+namespace isplat {
+
+// flock on <dir>/.lock, holding the owner's pid. A second holder fails at once with an Error naming the
+// folder and the pid that holds it. The kernel drops the lock when the process ends, however it ends.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& dir);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace isplat
