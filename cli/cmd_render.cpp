@@ -44,7 +44,7 @@ int run_render(int argc, char** argv) {
   std::string ply, trajectory = "orbit", out, camera_json;
   int64_t frames = 60, fps = 30, width = 0, height = 0, threads = 0;
   double hfov = 60, radius = 0.08;
-  bool depth = false, normal = false, no_video = false;
+  bool depth = false, normal = false, no_video = false, strip = false;
   ArgParser args("infinisplat render",
                  "Render novel views of a Gaussian PLY: an orbit around the source view, a dolly "
                  "along its axis, or a camera path (JSON). Writes PNG frames and an MP4.");
@@ -61,6 +61,8 @@ int run_render(int argc, char** argv) {
   args.flag("--depth", depth, "also write depth visualizations");
   args.flag("--normal", normal, "also write normal visualizations");
   args.flag("--no-video", no_video, "PNG frames only");
+  args.flag("--strip", strip,
+            "also write a side-by-side strip per frame (RGB | depth | normals | alpha); the video shows the strips");
   args.option("--threads", threads, "threads (0 = all cores)");
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!ply.empty() && !out.empty(), "render: --ply and --out are required (see --help)");
@@ -94,7 +96,8 @@ int run_render(int argc, char** argv) {
   const std::string video_path = (fs::path(out) / "video.mp4").string();
   const int W = path.views[0].intr.width, H = path.views[0].intr.height;
   if (!no_video) {
-    video.open(video_path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), static_cast<double>(fps), cv::Size(W, H));
+    video.open(video_path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), static_cast<double>(fps),
+               cv::Size(strip ? 4 * W : W, H));
     if (!video.isOpened()) {
       log_warn("render: OpenCV cannot write MP4 here (", video_path, "); writing PNG frames only");
       no_video = true;
@@ -113,16 +116,30 @@ int run_render(int argc, char** argv) {
     char name[64];
     std::snprintf(name, sizeof name, "frame_%04zu.png", i);
     write_image((fs::path(out) / name).string(), rgb);
-    if (!no_video) video.write(rgb_to_bgr8(rgb, video_path));
+    const cv::Mat depth_rgb = depth || strip ? depth_visual(r, 0.3 * typical_depth, 2.5 * typical_depth) : cv::Mat();
+    cv::Mat normal_rgb;
+    if (normal || strip) {
+      auto n = (r.normal / torch::clamp_min(r.alpha, 1e-4) * 0.5 + 0.5) * (r.alpha > 0.5);
+      normal_rgb = tensor_to_image(torch::clamp(n, 0.0, 1.0));
+    }
     if (depth) {
       std::snprintf(name, sizeof name, "depth_%04zu.png", i);
-      write_image((fs::path(out) / name).string(), depth_visual(r, 0.3 * typical_depth, 2.5 * typical_depth));
+      write_image((fs::path(out) / name).string(), depth_rgb);
     }
     if (normal) {
       std::snprintf(name, sizeof name, "normal_%04zu.png", i);
-      auto n = (r.normal / torch::clamp_min(r.alpha, 1e-4) * 0.5 + 0.5) * (r.alpha > 0.5);
-      write_image((fs::path(out) / name).string(), tensor_to_image(torch::clamp(n, 0.0, 1.0)));
+      write_image((fs::path(out) / name).string(), normal_rgb);
     }
+    cv::Mat frame = rgb;
+    if (strip) {  // one image per frame, the same for the video: RGB | depth | normals | alpha
+      cv::Mat depth_f, alpha;
+      depth_rgb.convertTo(depth_f, CV_32FC3, 1.0 / 255.0);
+      cv::cvtColor(tensor_to_map(torch::clamp(r.alpha[0], 0.0, 1.0).contiguous()), alpha, cv::COLOR_GRAY2RGB);
+      cv::hconcat(std::vector<cv::Mat>{rgb, depth_f, normal_rgb, alpha}, frame);
+      std::snprintf(name, sizeof name, "strip_%04zu.png", i);
+      write_image((fs::path(out) / name).string(), frame);
+    }
+    if (!no_video) video.write(rgb_to_bgr8(frame, video_path));
     bar.tick();
   }
   bar.finish();

@@ -2,6 +2,8 @@
 // repeated non-finite steps stop training with a clear message.
 #include <catch2/catch.hpp>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include <torch/torch.h>
 
 #include <filesystem>
@@ -126,6 +128,11 @@ TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoin
   bool panel = false;
   for (const auto& e : fs::directory_iterator(fs::path(out) / "val")) panel |= e.path().extension() == ".png";
   CHECK(panel);
+  // curves.png: four charts (loss terms, lr, validation PSNR, validation loss) refreshed at each validation.
+  const cv::Mat curves = cv::imread((fs::path(out) / "curves.png").string());
+  REQUIRE_FALSE(curves.empty());
+  CHECK(curves.cols == 2 * 640);
+  CHECK(curves.rows == 2 * 420);
   cfg.train.steps = 6;
   {
     Trainer more(cfg);

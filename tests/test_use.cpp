@@ -2,6 +2,7 @@
 // through the `infinisplat` tool itself.
 #include <catch2/catch.hpp>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <filesystem>
@@ -126,6 +127,17 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   cv::VideoCapture video(out + "/orbit/video.mp4");
   REQUIRE(video.isOpened());
   CHECK(static_cast<int>(video.get(cv::CAP_PROP_FRAME_COUNT)) == 5);
+  // The side-by-side strip: RGB | depth | normals | alpha, four frames wide, and the video shows it.
+  const std::string strip = tool + " render --ply " + out + "/scene.ply --trajectory dolly --frames 3 --strip --out " +
+                            out + "/strip > " + out + "/strip.txt 2>&1";
+  REQUIRE(std::system(strip.c_str()) == 0);
+  const cv::Mat frame = cv::imread(out + "/orbit/frame_0000.png"), s0 = cv::imread(out + "/strip/strip_0000.png");
+  REQUIRE(!s0.empty());
+  CHECK(s0.cols == 4 * frame.cols);
+  CHECK(s0.rows == frame.rows);
+  cv::VideoCapture strip_video(out + "/strip/video.mp4");
+  REQUIRE(strip_video.isOpened());
+  CHECK(static_cast<int>(strip_video.get(cv::CAP_PROP_FRAME_WIDTH)) == 4 * frame.cols);
   // Bad input is named.
   const std::string bad = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + out +
                           "/none.jpg --out " + out + "/x.ply > " + out + "/bad.txt 2>&1";

@@ -16,6 +16,7 @@
 #include "core/parse.h"
 #include "core/progress.h"
 #include "io/atomic_file.h"
+#include "io/chart.h"
 #include "io/checkpoint.h"
 #include "io/folder_lock.h"
 #include "io/panel.h"
@@ -215,6 +216,7 @@ double Trainer::validate(bool write_images) {
   nlohmann::json j = {{"step", step_}, {"val_loss", mean}, {"cpu_s", cpu_seconds()}};
   if (psnr_n) j["val_psnr_masked"] = psnr_sum / psnr_n;
   log_->write(j);
+  write_curves();
   log_info("validation at step ", step_, ": loss ", mean,
            psnr_n ? cat(", masked PSNR ", psnr_sum / psnr_n, " dB") : "");
   return mean;
@@ -303,6 +305,41 @@ void Trainer::resume(const std::string& requested) {
   if (bv != ck.metadata.end()) best_val_ = parse_double(bv->second).value_or(std::numeric_limits<double>::infinity());
   loader_.reset();  // restart the data stream at the resumed step
   log_info("train: resumed from ", path, " at step ", step_);
+}
+
+void Trainer::write_curves() const {
+  // curves.png from the log itself: loss terms (20-step moving average), learning rate, validation.
+  std::map<std::string, ChartSeries> terms;
+  ChartSeries lr{"learning rate", {}, {}, true, -1, 0}, psnr{"masked PSNR", {}, {}, true, 0, 2},
+      val{"validation loss", {}, {}, true, 0, 1};
+  std::map<std::string, std::vector<double>> window;
+  for (const auto& j : read_jsonl(log_->path())) {
+    const double step = j.value("step", 0.0);
+    if (j.contains("loss") && j["loss"].is_object()) {
+      for (auto it = j["loss"].begin(); it != j["loss"].end(); ++it) {
+        if (!it.value().is_number() || it.key() == "total_all_ranks") continue;
+        auto& w = window[it.key()];
+        w.push_back(it.value().get<double>());
+        if (w.size() > 20) w.erase(w.begin());
+        double sum = 0;
+        for (double x : w) sum += x;
+        auto& series = terms[it.key()];
+        series.name = it.key();
+        series.x.push_back(step), series.y.push_back(sum / w.size());
+      }
+      if (j.contains("lr") && j["lr"].is_number()) lr.x.push_back(step), lr.y.push_back(j["lr"].get<double>());
+    }
+    if (j.contains("val_psnr_masked") && j["val_psnr_masked"].is_number())
+      psnr.x.push_back(step), psnr.y.push_back(j["val_psnr_masked"].get<double>());
+    if (j.contains("val_loss") && j["val_loss"].is_number())
+      val.x.push_back(step), val.y.push_back(j["val_loss"].get<double>());
+  }
+  Chart loss{"training loss terms (20-step moving average)", "step", "loss", false, {}};
+  for (auto& [k, v] : terms) loss.series.push_back(v);
+  write_charts((fs::path(run_dir_) / "curves.png").string(),
+               {loss, Chart{"learning rate", "step", "lr", false, {lr}},
+                Chart{"validation: masked PSNR of the raw render", "step", "PSNR (dB)", false, {psnr}},
+                Chart{"validation loss", "step", "loss", false, {val}}});
 }
 
 void Trainer::write_log(const StepStats& s) {

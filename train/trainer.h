@@ -42,6 +42,7 @@ class Trainer {
   void synchronize_gradients(StepStats& s);
   bool writer() const;  // rank 0 (or the only process): the one that writes logs, images and checkpoints
   void write_log(const StepStats& s);
+  void write_curves() const;  // <run>/curves.png, refreshed at each validation
   void write_val_images(const Batch& batch, const RenderedViews& views, int64_t index);
   Checkpoint make_checkpoint(bool with_optimizer) const;
 
