@@ -7,7 +7,8 @@ PACKAGES=(
   libtorch-dev libopencv-dev libeigen3-dev nlohmann-json3-dev
   libopenexr-dev libimath-dev catch2 libhdf5-dev libjpeg62-turbo-dev zlib1g-dev
   libonnx-dev libprotobuf-dev protobuf-compiler
-  libbenchmark-dev libopenblas0-pthread clang-format zlib1g-dev
+  libbenchmark-dev libopenblas0-pthread clang-format
+  libgloo-dev  # Gloo headers for c10d ProcessGroupGloo (data-parallel training)
   chromium  # opens the exported HTML viewer headless in the tests
 )
 
