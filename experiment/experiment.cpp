@@ -253,7 +253,7 @@ void Experiment::report() {
       Chart chart;
       chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
       chart.x_label = "baseline bin (0 = smallest)";
-      chart.y_label = "delta PSNR (dB), 95% CI";
+      chart.y_label = "delta PSNR (dB), mean over the bin's pairs";
       // Rows: every trained row and seed, then the baselines.
       struct Entry {
         std::string name, label;
