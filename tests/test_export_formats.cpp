@@ -2,8 +2,6 @@
 // reading what we write, our reader reading what it writes, and the HTML viewer opened in headless Chromium.
 #include <catch2/catch.hpp>
 
-#include <zlib.h>
-
 #include <torch/torch.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -61,23 +59,7 @@ double max_abs(const torch::Tensor& a, const torch::Tensor& b) {
 }
 
 std::string gunzip_file(const std::string& path) {
-  const std::string packed = test::read_bytes(path);
-  z_stream zs{};
-  REQUIRE(inflateInit2(&zs, 16 + MAX_WBITS) == Z_OK);
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(packed.data()));
-  zs.avail_in = static_cast<uInt>(packed.size());
-  std::string out;
-  char buf[4096];
-  int rc = Z_OK;
-  while (rc == Z_OK) {
-    zs.next_out = reinterpret_cast<Bytef*>(buf);
-    zs.avail_out = sizeof(buf);
-    rc = inflate(&zs, Z_NO_FLUSH);
-    out.append(buf, sizeof(buf) - zs.avail_out);
-  }
-  inflateEnd(&zs);
-  REQUIRE(rc == Z_STREAM_END);
-  return out;
+  return gunzip(path, test::read_bytes(path));
 }
 
 std::vector<std::string> ply_properties(const std::string& path) {

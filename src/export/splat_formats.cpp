@@ -73,6 +73,12 @@ std::string gzip(const std::string& path, const std::string& raw) {
   return out;
 }
 
+// Our OpenCV frame (x right, y down, z forward) <-> SPZ's RUB (x right, y up, z back): negate y and z.
+// This is a 180-degree turn about x (a rotation, not a mirror), so quaternions turn as (w, x, -y, -z).
+constexpr float kRdfToRub[3] = {1.0f, -1.0f, -1.0f};
+
+}  // namespace
+
 std::string gunzip(const std::string& path, const std::string& packed) {
   z_stream zs{};
   ISPLAT_CHECK(inflateInit2(&zs, 16 + MAX_WBITS) == Z_OK, path, ": zlib inflateInit2 failed");
@@ -91,12 +97,6 @@ std::string gunzip(const std::string& path, const std::string& packed) {
   ISPLAT_CHECK(rc == Z_STREAM_END, path, ": not a valid gzip stream (zlib code ", rc, ")");
   return out;
 }
-
-// Our OpenCV frame (x right, y down, z forward) <-> SPZ's RUB (x right, y up, z back): negate y and z.
-// This is a 180-degree turn about x (a rotation, not a mirror), so quaternions turn as (w, x, -y, -z).
-constexpr float kRdfToRub[3] = {1.0f, -1.0f, -1.0f};
-
-}  // namespace
 
 void write_splat(const std::string& path, const Gaussians& g, bool colors_linear) {
   const Packed p = prepare(path, g, colors_linear);

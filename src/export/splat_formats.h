@@ -29,4 +29,7 @@ void write_spz(const std::string& path, const Gaussians& g, bool colors_linear =
 // linear RGB when `want_linear`. Higher SH bands are skipped. Bad files throw Error naming the path.
 Gaussians read_spz(const std::string& path, bool want_linear = true);
 
+// The bytes inside a gzip stream (`path` names the source in errors); a corrupt stream is an Error.
+std::string gunzip(const std::string& path, const std::string& packed);
+
 }  // namespace isplat
