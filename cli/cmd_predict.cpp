@@ -24,6 +24,7 @@
 #include "io/ply.h"
 #include "io/tensor_image.h"
 #include "model/model_io.h"
+#include "render/prune.h"
 
 namespace isplat::cli {
 namespace fs = std::filesystem;
@@ -52,8 +53,8 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
 
 int run_predict(int argc, char** argv) {
   std::string checkpoint, image_path, depth_model, depth_path, prompts_path, out;
-  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02;
-  int64_t threads = 0, width = 0, height = 0, seed = 0;
+  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
+  int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4;
   bool keep_outside = false;
   std::vector<std::string> sets;
   ArgParser args("infinisplat predict",
@@ -74,6 +75,10 @@ int run_predict(int argc, char** argv) {
   args.option("--width", width, "working width (default: the training resolution's area at the photo's aspect)");
   args.option("--height", height, "working height");
   args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)");
+  args.option("--prune-contribution", prune_contribution,
+              "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
+              "--prune-views nearby views stays below this (0 = off; 0.01 is a good start)");
+  args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");
@@ -147,9 +152,19 @@ int run_predict(int argc, char** argv) {
     outside = made - keep.sum().item<int64_t>();
     g = g.index(keep);
   }
-  const int64_t faint = prune_opacity > 0 ? prune_by_opacity(g, prune_opacity) : 0;
+  PruneOptions po;
+  po.enabled = true;
+  po.min_opacity = prune_opacity;
+  po.min_contribution = prune_contribution;
+  po.views = prune_views;
+  const auto t_prune = Clock::now();
+  const PruneResult pruned = prune_gaussians(g, to_camera(view), po);
+  const double prune_ms = ms_since(t_prune);
+  g = pruned.kept;
+  const int64_t faint = pruned.low_opacity;
   ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
-               " below opacity ", prune_opacity, "); not writing an empty scene to ", out);
+               " below opacity ", prune_opacity, ", ", pruned.low_contribution,
+               " below contribution); not writing an empty scene to ", out);
   write_ply(out, g, pipeline->model()->options.composer.linear_rgb);
   const double typical_depth = pred.supports.depth.median().item<double>();
   write_scene_camera(camera_sidecar_path(out), view, typical_depth);
@@ -159,12 +174,15 @@ int run_predict(int argc, char** argv) {
   std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
   std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
   std::cout << "supports     " << pred.supports.count() << "\n";
-  std::cout << "Gaussians    " << g.count() << " written (" << faint << " below opacity " << std::setprecision(3)
-            << std::defaultfloat << prune_opacity << " and " << outside << " outside the view pruned)\n";
+  std::cout << "Gaussians    " << g.count() << " written of " << made << " decoded (pruned: " << outside
+            << " outside the view, " << faint << " below opacity " << std::setprecision(3) << std::defaultfloat
+            << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
+            << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views)\n";
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k))
       std::cout << " " << k << " " << std::fixed << std::setprecision(0) << pred.timings_ms.at(k);
+  std::cout << " prune " << std::fixed << std::setprecision(0) << prune_ms;
   std::cout << " | total " << std::fixed << std::setprecision(0) << ms_since(t_start) << "\n";
   std::cout << "wrote        " << fs::absolute(out).string() << "\n             "
             << fs::absolute(camera_sidecar_path(out)).string() << "\n";

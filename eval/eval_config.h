@@ -6,6 +6,7 @@
 #include "core/runtime.h"
 #include "eval/datasets.h"
 #include "eval/pairs.h"
+#include "render/prune.h"
 #include "render/render.h"
 
 namespace isplat {
@@ -17,8 +18,14 @@ struct MethodOptions {
   std::string type = "model";          // model | lift | identity
   std::string checkpoint;              // model: checkpoint file
   std::vector<std::string> overrides;  // model: overrides of its stored config, e.g. "prior.type=sparse"
+  std::vector<std::string> budgets;    // model: support budgets to sweep ("px:0.5", "n:50000", "detail:1")
+  PruneOptions prune;                  // model: pruning after decoding
   void visit(ConfigVisitor& v);
 };
+
+// A model method with budgets becomes one method per budget, named <name>@<budget> (e.g. full@px0.5), with
+// the sampler overrides appended; other methods pass through. Throws Error naming a malformed budget.
+std::vector<MethodOptions> expand_budget_sweeps(const std::vector<MethodOptions>& methods);
 
 struct ScoringOptions {
   std::string out = "out/eval";

@@ -21,6 +21,7 @@ namespace fs = std::filesystem;
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
   ISPLAT_CHECK(!config_.datasets.empty(), "eval: no datasets (config key datasets)");
+  config_.methods = expand_budget_sweeps(config_.methods);
   for (const auto& net : config_.scoring.lpips) {
     std::string why;
     auto lp = Lpips::from_folder(net, config_.scoring.weights_dir, why);
@@ -196,6 +197,9 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
       r.infer_ms = o.infer_ms;
       r.render_ms = o.render_ms;
       r.gaussians = o.gaussians;
+      r.decoded = o.decoded;
+      r.stage_ms = o.stage_ms;
+      r.peak_mb = o.peak_mb;
       log.append(r);
       if (examples++ < config_.scoring.examples)
         write_panel((dir / "examples" / cat(safe_name(mo.name), "_pair", i, ".png")).string(),

@@ -7,9 +7,11 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/runtime.h"
 #include "decoder/composer.h"
 #include "geometry/color.h"
 #include "model/model_io.h"
+#include "render/prune.h"
 #include "render/render.h"
 #include "sampler/base_gaussians.h"
 
@@ -32,16 +34,23 @@ class ModelMethod final : public Method {
   MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed,
                        const torch::Tensor& prompts) override {
     torch::NoGradGuard g;
+    const bool peak = reset_peak_memory();
     PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
     auto t0 = Clock::now();
     const Prediction p = pipeline_->run(in, src.camera.T_cw, false);
     MethodOutput out;
+    out.stage_ms = p.timings_ms;
+    out.decoded = p.gaussians.count();
+    const auto tp = Clock::now();
+    const PruneResult pr = prune_gaussians(p.gaussians, src.camera, options_.prune, render_);
+    if (options_.prune.enabled) out.stage_ms["prune"] = ms_since(tp);
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();
-    const RenderOutput r = render(p.gaussians, target, render_);
+    const RenderOutput r = render(pr.kept, target, render_);
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
-    out.gaussians = p.gaussians.count();
+    out.gaussians = pr.kept.count();
+    if (peak) out.peak_mb = peak_memory_mb();
     return out;
   }
   std::string describe() const override { return "checkpoint " + options_.checkpoint; }
@@ -75,7 +84,7 @@ class LiftMethod final : public Method {
     const RenderOutput r = render(gs, target, render_);
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, true);
-    out.gaussians = gs.count();
+    out.gaussians = out.decoded = gs.count();
     return out;
   }
   std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }

@@ -1,6 +1,8 @@
 // Methods the evaluator scores: a trained checkpoint (RGB or LiDAR variant, or an ablation), and the
 // baselines any reviewer asks for ("lift" and "identity").
 #pragma once
+#include <limits>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -10,10 +12,13 @@
 namespace isplat {
 
 struct MethodOutput {
-  torch::Tensor image;   // [3,H,W] sRGB in [0,1], the target view
-  double infer_ms = 0;   // one image -> Gaussians (prior included)
-  double render_ms = 0;  // Gaussians -> target view
-  int64_t gaussians = 0;
+  torch::Tensor image;                                        // [3,H,W] sRGB in [0,1], the target view
+  double infer_ms = 0;                                        // one image -> Gaussians (prior included)
+  double render_ms = 0;                                       // Gaussians -> target view
+  int64_t gaussians = 0;                                      // rendered (after pruning)
+  int64_t decoded = 0;                                        // before pruning
+  std::map<std::string, double> stage_ms;                     // prior, sampler, encoder, decoder, composer, prune
+  double peak_mb = std::numeric_limits<double>::quiet_NaN();  // process peak memory during predict + render
 };
 
 class Method {

@@ -1,8 +1,8 @@
 // Aggregation and report writers (Markdown, CSV, JSON, PNG chart).
 #include "eval/report.h"
 
-#include <opencv2/imgproc.hpp>
-
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -12,13 +12,15 @@
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/chart.h"
 #include "io/csv.h"
-#include "io/image_io.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
 
 namespace {
+constexpr const char* kStages[] = {"prior", "sampler", "encoder", "decoder", "composer", "prune"};
+
 std::string fmt(double v, int digits) {
   if (!std::isfinite(v)) return "n/a";
   std::ostringstream os;
@@ -26,6 +28,71 @@ std::string fmt(double v, int digits) {
   return os.str();
 }
 }  // namespace
+
+std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& points) {
+  std::vector<size_t> order(points.size()), front;
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return points[a].first < points[b].first ||
+           (points[a].first == points[b].first && points[a].second > points[b].second);
+  });
+  double best = -std::numeric_limits<double>::infinity();
+  for (size_t i : order)
+    if (std::isfinite(points[i].first) && std::isfinite(points[i].second) && points[i].second > best)
+      front.push_back(i), best = points[i].second;
+  return front;
+}
+
+static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& rows) {
+  std::vector<std::string> datasets;
+  for (const auto& r : rows)
+    if (std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end()) datasets.push_back(r.dataset);
+  std::vector<Chart> charts;
+  for (const auto& d : datasets) {
+    // One series per method family: "full@px0.5" and "full@px2" are points of the series "full px".
+    std::vector<std::string> families;
+    std::vector<const ReportRow*> pts;
+    for (const auto& r : rows) {
+      if (r.dataset != d || r.bin != "all" || !std::isfinite(r.psnr)) continue;
+      pts.push_back(&r);
+      const std::string f = method_family(r.method);
+      if (std::find(families.begin(), families.end(), f) == families.end()) families.push_back(f);
+    }
+    for (int axis = 0; axis < 2; ++axis) {
+      Chart c;
+      c.title = d + (axis == 0 ? ": quality against time" : ": quality against Gaussians");
+      c.x_label = axis == 0 ? "inference + render per pair (ms)" : "Gaussians rendered";
+      c.y_label = "masked PSNR (dB)";
+      c.log_x = true;
+      auto xval = [&](const ReportRow* r) { return axis == 0 ? r->infer_ms + r->render_ms : r->gaussians; };
+      for (size_t k = 0; k < families.size(); ++k) {
+        ChartSeries s{families[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
+        std::vector<const ReportRow*> mine;
+        for (const auto* r : pts)
+          if (method_family(r->method) == families[k] && xval(r) > 0) mine.push_back(r);
+        std::sort(mine.begin(), mine.end(), [&](auto* a, auto* b) { return xval(a) < xval(b); });
+        for (const auto* r : mine) s.x.push_back(xval(r)), s.y.push_back(r->psnr);
+        c.series.push_back(s);
+      }
+      std::vector<std::pair<double, double>> xy;
+      for (const auto* r : pts)
+        xy.push_back({xval(r) > 0 ? xval(r) : std::numeric_limits<double>::quiet_NaN(), r->psnr});
+      ChartSeries front{"Pareto front", {}, {}, true, 3, 7};
+      for (size_t i : pareto_front(xy)) front.x.push_back(xy[i].first), front.y.push_back(xy[i].second);
+      c.series.push_back(front);
+      charts.push_back(c);
+    }
+  }
+  return charts;
+}
+
+std::string method_family(const std::string& method) {
+  const auto at = method.find('@');
+  if (at == std::string::npos) return method;
+  size_t k = at + 1;
+  while (k < method.size() && std::isalpha(static_cast<unsigned char>(method[k]))) ++k;
+  return method.substr(0, at) + " " + method.substr(at + 1, k - at - 1);
+}
 
 std::vector<ReportRow> summarize(const std::string& dataset, const std::string& method,
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
@@ -37,7 +104,9 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
     r.method = method;
     r.bin = label;
     r.requested = req;
-    double p = 0, s = 0, inf = 0, ren = 0, g = 0;
+    double p = 0, s = 0, inf = 0, ren = 0, g = 0, dec = 0;
+    std::map<std::string, double> stage;
+    r.peak_mb = std::numeric_limits<double>::quiet_NaN();
     std::map<std::string, double> lp;
     std::map<std::string, int64_t> lp_n;
     int64_t psnr_n = 0;
@@ -45,7 +114,9 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
       if (bin >= 0 && x.bin != bin) continue;
       ++r.pairs;
       if (std::isfinite(x.psnr)) p += x.psnr, ++psnr_n;
-      s += x.ssim, inf += x.infer_ms, ren += x.render_ms, g += x.gaussians;
+      s += x.ssim, inf += x.infer_ms, ren += x.render_ms, g += x.gaussians, dec += x.decoded;
+      for (const auto& [k, v] : x.stage_ms) stage[k] += v;
+      if (std::isfinite(x.peak_mb)) r.peak_mb = std::isfinite(r.peak_mb) ? std::max(r.peak_mb, x.peak_mb) : x.peak_mb;
       for (const auto& net : lpips_nets) {
         auto it = x.lpips.find(net);
         if (it != x.lpips.end() && std::isfinite(it->second)) lp[net] += it->second, ++lp_n[net];
@@ -58,6 +129,8 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
     r.infer_ms = r.pairs ? inf / n : nan;
     r.render_ms = r.pairs ? ren / n : nan;
     r.gaussians = r.pairs ? g / n : nan;
+    r.decoded = r.pairs ? dec / n : nan;
+    for (const auto& [k, v] : stage) r.stage_ms[k] = v / n;
     for (const auto& net : lpips_nets) r.lpips[net] = lp_n[net] ? lp[net] / lp_n[net] : nan;
     rows.push_back(r);
   };
@@ -93,6 +166,22 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
       for (const auto& n : nets) md << " " << fmt(r.lpips.at(n), 4) << " |";
       md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 0) << " | " << fmt(r.gaussians, 0) << " |\n";
     }
+    md << "\nWhere the time goes (ms per pair, all bins; Gaussians decoded -> rendered after pruning; peak = "
+          "the process's resident peak during one prediction and render):\n\n| method | Gaussians |";
+    for (const char* st : kStages) md << " " << st << " |";
+    md << " infer | render | peak MB |\n|---|---|";
+    for (size_t i = 0; i < std::size(kStages); ++i) md << "---|";
+    md << "---|---|---|\n";
+    for (const auto& r : rows) {
+      if (r.dataset != d || r.bin != "all") continue;
+      md << "| " << r.method << " | " << fmt(r.decoded, 0)
+         << (std::isfinite(r.decoded) && std::llround(r.decoded) != std::llround(r.gaussians)
+                 ? " -> " + fmt(r.gaussians, 0)
+                 : "")
+         << " |";
+      for (const char* st : kStages) md << " " << (r.stage_ms.count(st) ? fmt(r.stage_ms.at(st), 1) : "-") << " |";
+      md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 1) << " | " << fmt(r.peak_mb, 0) << " |\n";
+    }
     md << "\n";
   }
   if (!notes.empty()) {
@@ -104,7 +193,8 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   CsvTable csv;
   csv.header = {"dataset", "method", "bin", "pairs", "requested", "psnr", "ssim"};
   for (const auto& n : nets) csv.header.push_back("lpips_" + n);
-  for (const char* h : {"infer_ms", "render_ms", "gaussians"}) csv.header.push_back(h);
+  for (const char* h : {"infer_ms", "render_ms", "gaussians", "decoded", "peak_mb"}) csv.header.push_back(h);
+  for (const char* st : kStages) csv.header.push_back(std::string(st) + "_ms");
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& r : rows) {
     std::vector<std::string> row = {
@@ -122,95 +212,23 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     row.push_back(fmt(r.infer_ms, 2));
     row.push_back(fmt(r.render_ms, 2));
     row.push_back(fmt(r.gaussians, 0));
-    j["infer_ms"] = r.infer_ms;
-    j["render_ms"] = r.render_ms;
-    j["gaussians"] = r.gaussians;
+    row.push_back(fmt(r.decoded, 0));
+    row.push_back(fmt(r.peak_mb, 1));
+    auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
+    for (const char* st : kStages) row.push_back(r.stage_ms.count(st) ? fmt(r.stage_ms.at(st), 2) : "");
+    j["infer_ms"] = num(r.infer_ms);
+    j["render_ms"] = num(r.render_ms);
+    j["gaussians"] = num(r.gaussians);
+    j["decoded"] = num(r.decoded);
+    j["peak_mb"] = num(r.peak_mb);
+    j["stage_ms"] = r.stage_ms;
     csv.rows.push_back(row);
     js.push_back(j);
   }
   write_csv((fs::path(out) / "report.csv").string(), csv);
   write_file_atomic((fs::path(out) / "report.json").string(), js.dump(2) + "\n");
 
-  // Speed/quality chart: x = inference + render time per pair (log scale), y = masked PSNR.
-  // Colour = method, marker = dataset, so each point reads without a long legend.
-  const int W = 960, H = 560, L = 80, R = 230, T = 40, B = 60;
-  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
-  std::vector<const ReportRow*> pts;
-  std::vector<std::string> methods, sets;
-  for (const auto& r : rows) {
-    if (r.bin != "all" || !std::isfinite(r.psnr)) continue;
-    pts.push_back(&r);
-    if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) methods.push_back(r.method);
-    if (std::find(sets.begin(), sets.end(), r.dataset) == sets.end()) sets.push_back(r.dataset);
-  }
-  if (!pts.empty()) {
-    auto xval = [](const ReportRow* r) { return std::log10(std::max(0.1, r->infer_ms + r->render_ms)); };
-    double x0 = 1e18, x1 = -1e18, y0 = 1e18, y1 = -1e18;
-    for (const auto* r : pts) {
-      x0 = std::min(x0, xval(r)), x1 = std::max(x1, xval(r)), y0 = std::min(y0, r->psnr), y1 = std::max(y1, r->psnr);
-    }
-    x0 = std::floor(x0 - 0.2), x1 = std::ceil(x1 + 0.2), y0 -= 1.0, y1 += 1.0;
-    auto px = [&](double x) { return L + static_cast<int>((x - x0) / (x1 - x0) * (W - L - R)); };
-    auto py = [&](double y) { return H - B - static_cast<int>((y - y0) / (y1 - y0) * (H - T - B)); };
-    const cv::Scalar black(0, 0, 0);
-    auto text = [&](const std::string& s, cv::Point p, double scale = 0.45) {
-      cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, black, 1, cv::LINE_AA);
-    };
-    cv::rectangle(img, {L, T}, {W - R, H - B}, black, 1);
-    for (int e = static_cast<int>(x0); e <= static_cast<int>(x1); ++e) {
-      cv::line(img, {px(e), H - B}, {px(e), H - B + 5}, black);
-      std::ostringstream lab;
-      lab << std::pow(10.0, e) << " ms";
-      text(e == static_cast<int>(x0) ? "<= " + lab.str() : lab.str(), {px(e) - 22, H - B + 22});
-    }
-    for (int t = 0; t <= 4; ++t) {
-      const double y = y0 + (y1 - y0) * t / 4;
-      cv::line(img, {L - 5, py(y)}, {L, py(y)}, black);
-      text(fmt(y, 1), {L - 48, py(y) + 5});
-    }
-    text("time per pair (inference + render), log scale", {L + 150, H - 15}, 0.5);
-    text("masked PSNR (dB), average over pairs", {10, T - 15}, 0.5);
-    // RGB (write_image takes RGB): the matplotlib "tab10" palette.
-    static const cv::Scalar colors[] = {{31, 119, 180},  {255, 127, 14}, {44, 160, 44},   {214, 39, 40},
-                                        {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127}};
-    auto marker = [&](size_t kind, cv::Point p, const cv::Scalar& c) {
-      switch (kind % 4) {
-        case 0:
-          cv::circle(img, p, 7, c, cv::FILLED, cv::LINE_AA);
-          break;
-        case 1:
-          cv::rectangle(img, {p.x - 6, p.y - 6}, {p.x + 6, p.y + 6}, c, cv::FILLED);
-          break;
-        case 2: {
-          std::vector<cv::Point> tri = {{p.x, p.y - 8}, {p.x - 7, p.y + 6}, {p.x + 7, p.y + 6}};
-          cv::fillConvexPoly(img, tri, c, cv::LINE_AA);
-          break;
-        }
-        default:
-          cv::drawMarker(img, p, c, cv::MARKER_TILTED_CROSS, 14, 3, cv::LINE_AA);
-      }
-    };
-    auto index = [](const std::vector<std::string>& v, const std::string& s) {
-      return static_cast<size_t>(std::find(v.begin(), v.end(), s) - v.begin());
-    };
-    for (const auto* r : pts)
-      marker(index(sets, r->dataset), {px(xval(r)), py(r->psnr)}, colors[index(methods, r->method) % 8]);
-    int y = T + 10;
-    text("method (colour)", {W - R + 15, y}, 0.5);
-    for (size_t i = 0; i < methods.size(); ++i) {
-      y += 22;
-      marker(0, {W - R + 25, y - 5}, colors[i % 8]);
-      text(methods[i], {W - R + 40, y});
-    }
-    y += 34;
-    text("dataset (marker)", {W - R + 15, y}, 0.5);
-    for (size_t i = 0; i < sets.size(); ++i) {
-      y += 22;
-      marker(i, {W - R + 25, y - 5}, black);
-      text(sets[i], {W - R + 40, y});
-    }
-  }
-  write_image((fs::path(out) / "speed_quality.png").string(), img);
+  write_charts((fs::path(out) / "speed_quality.png").string(), speed_quality_charts(rows), 2, 620, 420);
 }
 
 }  // namespace isplat

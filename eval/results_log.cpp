@@ -11,16 +11,14 @@ namespace isplat {
 
 nlohmann::json result_json(const PairResult& r) {
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  nlohmann::json j = {{"index", r.index},
-                      {"bin", r.bin},
-                      {"baseline", r.baseline},
-                      {"psnr", num(r.psnr)},
-                      {"ssim", r.ssim},
-                      {"infer_ms", r.infer_ms},
-                      {"render_ms", r.render_ms},
-                      {"gaussians", r.gaussians},
-                      {"mask_fraction", r.mask_fraction}};
+  nlohmann::json j = {{"index", r.index},         {"bin", r.bin},
+                      {"baseline", r.baseline},   {"psnr", num(r.psnr)},
+                      {"ssim", r.ssim},           {"infer_ms", r.infer_ms},
+                      {"render_ms", r.render_ms}, {"gaussians", r.gaussians},
+                      {"decoded", r.decoded},     {"mask_fraction", r.mask_fraction},
+                      {"peak_mb", num(r.peak_mb)}};
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
+  if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
   return j;
 }
 
@@ -55,6 +53,16 @@ PairResult result_from_json(const nlohmann::json& j) {
   ISPLAT_CHECK(r.gaussians >= 0, "'gaussians' = ", r.gaussians, " is negative");
   r.mask_fraction = j.at("mask_fraction").get<double>();
   check_range("mask_fraction", r.mask_fraction, 0, 1);
+  // Added later: optional, so older logs still resume.
+  r.decoded = j.contains("decoded") ? j.at("decoded").get<int64_t>() : r.gaussians;
+  ISPLAT_CHECK(r.decoded >= 0, "'decoded' = ", r.decoded, " is negative");
+  r.peak_mb = j.contains("peak_mb") && !j.at("peak_mb").is_null() ? j.at("peak_mb").get<double>() : nan;
+  if (std::isfinite(r.peak_mb)) check_range("peak_mb", r.peak_mb, 0, 1e8);
+  if (j.contains("stage_ms"))
+    for (auto it = j.at("stage_ms").begin(); it != j.at("stage_ms").end(); ++it) {
+      r.stage_ms[it.key()] = it.value().get<double>();
+      check_range(it.key().c_str(), r.stage_ms[it.key()], 0, 1e9);
+    }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key().rfind("lpips_", 0) == 0) {
       r.lpips[it.key().substr(6)] = it.value().is_null() ? nan : it.value().get<double>();

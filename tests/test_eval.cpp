@@ -1,11 +1,12 @@
 // Evaluation: pair selection (bins, caps, overlap and rotation filters, determinism, byte-identical
 // manifests), depth-free captures (points3D and camera proxies, full-frame masks), NeRF-synthetic files, and
-// a tiny end-to-end run of two methods with reports and resume.
+// a tiny end-to-end run of two methods with reports and resume, and a support-budget sweep with pruning.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include <opencv2/imgcodecs.hpp>
@@ -147,6 +148,78 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   const auto again = Evaluator(c).run();
   CHECK(test::read_bytes(c.scoring.out + "/courtyard/results_lift.jsonl") == before);
   CHECK(again[4].psnr == rows[4].psnr);
+}
+
+TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
+  MethodOptions m{"full", "model", "ck.safetensors", {"prior.type=dataset"}};
+  m.budgets = {"px:0.5", "n:50000", "detail:1"};
+  const auto out = expand_budget_sweeps({MethodOptions{"lift", "lift", "", {}}, m});
+  REQUIRE(out.size() == 4);
+  CHECK(out[0].name == "lift");
+  CHECK(out[1].name == "full@px0.5");
+  CHECK(out[1].overrides ==
+        std::vector<std::string>{"prior.type=dataset", "sampler.budget_mode=per_pixel", "sampler.density=0.5"});
+  CHECK(out[2].overrides.back() == "sampler.budget=50000");
+  CHECK(out[3].overrides[1] == "sampler.budget_mode=detail");
+  for (const char* bad : {"px", "px:", "px:-1", "px:0.5x", "budget:3"}) {
+    m.budgets = {bad};
+    CHECK_THROWS_WITH(expand_budget_sweeps({m}), Catch::Contains(std::string("budget '") + bad + "'"));
+  }
+  m.budgets = {"px:1", "px:1"};
+  CHECK_THROWS_WITH(expand_budget_sweeps({m}), Catch::Contains("two methods are named 'full@px1'"));
+  CHECK(method_family("full@px0.25") == "full px");
+  CHECK(method_family("full+prune@detail2") == "full+prune detail");
+  CHECK(method_family("lift") == "lift");
+  // Cheaper and better points form the front; dominated ones do not.
+  const std::vector<std::pair<double, double>> pts = {{10, 20}, {5, 21}, {20, 22}, {30, 21.5}, {20, 19}, {1, 15}};
+  CHECK(pareto_front(pts) == std::vector<size_t>{5, 1, 2});
+}
+
+TEST_CASE("eval: a support-budget sweep with pruning scores every budget and writes the chart and tables", "[eval]") {
+  test::QuietLogs quiet;
+  const auto g = test::make_tiny_dataset("eval_sweep", 16);
+  const std::string ck = test::temp_dir("eval_sweep_ck") + "/tiny.safetensors";
+  Trainer(test::tiny_train_config(g, test::temp_dir("eval_sweep_run"), 1)).save(ck);
+  EvalConfig c;
+  c.datasets = {colmap_set(g)};
+  c.methods = {{"tiny", "model", ck, {"prior.type=dataset"}}, {"tiny+prune", "model", ck, {"prior.type=dataset"}}};
+  c.methods[0].budgets = {"px:0.25", "n:900", "detail:1"};
+  c.methods[1].budgets = {"n:900"};
+  c.methods[1].prune.enabled = true;
+  c.methods[1].prune.min_contribution = 0.02;
+  c.protocol.pairs_per_bin = 2;
+  c.scoring.out = test::temp_dir("eval_sweep_out");
+  c.scoring.weights_dir = test::project_weights_dir();
+  c.scoring.lpips = {"squeeze"};
+  c.scoring.examples = 0;
+  const auto rows = Evaluator(c).run();
+  std::map<std::string, ReportRow> all;
+  for (const auto& r : rows)
+    if (r.bin == "all") all[r.method] = r;
+  REQUIRE(all.size() == 4);
+  const ReportRow &px = all.at("tiny@px0.25"), &n = all.at("tiny@n900"), &pruned = all.at("tiny+prune@n900");
+  REQUIRE(n.pairs > 0);
+  CHECK(n.decoded == 900);
+  CHECK(n.gaussians == 900);
+  CHECK(pruned.decoded == 900);
+  CHECK(pruned.gaussians < 900);  // an untrained model leaves faint and hidden base Gaussians
+  CHECK(pruned.stage_ms.count("prune") == 1);
+  CHECK(px.decoded > 0);
+  CHECK(all.at("tiny@detail1").decoded > 0);
+  for (const char* stage : {"prior", "sampler", "encoder", "decoder", "composer"}) CHECK(n.stage_ms.count(stage) == 1);
+  CHECK(std::isfinite(n.peak_mb));
+  CHECK(n.peak_mb > 10);
+  CHECK(fs::exists(fs::path(c.scoring.out) / "speed_quality.png"));
+  const std::string md = test::read_bytes(c.scoring.out + "/report.md");
+  CHECK_THAT(md, Catch::Contains("Where the time goes"));
+  CHECK_THAT(md, Catch::Contains("| tiny+prune@n900 | 900 -> "));
+  const std::string csv = test::read_bytes(c.scoring.out + "/report.csv");
+  CHECK_THAT(csv, Catch::Contains("decoder_ms"));
+  CHECK_THAT(csv, Catch::Contains("peak_mb"));
+  // The per-pair log keeps the new fields, so a resumed run reports the same timings.
+  const auto again = Evaluator(c).run();
+  for (const auto& r : again)
+    if (r.method == "tiny@n900" && r.bin == "all") CHECK(r.stage_ms.at("decoder") == n.stage_ms.at("decoder"));
 }
 
 TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D and scores on full frames",

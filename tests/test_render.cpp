@@ -1,5 +1,6 @@
 // Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
-// culling and input errors, batching, options, thread-count determinism and AVX2/portable agreement.
+// culling and input errors, batching, options, thread-count determinism and AVX2/portable agreement; the
+// contribution measure and pruning.
 #include <catch2/catch.hpp>
 
 #include <ATen/Parallel.h>
@@ -11,6 +12,7 @@
 #include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "render/kernels.h"
+#include "render/prune.h"
 #include "render/render.h"
 #include "support/finite_diff.h"
 #include "support/reference_render.h"
@@ -456,4 +458,79 @@ TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]")
     CHECK(torch::equal(results[0][k], results[1][k]));
   }
   CHECK(max_abs(results[1][4]) > 0);
+}
+
+namespace {
+// Each Gaussian's largest weight α·T over the pixels, from the dense reference: weights do not depend on
+// colours, so three Gaussians at a time get one-hot colours and the rendered channels are their weights.
+Tensor reference_max_weight(const Gaussians& g, const Camera& cam) {
+  const int64_t n = g.count();
+  Tensor out = torch::zeros({n}, kF64);
+  for (int64_t i0 = 0; i0 < n; i0 += 3) {
+    Gaussians probe = g;
+    probe.colors = torch::zeros({n, 3}, kF64);
+    for (int64_t c = 0; c < 3 && i0 + c < n; ++c) probe.colors[i0 + c][c] = 1.0;
+    const Tensor rgb = test::reference_render(probe, cam, RenderOptions{}).rgb;
+    for (int64_t c = 0; c < 3 && i0 + c < n; ++c) out[i0 + c] = rgb[c].max();
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("prune: the contribution measure equals the dense reference's largest weight per Gaussian", "[render]") {
+  const Camera cam = make_camera(40, 28, 36.0, 36.0, 0.2, true);
+  const Gaussians scene = random_scene(45, cam, 31, 1.6);
+  const Tensor ours = max_contribution(scene, cam), ref = reference_max_weight(scene, cam);
+  CHECK(max_abs(ours - ref) < 1e-9);
+  CHECK((ref > 0.05).sum().item<int64_t>() > 10);  // many contribute
+  CHECK((ref == 0).sum().item<int64_t>() > 0);     // and some (outside the frustum or occluded) do not
+  // Float precision and the AVX2 loops' rules agree with the portable measure.
+  CHECK(max_abs(max_contribution(scene.to(torch::kFloat32), cam.to(torch::kFloat32)).to(kF64) - ref) < 1e-4);
+}
+
+TEST_CASE("prune: never removes a Gaussian that contributes at least the threshold in any view", "[render]") {
+  const Camera cam = make_camera(40, 28, 36.0, 36.0, 0.0, true);
+  const Gaussians scene = random_scene(60, cam, 33, 1.3);
+  PruneOptions o;
+  o.enabled = true;
+  o.min_opacity = 0.1;
+  o.min_contribution = 0.05;
+  o.views = 2;
+  o.view_shift = 0.15;
+  const PruneResult r = prune_gaussians(scene, cam, o);
+  // The same views, measured with the dense reference.
+  const auto T = cam.T_cw.to(kF64);
+  const double median_z = (torch::matmul(scene.means, T.index({2, torch::indexing::Slice(0, 3)})) + T.index({2, 3}))
+                              .median()
+                              .item<double>();
+  Tensor best = reference_max_weight(scene, cam);
+  for (const Camera& v : nearby_views(cam, o.view_shift * median_z, o.views))
+    best = torch::maximum(best, reference_max_weight(scene, v));
+  const Tensor expected = (scene.opacities >= o.min_opacity).logical_and(best >= o.min_contribution);
+  CHECK(torch::equal(r.keep, expected));
+  CHECK(r.low_opacity == (scene.opacities < o.min_opacity).sum().item<int64_t>());
+  CHECK(r.after() == r.kept.count());
+  CHECK(r.low_contribution > 0);
+  CHECK(r.after() < r.before);
+  // Disabled keeps everything.
+  o.enabled = false;
+  CHECK(prune_gaussians(scene, cam, o).kept.count() == scene.count());
+}
+
+TEST_CASE("prune: virtual views move the camera centre along its own axes", "[render]") {
+  const Camera cam = make_camera(32, 24, 30.0, 30.0, 0.0, true);
+  auto centre = [](const Camera& c) {
+    const Tensor T = c.T_cw.to(kF64);
+    const Tensor R = T.slice(0, 0, 3).slice(1, 0, 3), t = T.slice(0, 0, 3).select(1, 3);
+    return -torch::matmul(R.t(), t);
+  };
+  const auto views = nearby_views(cam, 0.5, 6);
+  REQUIRE(views.size() == 6);
+  const Tensor R = cam.T_cw.to(kF64).slice(0, 0, 3).slice(1, 0, 3);
+  for (int64_t k = 0; k < 6; ++k) {
+    const Tensor moved = centre(views[size_t(k)]) - centre(cam);
+    const Tensor axis = R[k / 2] * (k % 2 == 0 ? 0.5 : -0.5);  // row a of R is camera axis a in world
+    CHECK(max_abs(moved - axis) < 1e-12);
+  }
+  CHECK_THROWS_AS(nearby_views(cam, 0.5, 7), Error);
 }

@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "sampler/base_gaussians.h"
 #include "sampler/sampler.h"
@@ -152,6 +153,38 @@ TEST_CASE("sampler: pixel and vertex_face modes, and adaptive budgets", "[sample
   CHECK(full > 0);
   CHECK(static_cast<double>(part) / full == Approx(37.0 / 49.0).margin(0.05));  // the top 12 rows are sky
   CHECK(sample_supports(depth, valid, K(), image(), sa).count() == part);
+}
+
+TEST_CASE("sampler: the detail budget gives a plain flat wall few supports and a cluttered scene many", "[sampler]") {
+  SamplerOptions o;
+  o.budget_mode = "detail";
+  o.density = 1.0;
+  o.min_budget = 1;
+  // A plain fronto-parallel wall: no colour gradient, zero curvature, so every block gets the floor.
+  const auto wall_depth = torch::full({H, W}, 3.0f);
+  const auto plain = torch::full({3, H, W}, 0.5f);
+  const int64_t wall = resolve_budget(o, wall_depth, ones(), K(), plain);
+  CHECK(wall == static_cast<int64_t>(std::llround(o.detail_floor * H * W)));
+  // Clutter of the same size: random colours on a bumpy surface earn the full density.
+  torch::manual_seed(3);
+  const auto bumpy = 2.0f + 0.5f * torch::rand({H, W});
+  const int64_t cluttered = resolve_budget(o, bumpy, ones(), K(), torch::rand({3, H, W}));
+  CHECK(cluttered == H * W);
+  CHECK(sample_supports(bumpy, ones(), K(), torch::rand({3, H, W}), o).count() == cluttered);
+  CHECK_THROWS_AS(resolve_budget(o, wall_depth, ones(), K()), Error);  // needs the image
+
+  // Half plain, half textured on one plane: supports crowd the textured half, and the represented areas
+  // still add up to the surface.
+  auto half = torch::full({3, H, W}, 0.5f);
+  half.narrow(2, 32, W - 32).copy_(torch::rand({3, H, W - 32}));
+  const auto weights = detail_weights(wall_depth, ones(), half, o);
+  CHECK(weights.narrow(1, 0, 24).max().item<float>() == Approx(o.detail_floor));
+  CHECK(weights.narrow(1, 40, W - 40).min().item<float>() == Approx(1.0));
+  const Supports s = sample_supports(wall_depth, ones(), K(), half, o, 5);
+  const auto hist = column_histogram(s, 4);
+  CHECK(hist[3] > 4 * hist[0]);
+  const double area = ((W - 1) * 3.0 / fx) * ((H - 1) * 3.0 / fy);
+  CHECK(s.area.sum().item<double>() == Approx(area).epsilon(0.02));
 }
 
 TEST_CASE("sampler: all-invalid depth is a clear error", "[sampler]") {

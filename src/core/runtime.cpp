@@ -10,6 +10,7 @@
 #include <atomic>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <set>
 #include <thread>
 
@@ -61,6 +62,21 @@ void apply_runtime(const RuntimeOptions& options) {
   configure_threads(options.threads);
   set_max_image_pixels(options.max_image_pixels);
   torch::manual_seed(static_cast<uint64_t>(options.seed));
+}
+
+bool reset_peak_memory() {
+  std::ofstream f("/proc/self/clear_refs");
+  f << "5";
+  f.flush();
+  return static_cast<bool>(f);
+}
+
+double peak_memory_mb() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // "VmHWM:  1234 kB"
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 std::string loaded_blas() {

@@ -36,6 +36,12 @@ void apply_runtime(const RuntimeOptions& options);
 // Which BLAS library libtorch resolved at load time, e.g. ".../openblas-pthread/libblas.so.3 (OpenBLAS 0.3.21 ...)".
 std::string loaded_blas();
 
+// Peak resident memory of this process in MiB (Linux VmHWM; NaN where unavailable). reset_peak_memory()
+// restarts the peak from the current resident size (writes 5 to /proc/self/clear_refs; false if refused),
+// so a peak read afterwards belongs to the work done in between.
+bool reset_peak_memory();
+double peak_memory_mb();
+
 // Measures float32 matmul throughput in GFLOP/s on an n x n product (median of a few runs).
 double matmul_gflops(int n = 512);
 

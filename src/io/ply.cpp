@@ -176,11 +176,4 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   return g;
 }
 
-int64_t prune_by_opacity(Gaussians& g, double min_opacity) {
-  auto keep = g.opacities >= min_opacity;
-  const int64_t removed = g.count() - keep.sum().item<int64_t>();
-  if (removed > 0) g = g.index(keep);
-  return removed;
-}
-
 }  // namespace isplat

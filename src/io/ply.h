@@ -26,7 +26,4 @@ void write_ply(const std::string& path, const Gaussians& g, bool colors_linear =
 // with colours converted to linear RGB when `want_linear`. Malformed or truncated files throw Error.
 Gaussians read_ply(const std::string& path, bool want_linear = true);
 
-// Keeps Gaussians with opacity >= min_opacity; returns the number removed.
-int64_t prune_by_opacity(Gaussians& g, double min_opacity);
-
 }  // namespace isplat

@@ -103,6 +103,9 @@ struct RasterOutput {
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
                            const double background[3]);
 
+// Per Gaussian [N]: the largest weight w = α·T it reaches at any pixel (0 if culled or never composited).
+torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam);
+
 // ---- Backward rasterization (kernels_bwd.cpp) ----
 
 // Per-Gaussian 2D gradients [N, kGrad2d] from the image gradients (undefined tensors count as zero).

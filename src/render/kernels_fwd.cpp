@@ -207,6 +207,31 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
   });
 }
 
+// The largest weight w = α·T each tile-list entry reaches in its tile, written at the entry's position in the
+// intersection list (so no two threads ever write the same place). Same rule as fwd_tile_generic.
+template <class T>
+void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
+  for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
+    T* st = scratch.pixel_planes(kFwdPlanes);
+    int32_t* last = scratch.last.data();
+    const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
+    const T* local = scratch.gather(packed, ids + begin, count);
+    fwd_init(x0, y0, x1, y1, st, last);
+    Group<T> groups[kMaxGroups];
+    int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+    for (int64_t i = 0; i < count && active > 0; ++i) {
+      const T* rec = local + i * kRec;
+      if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+      Splat<T> s = fwd_splat(rec);
+      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+      T best = 0;
+      auto keep_max = [&best](T w) { best = std::max(best, w); };
+      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1), keep_max);
+      per_entry[begin + i] = best;
+    }
+  });
+}
+
 }  // namespace
 
 namespace {
@@ -248,6 +273,21 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
         packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
         background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(), out.depth.data_ptr<scalar_t>(),
         out.normal.data_ptr<scalar_t>(), out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>());
+  });
+  return out;
+}
+
+torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam) {
+  const int64_t n = packed.size(0), entries = bins.intersections();
+  torch::Tensor per_entry = torch::zeros({entries}, packed.options());
+  torch::Tensor out = torch::zeros({n}, packed.options());
+  AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_max_weight", [&] {
+    max_weight_impl<scalar_t>(packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(),
+                              bins.isect_ids.data_ptr<int32_t>(), cam, per_entry.data_ptr<scalar_t>());
+    const scalar_t* m = per_entry.data_ptr<scalar_t>();
+    const int32_t* ids = bins.isect_ids.data_ptr<int32_t>();
+    scalar_t* o = out.data_ptr<scalar_t>();
+    for (int64_t k = 0; k < entries; ++k) o[ids[k]] = std::max(o[ids[k]], m[k]);
   });
   return out;
 }

@@ -140,9 +140,17 @@ enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
 
 // ---- Portable scalar lanes ----
 
-// Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here.
-template <class T>
-ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t* last, int32_t id) {
+// Ignores the weights (the renderer's case).
+struct NoWeightSink {
+  template <class T>
+  ISPLAT_INLINE void operator()(T) const {}
+};
+
+// Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink` sees every
+// composited weight w = α·T (the contribution measure uses it; the renderer passes NoWeightSink).
+template <class T, class Sink = NoWeightSink>
+ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t* last, int32_t id,
+                            Sink&& sink = Sink{}) {
   int stops = 0;
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
@@ -159,6 +167,7 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t
       continue;
     }
     const T w = alpha * t;
+    sink(w);
     for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] += w * s.f[c];
     st[fwd_at(p, kPlT)] = next;
     last[p] = id;

@@ -20,8 +20,10 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "support placement: area-weighted on the depth surface (paper), one per pixel (ablation), "
           "or the release's gradient-priority vertices + area-weighted faces",
           {"area", "pixel", "vertex_face"});
-  v.field("budget_mode", budget_mode, "fixed count, or adaptive: per image pixel, or per steradian of valid surface",
-          {"fixed", "per_pixel", "solid_angle"});
+  v.field("budget_mode", budget_mode,
+          "fixed count; or per image pixel, per steradian of valid surface; or detail: per pixel, scaled by how "
+          "much the image and surface vary there (see detail_floor)",
+          {"fixed", "per_pixel", "solid_angle", "detail"});
   v.field("budget", budget, "number of supports when budget_mode = fixed (paper: 1.5M at 1536x1024)",
           Range::between(1, kMaxSupports));
   v.field("density", density, "supports per pixel (per_pixel) or per steradian (solid_angle)", Range::above(0));
@@ -30,6 +32,15 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.require("max_budget", min_budget <= max_budget, "must be >= sampler.min_budget");
   v.field("vertex_fraction", vertex_fraction, "vertex_face: fraction of supports on gradient-priority vertices",
           Range::unit());
+  v.field("detail_floor", detail_floor,
+          "detail budget: share of `density` a featureless, flat block gets (1 = per_pixel everywhere)",
+          Range::between(0.01, 1.0));
+  v.field("detail_ref", detail_ref,
+          "detail budget: block detail (mean colour gradient + surface curvature per pixel) that earns the full "
+          "density",
+          Range::above(0.0));
+  v.field("detail_block", detail_block, "detail budget: block size in pixels over which detail is averaged",
+          Range::between(1, 256));
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -152,7 +163,10 @@ std::vector<T> row_offsets(const std::vector<T>& per_row, T start) {
 }
 
 // Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
-double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first) {
+// `weight` (per pixel, or null): triangles are drawn in proportion to area × the weight of their quad's
+// first vertex, and each support then stands for a share of area inversely proportional to that weight.
+double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first,
+                    const float* weight = nullptr) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
   std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
@@ -172,12 +186,27 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
                "sampler: the depth map has no valid triangle (all depth is invalid, NaN/inf/<=0, or broken "
                "by discontinuities)");
   if (n == 0) return total;
+  // Weighted areas (the allocation's measure) and their total.
+  double total_w = total;
+  if (weight != nullptr) {
+    for_each_row(Hq, [&](int64_t i) {
+      double s = 0;
+      for (int64_t j = 0; j < Wq; ++j)
+        for (int t = 0; t < 2; ++t) {
+          float& a = area[(i * Wq + j) * 2 + t];
+          if (a > 0) a *= weight[i * g.W + j + t];  // the triangle's first vertex: valid, so weight >= floor > 0
+          s += a;
+        }
+      row_sum[i] = s;
+    });
+    total_w = row_offsets(row_sum, 0.0)[Hq];
+  }
   // Systematic (stratified) allocation over the cumulative area, in exact integer arithmetic so that
   // row boundaries agree and rejected (zero-area) triangles can never receive a support:
   // triangle q gets floor((C_end*n + X)/Q) - floor((C_start*n + X)/Q) supports.
   std::vector<int64_t> qarea(area.size());
   std::vector<int64_t> row_qsum(static_cast<size_t>(Hq), 0);
-  const double quantum = std::ldexp(1.0, 40) / total;
+  const double quantum = std::ldexp(1.0, 40) / total_w;
   for_each_row(Hq, [&](int64_t i) {
     int64_t rs = 0;
     for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) rs += qarea[q] = std::llround(area[q] * quantum);
@@ -221,7 +250,8 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
         // Allocation is proportional to area, so every support stands for the same area, total / n
         // (= A_t / n_t in expectation). Unlike A_t / n_t it stays right when n is below the triangle
         // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
-        const float rep = static_cast<float>(total / n);
+        const float rep =
+            static_cast<float>(weight == nullptr ? total / n : total_w / (n * double(weight[i * g.W + j + t])));
         const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
                      s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
         for (int32_t m = 0; m < cnt; ++m, ++k) {
@@ -281,9 +311,85 @@ void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int6
 
 }  // namespace
 
+namespace {
+
+// Per-pixel detail weights in [floor, 1] (0 where depth is unusable), see SamplerOptions.
+std::vector<float> detail_weights(const Grid& g, const SamplerOptions& o) {
+  const int64_t H = g.H, W = g.W, HW = H * W;
+  auto ok = [&](int64_t i, int64_t j) { return i >= 0 && j >= 0 && i < H && j < W && g.valid[i * W + j] != 0.0f; };
+  // Detail per pixel: the largest colour gradient (sRGB per pixel) plus the surface's curvature, measured
+  // as |Laplacian of inverse depth| relative to the inverse depth (0 on any plane, large at creases and
+  // depth edges).
+  std::vector<float> detail(static_cast<size_t>(HW), 0.0f);
+  for_each_row(H, [&](int64_t i) {
+    for (int64_t j = 0; j < W; ++j) {
+      if (!ok(i, j)) continue;
+      const int64_t jl = ok(i, j - 1) ? j - 1 : j, jr = ok(i, j + 1) ? j + 1 : j;
+      const int64_t iu = ok(i - 1, j) ? i - 1 : i, id = ok(i + 1, j) ? i + 1 : i;
+      float colour = 0;
+      for (int c = 0; c < 3; ++c) {
+        const float* m = g.image + c * HW;
+        const float gx = (m[i * W + jr] - m[i * W + jl]) / float(std::max<int64_t>(1, jr - jl));
+        const float gy = (m[id * W + j] - m[iu * W + j]) / float(std::max<int64_t>(1, id - iu));
+        colour = std::max(colour, std::sqrt(gx * gx + gy * gy));
+      }
+      const double inv = 1.0 / g.depth[i * W + j];
+      double lap = 0;
+      if (jl != j && jr != j) lap += 1.0 / g.depth[i * W + jl] + 1.0 / g.depth[i * W + jr] - 2 * inv;
+      if (iu != i && id != i) lap += 1.0 / g.depth[iu * W + j] + 1.0 / g.depth[id * W + j] - 2 * inv;
+      detail[i * W + j] = colour + static_cast<float>(std::min(1.0, std::abs(lap) / inv));
+    }
+  });
+  // Block means over valid pixels, mapped to the weight.
+  const int64_t b = o.detail_block, bh = (H + b - 1) / b, bw = (W + b - 1) / b;
+  std::vector<float> weight(static_cast<size_t>(HW), 0.0f);
+  at::parallel_for(0, bh, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t by = b0; by < b1; ++by)
+      for (int64_t bx = 0; bx < bw; ++bx) {
+        double sum = 0;
+        int64_t count = 0;
+        for (int64_t i = by * b; i < std::min(H, (by + 1) * b); ++i)
+          for (int64_t j = bx * b; j < std::min(W, (bx + 1) * b); ++j)
+            if (ok(i, j)) sum += detail[i * W + j], ++count;
+        if (count == 0) continue;
+        const float w =
+            static_cast<float>(o.detail_floor + (1.0 - o.detail_floor) * std::min(1.0, sum / count / o.detail_ref));
+        for (int64_t i = by * b; i < std::min(H, (by + 1) * b); ++i)
+          for (int64_t j = bx * b; j < std::min(W, (bx + 1) * b); ++j)
+            if (ok(i, j)) weight[i * W + j] = w;
+      }
+  });
+  return weight;
+}
+
+int64_t clamp_budget(const SamplerOptions& o, int64_t n) {
+  return std::clamp(n, o.min_budget, std::max(o.min_budget, o.max_budget));
+}
+
+int64_t detail_budget(const SamplerOptions& o, const std::vector<float>& weight) {
+  double sum = 0;
+  for (float w : weight) sum += w;
+  return clamp_budget(o, static_cast<int64_t>(std::llround(o.density * sum)));
+}
+
+}  // namespace
+
+torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
+                             const SamplerOptions& options) {
+  torch::Tensor dk, vk, ik;
+  const Grid g = make_grid(depth, valid, torch::eye(3), image, dk, vk, ik);
+  std::vector<float> w = detail_weights(g, options);
+  return torch::from_blob(w.data(), {g.H, g.W}, torch::kFloat32).clone();
+}
+
 int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid,
-                       const torch::Tensor& K) {
+                       const torch::Tensor& K, const torch::Tensor& image) {
   if (o.budget_mode == "fixed") return o.budget;
+  if (o.budget_mode == "detail") {
+    ISPLAT_CHECK(image.defined(), "sampler: budget_mode = detail needs the image");
+    torch::Tensor dk, vk, ik;
+    return detail_budget(o, detail_weights(make_grid(depth, valid, K, image, dk, vk, ik), o));
+  }
   int64_t n = 0;
   if (o.budget_mode == "per_pixel") {
     n = static_cast<int64_t>(std::llround(o.density * depth.size(0) * depth.size(1)));
@@ -301,7 +407,7 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
   } else {
     fail("sampler.budget_mode: unknown '", o.budget_mode, "'");
   }
-  return std::clamp(n, o.min_budget, std::max(o.min_budget, o.max_budget));
+  return clamp_budget(o, n);
 }
 
 Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
@@ -318,10 +424,12 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     write_pixel_supports(g, pointers(s), idx, static_cast<int64_t>(idx.size()));
     return s;
   }
-  const int64_t n = resolve_budget(options, dk, vk, K);
+  std::vector<float> weight;
+  if (options.budget_mode == "detail") weight = detail_weights(g, options);
+  const int64_t n = weight.empty() ? resolve_budget(options, dk, vk, K) : detail_budget(options, weight);
   if (options.mode == "area") {
     Supports s = allocate(n);
-    sample_faces(g, n, seed, pointers(s), 0);
+    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data());
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

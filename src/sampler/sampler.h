@@ -15,11 +15,16 @@ constexpr int64_t kMaxSupports = 4000000;
 
 struct SamplerOptions {
   std::string mode = "area";          // area | pixel | vertex_face
-  std::string budget_mode = "fixed";  // fixed | per_pixel | solid_angle
+  std::string budget_mode = "fixed";  // fixed | per_pixel | solid_angle | detail
   int64_t budget = 100000;            // supports, for budget_mode "fixed"
   double density = 1.0;               // supports per image pixel (per_pixel) or per steradian (solid_angle)
   int64_t min_budget = 1000, max_budget = 4000000;
   double vertex_fraction = 0.65;  // vertex_face: share of the budget spent on gradient-priority vertices
+  // budget_mode "detail": a block of detail_block² pixels gets density · (floor + (1 − floor)·min(1, d/ref))
+  // supports per pixel, d its mean detail (colour gradient + curvature of the surface); area mode places them
+  // in proportion to area × that weight, so flat, plain regions get few and cluttered ones many.
+  double detail_floor = 0.15, detail_ref = 0.05;
+  int64_t detail_block = 8;
   void visit(ConfigVisitor& v);
 };
 
@@ -33,9 +38,14 @@ struct Supports {
   int64_t count() const { return uv.size(0); }
 };
 
-// The number of supports the options ask for on this depth map (valid: [H,W] 0/1, K: [3,3]).
+// The number of supports the options ask for on this depth map (valid: [H,W] 0/1, K: [3,3]; image [3,H,W]
+// sRGB, needed by budget_mode "detail" only).
 int64_t resolve_budget(const SamplerOptions& options, const torch::Tensor& depth, const torch::Tensor& valid,
-                       const torch::Tensor& K);
+                       const torch::Tensor& K, const torch::Tensor& image = {});
+
+// budget_mode "detail": the per-pixel weight in [detail_floor, 1] ([H,W] float, 0 where depth is unusable).
+torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
+                             const SamplerOptions& options);
 
 // depth [H,W] float (planar metres), valid [H,W] (nonzero = valid), K [3,3], image [3,H,W] sRGB.
 // Deterministic in `seed`; the count equals the resolved budget (pixel mode: one per valid pixel).
