@@ -48,6 +48,7 @@ void run(int64_t dino_dim, int64_t n, int64_t W, int64_t H) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  keep_freed_memory();  // as every executable does (run_main)
   configure_threads(argc > 1 ? std::atoll(argv[1]) : 0);
   std::printf("implicit decoder benchmark, %d threads\n", at::get_num_threads());
   run(384, 100000, 256, 192);  // quickstart: ViT-S, 100k supports

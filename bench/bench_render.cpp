@@ -93,18 +93,10 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-// kB fields of /proc/self/status, e.g. "VmHWM" (peak resident set) or "VmRSS".
-double status_mb(const std::string& key) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind(key + ":", 0) == 0) return std::stod(line.substr(key.size() + 1)) / 1024.0;
-  return 0;
-}
-
-// Resets the peak-RSS counter (Linux >= 4.0), so each case reports its own peak.
-void reset_peak() {
-  std::ofstream("/proc/self/clear_refs") << "5";
+// The resident size now: reset_peak_memory() makes the peak the current size.
+double resident_mb() {
+  reset_peak_memory();
+  return peak_memory_mb();
 }
 
 double mb(const torch::Tensor& t) {
@@ -125,8 +117,12 @@ void run(const Case& cs) {
   const Gaussians& g = scene.gaussians;
   const Camera& cam = scene.target;
   const double build_ms = now_ms() - t_build;
-  reset_peak();
-  const double rss0 = status_mb("VmRSS");
+  const double rss0 = resident_mb();  // also resets the peak, so each case reports its own
+
+  // The first render of this case: in a fresh process (--only NAME), every buffer is new memory.
+  double first = now_ms();
+  render(g, cam);
+  first = now_ms() - first;
 
   // Per-phase times through the kernels (the same calls render() makes), and the buffer sizes.
   const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, cs.W, cs.H);
@@ -166,7 +162,7 @@ void run(const Case& cs) {
     const RenderOutput out = render(g, cam);
     fwd.push_back(now_ms() - t0);
   }
-  const double peak_fwd = status_mb("VmHWM");
+  const double peak_fwd = peak_memory_mb();
 
   // Forward + backward of an L1 loss on rgb plus light depth and alpha terms.
   std::vector<double> fb;
@@ -185,17 +181,17 @@ void run(const Case& cs) {
       fb.push_back(now_ms() - t0);
     }
   }
-  const double peak_all = status_mb("VmHWM");
+  const double peak_all = peak_memory_mb();
 
   const double f = median(fwd), b = median(fb);
   std::cout << std::fixed << std::setprecision(1);
   std::cout << "| " << std::left << std::setw(20) << cs.name << std::right << " | " << std::setw(8) << cs.n << " | "
             << std::setw(9) << (std::to_string(cs.W) + "x" + std::to_string(cs.H)) << " | " << std::setw(8) << visible
-            << " | " << std::setw(9) << isects << " | " << std::setw(8) << f << " | " << std::setw(8)
-            << (cs.bwd_runs ? b : NAN) << " | " << std::setw(7) << std::setprecision(1) << double(isects) / f / 1e3
-            << " | " << std::setw(6) << median(t_proj) << " | " << std::setw(6) << median(t_bin) << " | "
-            << std::setw(7) << median(t_rast) << " | " << std::setw(7) << median(t_rbwd) << " | " << std::setw(6)
-            << median(t_pbwd) << " | " << std::setw(7) << peak_fwd << " | " << std::setw(7)
+            << " | " << std::setw(9) << isects << " | " << std::setw(8) << first << " | " << std::setw(8) << f << " | "
+            << std::setw(8) << (cs.bwd_runs ? b : NAN) << " | " << std::setw(7) << std::setprecision(1)
+            << double(isects) / f / 1e3 << " | " << std::setw(6) << median(t_proj) << " | " << std::setw(6)
+            << median(t_bin) << " | " << std::setw(7) << median(t_rast) << " | " << std::setw(7) << median(t_rbwd)
+            << " | " << std::setw(6) << median(t_pbwd) << " | " << std::setw(7) << peak_fwd << " | " << std::setw(7)
             << (cs.bwd_runs ? peak_all : NAN) << " | " << std::setw(6) << rss0 << " | " << std::setw(6) << buffers_fwd
             << " | " << std::setw(6) << buffers_bwd << " | " << std::setw(6) << build_ms / 1000 << " | " << std::setw(6)
             << median(c_fwd) << " | " << std::setw(6) << median(c_bwd) << " |" << std::endl;
@@ -217,17 +213,22 @@ int main(int argc, char** argv) {
     parser.flag("--large-1.5m", huge_large, "also run the large-splats variant at 1.5M");
     parser.option("--only", only, "run only the case with this name (e.g. 100k)", "NAME");
     if (!parser.parse(argc, argv)) return 0;
+    keep_freed_memory();  // as every executable does (run_main)
     const int used = configure_threads(threads);
     std::cout
         << "bench_render: " << used << " threads, median of timed runs (ms); float32; times exclude scene building\n"
-        << "cols: fwd = render(); fwd+bwd = render + L1 loss + backward; Misect/s = intersections per second of "
+        << "freed memory is kept for reuse (as in every executable); MALLOC_MMAP_MAX_=65536 in the environment "
+           "gives glibc's default instead\n"
+        << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "
+           "render + L1 loss + backward; Misect/s = intersections per second of "
            "fwd;\n      proj/bin/rast/rbwd/pbwd = phases (project, tile binning, rasterize fwd, rasterize bwd, "
            "project bwd);\n      peakF/peakFB = VmHWM (MB, process peak reset before the case) after the fwd "
            "runs / after fwd+bwd;\n      rss0 = VmRSS at the start of the case (scene inputs included); bufF/bufB "
            "= renderer's own buffers (MB);\n      cpuF/cpuB = process CPU ms of the kernel phases fwd (proj+bin+rast) "
            "/ bwd (rbwd+pbwd)\n\n";
     std::cout
-        << "| case                 |        N |     image |  visible |    isects |   fwd ms | f+b ms   | Misect/s "
+        << "| case                 |        N |     image |  visible |    isects | first ms |   fwd ms | f+b ms   | "
+           "Misect/s "
            "|  proj |   bin |    rast |    rbwd |  pbwd |   peakF |  peakFB |   rss0 |   bufF |   bufB | build s | "
            "cpuF   | cpuB   |\n";
     const int k = int(std::max<int64_t>(1, runs_scale));

@@ -18,6 +18,7 @@ using namespace isplat;
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
+  keep_freed_memory();  // as every executable does (run_main)
   configure_threads(argc > 2 ? std::atoll(argv[2]) : 0);
   std::string root = argc > 1 ? argv[1] : "";
   const fs::path tmp = fs::temp_directory_path() / "isplat_bench_train";
@@ -30,9 +31,7 @@ int main(int argc, char** argv) {
     root = generated_hypersim_root(g.out);
   }
   set_log_level(LogLevel::Warn);
-  const std::string weights = fs::exists("../shared/weights")
-                                  ? "../shared/weights/squeezenet1_1_features.safetensors"
-                                  : "/work/shared/weights/squeezenet1_1_features.safetensors";
+  const std::string weights = std::string(ISPLAT_SOURCE_DIR) + "/weights/squeezenet1_1_features.safetensors";
   auto config = load_config<TrainConfig>(
       std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json",
       {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",

@@ -74,6 +74,9 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
+  v.field("reference", reference,
+          "method (after budget expansion, e.g. full@px0.95) every other method is compared with on the same "
+          "pairs, with paired bootstrap intervals; empty = no comparison");
   v.section("render", "renderer options for scoring", render);
 }
 

@@ -34,6 +34,7 @@ struct ScoringOptions {
   int64_t mask_radius = 2;
   int64_t examples = 4;     // example panels saved per dataset and method
   int64_t max_per_bin = 0;  // score only the first N pairs of each bin (0 = all)
+  std::string reference;    // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);
 };

@@ -221,6 +221,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   write_file_atomic((fs::path(config_.scoring.out) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
   const std::vector<std::string>& nets = config_.scoring.lpips;
   std::vector<ReportRow> rows;
+  std::vector<DiffRow> differences;
   if (config_.scoring.max_per_bin > 0)
     notes_.push_back(cat("only the first ", config_.scoring.max_per_bin,
                          " pairs of each bin were scored "
@@ -252,11 +253,17 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     const std::vector<ColmapModel> no_points;
     const std::vector<ColmapModel>& points = ds.prompts == "points3d" ? models : no_points;
     const std::vector<int64_t> pairs = select_pairs(m);
+    std::map<std::string, std::vector<PairResult>> by_method;
     for (const auto& mo : config_.methods) {
-      const auto results = score(d, sequences, m, pairs, mo, points);
+      auto results = score(d, sequences, m, pairs, mo, points);
       if (results.empty() && !pairs.empty()) continue;  // not applicable here; score() left a note
       auto r = summarize(ds.name, mo.name, labels, requested, results, nets);
       rows.insert(rows.end(), r.begin(), r.end());
+      by_method[mo.name] = std::move(results);
+    }
+    if (!config_.scoring.reference.empty()) {
+      auto diffs = paired_differences(ds.name, config_.scoring.reference, by_method, nets.empty() ? "" : nets[0]);
+      differences.insert(differences.end(), diffs.begin(), diffs.end());
     }
   }
   if (shard_count_ > 1) {
@@ -265,7 +272,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     return rows;
   }
   if (!pairs_only) {
-    write_reports(config_.scoring.out, rows, nets, notes_);
+    write_reports(config_.scoring.out, rows, nets, notes_, differences);
     log_info("eval: reports in ", config_.scoring.out, " (report.md, report.csv, report.json, speed_quality.png)");
   }
   return rows;

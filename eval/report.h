@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "metrics/stats.h"
+
 namespace isplat {
 
 struct PairResult {
@@ -38,6 +40,18 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets);
 
+// One method against the reference method on the same pairs: paired bootstrap 95% intervals.
+struct DiffRow {
+  std::string dataset, method, reference;
+  Interval psnr, lpips;  // method − reference (lpips: the first variant scored)
+  double gaussians = 0;  // mean Gaussians rendered, method / reference
+};
+
+// Differences of every method to `reference` per dataset (empty when the reference was not scored there).
+std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
+                                        const std::map<std::string, std::vector<PairResult>>& results,
+                                        const std::string& lpips_net, int64_t resamples = 2000);
+
 // "full@px0.5" -> "full px" (a budget sweep's points form one series); other names pass through.
 std::string method_family(const std::string& method);
 
@@ -47,6 +61,7 @@ std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& p
 // Writes report.md, report.csv, report.json and speed_quality.png (per dataset: PSNR against time and
 // against Gaussians, log scale, one series per method family, the Pareto front marked) into `out`.
 void write_reports(const std::string& out, const std::vector<ReportRow>& rows,
-                   const std::vector<std::string>& lpips_nets, const std::vector<std::string>& notes);
+                   const std::vector<std::string>& lpips_nets, const std::vector<std::string>& notes,
+                   const std::vector<DiffRow>& differences = {});
 
 }  // namespace isplat

@@ -173,6 +173,24 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   // Cheaper and better points form the front; dominated ones do not.
   const std::vector<std::pair<double, double>> pts = {{10, 20}, {5, 21}, {20, 22}, {30, 21.5}, {20, 19}, {1, 15}};
   CHECK(pareto_front(pts) == std::vector<size_t>{5, 1, 2});
+  // Paired differences: a method 1 dB better on every shared pair, with half the Gaussians.
+  std::map<std::string, std::vector<PairResult>> res;
+  for (int64_t i = 0; i < 20; ++i) {
+    PairResult r;
+    r.index = i, r.psnr = 20 + 0.1 * static_cast<double>(i), r.gaussians = 1000, r.lpips["squeeze"] = 0.2;
+    res["ref"].push_back(r);
+    r.psnr += 1.0, r.gaussians = 500;
+    if (i != 3) res["better"].push_back(r);  // one pair missing: only shared pairs count
+  }
+  const auto d = paired_differences("set", "ref", res, "squeeze");
+  REQUIRE(d.size() == 1);
+  CHECK(d[0].method == "better");
+  CHECK(d[0].psnr.n == 19);
+  CHECK(d[0].psnr.mean == Approx(1.0));
+  CHECK(d[0].psnr.excludes_zero());
+  CHECK_FALSE(d[0].lpips.excludes_zero());
+  CHECK(d[0].gaussians == Approx(0.5));
+  CHECK(paired_differences("set", "absent", res, "squeeze").empty());
 }
 
 TEST_CASE("eval: a support-budget sweep with pruning scores every budget and writes the chart and tables", "[eval]") {
@@ -192,6 +210,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   c.scoring.weights_dir = test::project_weights_dir();
   c.scoring.lpips = {"squeeze"};
   c.scoring.examples = 0;
+  c.scoring.reference = "tiny@n900";
   const auto rows = Evaluator(c).run();
   std::map<std::string, ReportRow> all;
   for (const auto& r : rows)
@@ -216,6 +235,11 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   const std::string csv = test::read_bytes(c.scoring.out + "/report.csv");
   CHECK_THAT(csv, Catch::Contains("decoder_ms"));
   CHECK_THAT(csv, Catch::Contains("peak_mb"));
+  // Every method against the reference on the same pairs.
+  CHECK_THAT(md, Catch::Contains("## Differences to the reference"));
+  const std::string diffs = test::read_bytes(c.scoring.out + "/differences.csv");
+  CHECK_THAT(diffs, Catch::Contains("tiny+prune@n900,tiny@n900"));
+  CHECK_THAT(diffs, Catch::Contains("tiny@px0.25,tiny@n900"));
   // The per-pair log keeps the new fields, so a resumed run reports the same timings.
   const auto again = Evaluator(c).run();
   for (const auto& r : again)

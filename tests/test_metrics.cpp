@@ -1,10 +1,16 @@
 // Metrics: PSNR and SSIM against hand-computed values and an independent reference SSIM, and LPIPS-squeeze
-// against the properties it must have (zero on identical images, symmetric, monotone in blur and noise).
+// against the properties it must have (zero on identical images, symmetric, monotone in blur and noise);
+// the stability measures (holes, cracks, normal incoherence) on hand-built renders.
 #include <catch2/catch.hpp>
 
 #include <torch/torch.h>
 
+#include <cmath>
+
+#include "core/error.h"
+#include "geometry/camera_torch.h"
 #include "metrics/metrics.h"
+#include "metrics/stability.h"
 #include "support/test_util.h"
 
 using namespace isplat;
@@ -109,4 +115,49 @@ TEST_CASE("metrics: LPIPS-squeeze is zero on identical images, symmetric and mon
   std::string why2;
   CHECK(Lpips::from_folder("alex", test::project_weights_dir(), why2) == nullptr);  // no AlexNet backbone here
   CHECK_THAT(why2, Catch::Contains("alexnet_features.safetensors"));
+}
+
+TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") {
+  const int64_t H = 10, W = 10;
+  auto mask = torch::ones({H, W});
+  auto alpha = torch::ones({1, H, W});
+  alpha.narrow(1, 0, 5).narrow(2, 0, 5).fill_(0.2);  // a 5x5 hole: a quarter of the frame
+  CHECK(hole_rate(alpha, mask) == Approx(0.25));
+  mask.narrow(0, 5, 5).zero_();  // only the top half counts: 25 of 50 pixels
+  CHECK(hole_rate(alpha, mask) == Approx(0.5));
+  CHECK(std::isnan(hole_rate(alpha, torch::zeros({H, W}))));
+  CHECK_THROWS_AS(hole_rate(torch::ones({3, H, W}), torch::ones({H, W})), Error);
+
+  // A smooth reference plane at 2 m; the render tears along the column boundary 4|5 (z jumps to 3 m).
+  const auto full = torch::ones({H, W}), opaque = torch::ones({1, H, W});
+  const auto ref = torch::full({H, W}, 2.0);
+  auto depth = torch::full({1, H, W}, 2.0);
+  depth.narrow(2, 5, 5).fill_(3.0);
+  CHECK(crack_rate(depth, opaque, ref, full) == Approx(10.0 / 180.0));  // 10 torn of 90 + 90 neighbour pairs
+  // depth is the alpha-weighted sum: half-transparent pixels with half the sum are the same depth.
+  CHECK(crack_rate(depth * 0.6, opaque * 0.6, ref, full) == Approx(10.0 / 180.0));
+  // Where the reference has the same edge, the jump is geometry, not a crack.
+  auto ref_edge = ref.clone();
+  ref_edge.narrow(1, 5, 5).fill_(3.0);
+  CHECK(crack_rate(depth, opaque, ref_edge, full) == 0.0);
+  // Holes are not cracks.
+  CHECK(std::isnan(crack_rate(depth, torch::zeros({1, H, W}), ref, full)));
+}
+
+TEST_CASE("stability: normal incoherence is 0 on a coherent plane and the tilt on a checkerboard", "[metrics]") {
+  const int64_t H = 12, W = 16;
+  const auto K = make_K(20.0, 20.0, W / 2.0, H / 2.0);
+  const auto ref = torch::full({H, W}, 3.0);  // fronto-parallel: planar everywhere
+  const auto mask = torch::ones({H, W}), alpha = torch::ones({1, H, W});
+  auto n = torch::zeros({3, H, W});
+  n[2].fill_(-1.0);
+  CHECK(normal_incoherence_deg(n * 0.7, alpha, ref, K, mask) == Approx(0.0).margin(1e-6));
+  // Every other pixel tilted by 10 degrees about x: each neighbour pair differs by exactly 10.
+  const double t = 10.0 * M_PI / 180.0;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j)
+      if ((i + j) % 2) n[1][i][j] = -std::sin(t), n[2][i][j] = -std::cos(t);
+  CHECK(normal_incoherence_deg(n, alpha, ref, K, mask) == Approx(10.0).epsilon(1e-6));
+  // A reference without valid depth leaves nothing to measure.
+  CHECK(std::isnan(normal_incoherence_deg(n, alpha, torch::zeros({H, W}), K, mask)));
 }

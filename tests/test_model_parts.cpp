@@ -45,6 +45,21 @@ TEST_CASE("encoder: ViT and CNN give feature maps at 1/16 and 1/4", "[encoder]")
   CHECK_THROWS_WITH(DualEncoder(o), Catch::Contains("cannot both be false"));
 }
 
+TEST_CASE("encoder: inference attention in row blocks equals the one-shot softmax attention", "[encoder]") {
+  torch::manual_seed(4);
+  Attention whole(32, 2, 1 << 20);
+  const auto x = torch::randn({4, 300, 32});
+  const auto sin = torch::randn({296, 16}), cos = torch::randn({296, 16});
+  torch::Tensor with_grad = whole->forward(x, sin, cos);  // the autograd path: one softmax
+  torch::NoGradGuard no_grad;
+  // 1 MB holds 109 query rows of 4 x 2 heads x 300 keys: three blocks. A huge budget gives one block.
+  Attention tiny(32, 2, 1);
+  for (const auto& item : whole->named_parameters()) tiny->named_parameters()[item.key()].copy_(item.value());
+  for (const auto& item : whole->named_buffers()) tiny->named_buffers()[item.key()].copy_(item.value());
+  CHECK(torch::allclose(tiny->forward(x, sin, cos), with_grad, 1e-5, 1e-6));
+  CHECK(torch::allclose(whole->forward(x, sin, cos), with_grad, 1e-5, 1e-6));
+}
+
 TEST_CASE("encoder: parameters carry the official DINOv3 names and a checkpoint loads", "[encoder]") {
   DinoViT a(tiny_vit()), b(tiny_vit());
   std::map<std::string, torch::Tensor> state;

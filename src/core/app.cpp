@@ -7,10 +7,12 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/runtime.h"
 
 namespace isplat {
 
 int run_main(const char* program, const std::function<int()>& body) {
+  keep_freed_memory();
   try {
     return body();
   } catch (const Error& e) {

@@ -10,8 +10,9 @@
 
 namespace isplat {
 
-// The one failure path of every executable: runs `body`; the project's Error, a LibTorch error or any
-// other exception becomes one clean line on stderr ("<program>: error: ...") and exit code 1.
+// The one failure path of every executable: keeps freed memory for reuse (keep_freed_memory), runs `body`; the
+// project's Error, a LibTorch error or any other exception becomes one clean line on stderr ("<program>: error: ...")
+// and exit code 1.
 int run_main(const char* program, const std::function<int()>& body);
 
 // `Options` is a root config struct with a `RuntimeOptions runtime` member.

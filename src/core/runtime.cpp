@@ -2,12 +2,14 @@
 #include "core/runtime.h"
 
 #include <dlfcn.h>
+#include <malloc.h>
 
 #include <ATen/Parallel.h>
 #include <torch/torch.h>
 #include <torch/version.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -62,6 +64,12 @@ void apply_runtime(const RuntimeOptions& options) {
   configure_threads(options.threads);
   set_max_image_pixels(options.max_image_pixels);
   torch::manual_seed(static_cast<uint64_t>(options.seed));
+}
+
+void keep_freed_memory() {
+  if (std::getenv("MALLOC_MMAP_MAX_") != nullptr) return;  // the user chose
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
 }
 
 bool reset_peak_memory() {

@@ -27,6 +27,10 @@ void ViTOptions::visit(ConfigVisitor& v) {
   v.field("weights", weights,
           "DINOv3 safetensors checkpoint (official names); empty = train from scratch "
           "(no pretrained DINO weights ship with this project)");
+  v.field("attention_chunk_mb", attention_chunk_mb,
+          "inference only: attention scores are computed in blocks of query rows of at most this many MB "
+          "(bounds memory at large images; same result)",
+          Range::between(1, 1 << 20));
 }
 
 namespace {
@@ -63,7 +67,7 @@ LayerScaleImpl::LayerScaleImpl(int64_t dim, double init) {
   gamma = register_parameter("gamma", torch::full({dim}, init));
 }
 
-AttentionImpl::AttentionImpl(int64_t dim, int64_t h) : heads(h) {
+AttentionImpl::AttentionImpl(int64_t dim, int64_t h, int64_t chunk) : heads(h), chunk_mb(chunk) {
   qkv = register_module("qkv", nn::Linear(nn::LinearOptions(dim, 3 * dim).bias(true)));
   // DINOv3 masks the K part of the qkv bias (LinearKMaskedBias); the mask is a checkpoint buffer.
   auto mask = torch::ones({3 * dim});
@@ -91,9 +95,25 @@ torch::Tensor AttentionImpl::forward(const torch::Tensor& x, const torch::Tensor
   };
   q = rope(q);
   k = rope(k);
-  auto attn = torch::softmax(torch::matmul(q, k.transpose(-2, -1)) * (1.0 / std::sqrt(static_cast<double>(Dh))), -1);
-  auto out = torch::matmul(attn, v).transpose(1, 2).reshape({B, N, C});
-  return proj->forward(out);
+  const double scale = 1.0 / std::sqrt(static_cast<double>(Dh));
+  torch::Tensor out;
+  if (torch::GradMode::is_enabled()) {
+    out = torch::matmul(torch::softmax(torch::matmul(q, k.transpose(-2, -1)) * scale, -1), v);
+  } else {
+    const auto kt = k.transpose(-2, -1);
+    q = q * scale;
+    out = torch::empty_like(q);
+    const int64_t bytes_per_row = B * heads * N * static_cast<int64_t>(sizeof(float));
+    const int64_t rows = std::max<int64_t>(1, (chunk_mb << 20) / std::max<int64_t>(1, bytes_per_row));
+    for (int64_t s = 0; s < N; s += rows) {
+      const int64_t n = std::min(rows, N - s);
+      auto scores = torch::matmul(q.narrow(2, s, n), kt);
+      scores.sub_(std::get<0>(scores.max(-1, true))).exp_();
+      scores.div_(scores.sum(-1, true));
+      out.narrow(2, s, n).copy_(torch::matmul(scores, v));
+    }
+  }
+  return proj->forward(out.transpose(1, 2).reshape({B, N, C}));
 }
 
 MlpImpl::MlpImpl(int64_t dim, int64_t hidden) {
@@ -105,9 +125,9 @@ torch::Tensor MlpImpl::forward(const torch::Tensor& x) {
   return fc2->forward(torch::gelu(fc1->forward(x)));
 }
 
-ViTBlockImpl::ViTBlockImpl(int64_t dim, int64_t heads, double ls) {
+ViTBlockImpl::ViTBlockImpl(int64_t dim, int64_t heads, double ls, int64_t chunk_mb) {
   norm1 = register_module("norm1", nn::LayerNorm(nn::LayerNormOptions({dim}).eps(1e-5)));
-  attn = register_module("attn", Attention(dim, heads));
+  attn = register_module("attn", Attention(dim, heads, chunk_mb));
   ls1 = register_module("ls1", LayerScale(dim, ls));
   norm2 = register_module("norm2", nn::LayerNorm(nn::LayerNormOptions({dim}).eps(1e-5)));
   mlp = register_module("mlp", Mlp(dim, 4 * dim));
@@ -148,7 +168,8 @@ DinoViTImpl::DinoViTImpl(const ViTOptions& o) : dim_(o.dim()), registers_(o.regi
   mask_token = register_parameter("mask_token", torch::zeros({1, dim_}));
   rope_embed = register_module("rope_embed", RopeEmbed(dim_ / heads, o.rope_base));
   blocks = register_module("blocks", nn::ModuleList());
-  for (int64_t i = 0; i < o.blocks(); ++i) blocks->push_back(ViTBlock(dim_, heads, o.layerscale_init));
+  for (int64_t i = 0; i < o.blocks(); ++i)
+    blocks->push_back(ViTBlock(dim_, heads, o.layerscale_init, o.attention_chunk_mb));
   norm = register_module("norm", nn::LayerNorm(nn::LayerNormOptions({dim_}).eps(1e-5)));
   // DINOv3 initialization: truncated normal linears, zero biases.
   for (auto& m : modules(false))

@@ -22,7 +22,8 @@ struct ViTOptions {
   int64_t registers = 4;  // DINOv3 "storage tokens"
   double layerscale_init = 1e-5;
   double rope_base = 100.0;
-  std::string weights;  // safetensors checkpoint under official DINOv3 names; empty = train from scratch
+  std::string weights;               // safetensors checkpoint under official DINOv3 names; empty = train from scratch
+  int64_t attention_chunk_mb = 256;  // inference: attention scores computed in blocks of at most this size
   void visit(ConfigVisitor& v);
   // Resolved architecture.
   int64_t dim() const;
@@ -38,12 +39,13 @@ struct LayerScaleImpl : torch::nn::Module {
 TORCH_MODULE(LayerScale);
 
 struct AttentionImpl : torch::nn::Module {
-  AttentionImpl(int64_t dim, int64_t heads);
-  // x [B,N,C]; sin/cos [P,Dh] for the last P (patch) tokens.
+  AttentionImpl(int64_t dim, int64_t heads, int64_t chunk_mb = 256);
+  // x [B,N,C]; sin/cos [P,Dh] for the last P (patch) tokens. Without autograd, the scores are computed in
+  // blocks of query rows (at most chunk_mb each) and normalized in place: same result, bounded memory.
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& sin, const torch::Tensor& cos);
   torch::nn::Linear qkv{nullptr}, proj{nullptr};
   torch::Tensor bias_mask;  // buffer "qkv.bias_mask": zeroes the K part of the qkv bias
-  int64_t heads;
+  int64_t heads, chunk_mb;
 };
 TORCH_MODULE(Attention);
 
@@ -55,7 +57,7 @@ struct MlpImpl : torch::nn::Module {
 TORCH_MODULE(Mlp);
 
 struct ViTBlockImpl : torch::nn::Module {
-  ViTBlockImpl(int64_t dim, int64_t heads, double layerscale_init);
+  ViTBlockImpl(int64_t dim, int64_t heads, double layerscale_init, int64_t attention_chunk_mb = 256);
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& sin, const torch::Tensor& cos);
   torch::nn::LayerNorm norm1{nullptr}, norm2{nullptr};
   Attention attn{nullptr};

@@ -16,10 +16,10 @@ class ConfigVisitor;
 
 struct PruneOptions {
   bool enabled = false;
-  double min_opacity = 0.005;       // drop Gaussians with opacity below this
-  double min_contribution = 0.01;   // drop Gaussians whose largest α·T over the views stays below this
-  int64_t views = 4;                // virtual views besides the source: 0, 2 (±x), 4 (±x, ±y) or 6 (±x, ±y, ±z)
-  double view_shift = 0.1;          // virtual camera offset as a fraction of the median Gaussian depth
+  double min_opacity = 0.005;      // drop Gaussians with opacity below this
+  double min_contribution = 0.01;  // drop Gaussians whose largest α·T over the views stays below this
+  int64_t views = 4;               // virtual views besides the source: 0, 2 (±x), 4 (±x, ±y) or 6 (±x, ±y, ±z)
+  double view_shift = 0.1;         // virtual camera offset as a fraction of the median Gaussian depth
   void visit(ConfigVisitor& v);
 };
 

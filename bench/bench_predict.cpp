@@ -1,0 +1,117 @@
+// Benchmark: one prediction (no autograd) from image + depth to Gaussians, and where its time and memory go:
+// the quickstart setting (ViT-S, 100k supports, 256x192) and, with --paper, the paper's (ViT-L, 1.5M supports,
+// 1536x1152). Untrained weights: the time does not depend on their values.
+// usage: bench_predict [--paper] [--threads N] [--runs N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <torch/torch.h>
+
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/runtime.h"
+#include "geometry/camera_torch.h"
+#include "decoder/feature_sampler.h"
+#include "model/infinisplat.h"
+
+using namespace isplat;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// A room-like depth map: a slanted floor-to-wall surface with boxes, plus a textured image.
+std::pair<torch::Tensor, torch::Tensor> scene(int64_t W, int64_t H) {
+  torch::manual_seed(0);
+  auto v = torch::linspace(0, 1, H).view({H, 1}), u = torch::linspace(0, 1, W).view({1, W});
+  auto depth = 2.0 + 3.0 * (1.0 - v) + 0.5 * torch::sin(6.0 * u) * torch::cos(4.0 * v);
+  auto box = (u > 0.3) & (u < 0.5) & (v > 0.5) & (v < 0.8);
+  depth = torch::where(box, depth - 1.0, depth).to(torch::kFloat32).contiguous();
+  auto image = torch::clamp(0.5 + 0.2 * torch::randn({3, H, W}), 0.0, 1.0);
+  return {depth, image};
+}
+
+void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int runs) {
+  InfiniSplat model(o);
+  model->eval();
+  const auto [depth, image] = scene(W, H);
+  const auto K = make_K(0.8 * W, 0.8 * W, W / 2.0, H / 2.0);
+  const auto valid = torch::ones({H, W});
+  std::map<std::string, std::vector<double>> ms;
+  double peak = 0;
+  for (int r = 0; r < runs + 1; ++r) {  // run 0 warms up
+    reset_peak_memory();
+    const auto t0 = Clock::now();
+    const Prediction p = model->predict(image, K, torch::eye(4), depth, valid);
+    const double total = ms_since(t0);
+    if (r == 0) continue;
+    peak = std::max(peak, peak_memory_mb());
+    for (const auto& [k, v] : p.timings_ms) ms[k].push_back(v);
+    ms["total"].push_back(total);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::printf("%-40s %5lldx%-5lld supports %8lld |", label, (long long)W, (long long)H, (long long)o.sampler.budget);
+  for (const char* k : {"sampler", "encoder", "decoder", "composer", "total"}) std::printf(" %s %8.1f", k, median(ms[k]));
+  std::printf(" ms | peak %7.0f MB\n", peak);
+  if (!model->decoder) return;
+  // The decoder's two parts on the same supports: the fused feature query and the MLP.
+  const auto f = model->encoder->forward(image.unsqueeze(0));
+  const auto uv = model->predict(image, K, torch::eye(4), depth, valid).supports.uv;
+  std::vector<double> query, mlp;
+  for (int r = 0; r < runs; ++r) {
+    auto& d = model->decoder;
+    auto h = torch::randn({uv.size(0), d->dino_dim > 0 ? d->dino_dim : d->cnn_dim});
+    auto t0 = Clock::now();
+    auto q = sample_features(f.dino, uv, W, H);
+    query.push_back(ms_since(t0));
+    t0 = Clock::now();
+    auto out = d->mlp_head(h);
+    mlp.push_back(ms_since(t0));
+  }
+  int64_t macs = 0;
+  for (const auto& p : model->decoder->mlp->parameters())
+    if (p.dim() == 2) macs += p.numel();
+  macs += model->decoder->head->weight.numel();
+  std::printf("%-40s one %lld-channel query %6.1f ms, MLP+head %7.1f ms (%.1f GFLOP/s; matmul 1024^2: %.1f GFLOP/s)\n",
+              "  decoder parts", (long long)f.dino.size(1), median(query), median(mlp),
+              2.0 * macs * uv.size(0) / (median(mlp) * 1e6), matmul_gflops(1024));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool paper = false;
+  int64_t threads = 0, runs = 5;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--paper")) paper = true;
+    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoll(argv[++i]);
+    if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::atoll(argv[++i]);
+  }
+  keep_freed_memory();  // as every executable does (run_main)
+  configure_threads(threads);
+  set_log_level(LogLevel::Warn);
+  torch::NoGradGuard no_grad;
+  std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, BLAS: %s\n", (long long)runs,
+              at::get_num_threads(), loaded_blas().c_str());
+  ModelOptions o;
+  o.sampler.budget_mode = "fixed";
+  o.sampler.budget = 100000;
+  o.encoder.vit.size = "S";
+  run("quickstart: ViT-S, 100k supports", o, 256, 192, static_cast<int>(runs));
+  o.sampler.budget = 40000;
+  run("ViT-S, 40k supports (0.85 per pixel)", o, 256, 192, static_cast<int>(runs));
+  if (paper) {
+    o.encoder.vit.size = "L";
+    o.sampler.budget = 1500000;
+    run("paper: ViT-L, 1.5M supports", o, 1536, 1152, 1);
+  }
+  return 0;
+}

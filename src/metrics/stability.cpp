@@ -1,0 +1,132 @@
+// Hole, crack and normal measures as plain loops over the pixels.
+#include "metrics/stability.h"
+
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "core/error.h"
+
+namespace isplat {
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+torch::Tensor plane(const torch::Tensor& t, int64_t H, int64_t W, const char* name) {
+  ISPLAT_CHECK(t.defined() && t.numel() == H * W, "stability: ", name, " must be [H,W] or [1,H,W] with H x W = ", H,
+               "x", W, ", got ", t.defined() ? t.sizes() : c10::IntArrayRef{});
+  return t.detach().reshape({H, W}).to(torch::kFloat64).contiguous();
+}
+
+}  // namespace
+
+double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const StabilityOptions& o) {
+  ISPLAT_CHECK(mask.dim() == 2, "hole_rate: mask must be [H,W], got ", mask.sizes());
+  const int64_t H = mask.size(0), W = mask.size(1);
+  const auto a = plane(alpha, H, W, "alpha"), m = plane(mask, H, W, "mask");
+  const double *pa = a.data_ptr<double>(), *pm = m.data_ptr<double>();
+  int64_t in = 0, holes = 0;
+  for (int64_t p = 0; p < H * W; ++p)
+    if (pm[p] != 0) ++in, holes += pa[p] < o.hole_alpha;
+  return in ? static_cast<double>(holes) / static_cast<double>(in) : kNaN;
+}
+
+double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                  const torch::Tensor& mask, const StabilityOptions& o) {
+  ISPLAT_CHECK(mask.dim() == 2, "crack_rate: mask must be [H,W], got ", mask.sizes());
+  const int64_t H = mask.size(0), W = mask.size(1);
+  const auto ds = plane(depth_sum, H, W, "depth"), a = plane(alpha, H, W, "alpha");
+  const auto r = plane(ref_depth, H, W, "reference depth"), m = plane(mask, H, W, "mask");
+  const double *pd = ds.data_ptr<double>(), *pa = a.data_ptr<double>(), *pr = r.data_ptr<double>(),
+               *pm = m.data_ptr<double>();
+  auto usable = [&](int64_t p) {
+    return pm[p] != 0 && pa[p] >= o.hole_alpha && std::isfinite(pr[p]) && pr[p] > 0;
+  };
+  int64_t pairs = 0, cracks = 0;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      const int64_t p = i * W + j;
+      if (!usable(p)) continue;
+      for (const int64_t q : {j + 1 < W ? p + 1 : -1, i + 1 < H ? p + W : -1}) {
+        if (q < 0 || !usable(q)) continue;
+        const double zr = 0.5 * (pr[p] + pr[q]);
+        if (std::abs(pr[p] - pr[q]) >= o.smooth_jump * zr) continue;  // the reference itself has an edge
+        ++pairs;
+        const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
+        cracks += std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq);
+      }
+    }
+  return pairs ? static_cast<double>(cracks) / static_cast<double>(pairs) : kNaN;
+}
+
+double normal_incoherence_deg(const torch::Tensor& normal_sum, const torch::Tensor& alpha,
+                              const torch::Tensor& ref_depth, const torch::Tensor& K, const torch::Tensor& mask,
+                              const StabilityOptions& o) {
+  ISPLAT_CHECK(mask.dim() == 2, "normal_incoherence: mask must be [H,W], got ", mask.sizes());
+  const int64_t H = mask.size(0), W = mask.size(1), HW = H * W;
+  ISPLAT_CHECK(normal_sum.defined() && normal_sum.numel() == 3 * HW, "normal_incoherence: normals must be [3,", H,
+               ",", W, "]");
+  ISPLAT_CHECK(K.defined() && K.numel() == 9, "normal_incoherence: K must be [3,3]");
+  const auto n = normal_sum.detach().reshape({3, HW}).to(torch::kFloat64).contiguous();
+  const auto a = plane(alpha, H, W, "alpha"), r = plane(ref_depth, H, W, "reference depth"),
+             m = plane(mask, H, W, "mask");
+  const auto k = K.detach().to(torch::kFloat64).contiguous();
+  const double *pn = n.data_ptr<double>(), *pa = a.data_ptr<double>(), *pr = r.data_ptr<double>(),
+               *pm = m.data_ptr<double>(), *pk = k.data_ptr<double>();
+  const double fx = pk[0], fy = pk[4], cx = pk[2], cy = pk[5];
+  auto ok = [&](int64_t i, int64_t j) {
+    const double z = pr[i * W + j];
+    return std::isfinite(z) && z > 0;
+  };
+  // Reference normals from forward differences of the back-projected depth (0 where undefined).
+  std::vector<double> rn(static_cast<size_t>(3 * HW), 0.0);
+  auto point = [&](int64_t i, int64_t j, double* P) {
+    const double z = pr[i * W + j];
+    P[0] = (j + 0.5 - cx) / fx * z, P[1] = (i + 0.5 - cy) / fy * z, P[2] = z;
+  };
+  for (int64_t i = 0; i + 1 < H; ++i)
+    for (int64_t j = 0; j + 1 < W; ++j) {
+      if (!ok(i, j) || !ok(i, j + 1) || !ok(i + 1, j)) continue;
+      double P[3], R[3], D[3];
+      point(i, j, P), point(i, j + 1, R), point(i + 1, j, D);
+      const double u[3] = {R[0] - P[0], R[1] - P[1], R[2] - P[2]}, v[3] = {D[0] - P[0], D[1] - P[1], D[2] - P[2]};
+      double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double len = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      if (len <= 0) continue;
+      for (int d = 0; d < 3; ++d) rn[static_cast<size_t>(3 * (i * W + j) + d)] = c[d] / len;
+    }
+  auto angle = [](const double* x, const double* y) {  // unit vectors
+    const double d = std::clamp(x[0] * y[0] + x[1] * y[1] + x[2] * y[2], -1.0, 1.0);
+    return std::acos(d) * 180.0 / M_PI;
+  };
+  auto rendered = [&](int64_t p, double* out) {
+    const double x = pn[p], y = pn[HW + p], z = pn[2 * HW + p], len = std::sqrt(x * x + y * y + z * z);
+    if (len <= 1e-12) return false;
+    out[0] = x / len, out[1] = y / len, out[2] = z / len;
+    return true;
+  };
+  double sum = 0;
+  int64_t count = 0;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      const int64_t p = i * W + j;
+      const double* rp = &rn[static_cast<size_t>(3 * p)];
+      if (pm[p] == 0 || pa[p] < o.hole_alpha || (rp[0] == 0 && rp[1] == 0 && rp[2] == 0)) continue;
+      double np[3];
+      if (!rendered(p, np)) continue;
+      for (const int64_t q : {j + 1 < W ? p + 1 : -1, i + 1 < H ? p + W : -1}) {
+        if (q < 0 || pm[q] == 0 || pa[q] < o.hole_alpha) continue;
+        const double* rq = &rn[static_cast<size_t>(3 * q)];
+        if ((rq[0] == 0 && rq[1] == 0 && rq[2] == 0) || angle(rp, rq) > o.planar_deg) continue;
+        double nq[3];
+        if (!rendered(q, nq)) continue;
+        sum += angle(np, nq), ++count;
+      }
+    }
+  return count ? sum / static_cast<double>(count) : kNaN;
+}
+
+}  // namespace isplat

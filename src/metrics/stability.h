@@ -1,0 +1,33 @@
+// Stability measures beyond PSNR/SSIM/LPIPS (the failure modes of single-image methods under large viewpoint
+// changes): holes, cracks, and incoherent surface normals in a rendered target view.
+#pragma once
+#include <torch/types.h>
+
+namespace isplat {
+
+struct StabilityOptions {
+  double hole_alpha = 0.5;      // a pixel is a hole when its rendered alpha stays below this
+  double crack_jump = 0.05;     // rendered depth jump between neighbours, relative to depth, that makes a crack
+  double smooth_jump = 0.01;    // ... where the reference depth changes by less than this (relative)
+  double planar_deg = 2.0;      // reference normals of neighbours within this angle mark a planar surface
+};
+
+// Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
+// NaN when the mask is empty.
+double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const StabilityOptions& options = {});
+
+// Share of masked neighbour pairs (right and down) where the rendered depth (depth_sum / alpha, both
+// rendered) jumps by more than crack_jump·z while the reference depth (ref_depth [H,W], valid where > 0 and
+// finite) changes by less than smooth_jump·z; pairs where either pixel is a hole are not counted (hole_rate
+// counts them). NaN when no pair qualifies.
+double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                  const torch::Tensor& mask, const StabilityOptions& options = {});
+
+// Mean angle in degrees between the rendered normals (normal_sum [3,H,W], normalized here) of neighbouring
+// pixels where the reference depth, seen through K [3,3], is planar (neighbouring reference normals within
+// planar_deg) and neither pixel is a hole. 0 for a perfectly coherent surface; NaN when nothing qualifies.
+double normal_incoherence_deg(const torch::Tensor& normal_sum, const torch::Tensor& alpha,
+                              const torch::Tensor& ref_depth, const torch::Tensor& K, const torch::Tensor& mask,
+                              const StabilityOptions& options = {});
+
+}  // namespace isplat
