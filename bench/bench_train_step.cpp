@@ -1,6 +1,7 @@
 // Benchmark: one training step at the quickstart settings (configs/quickstart.json: ViT-S, 100k
 // supports, 256x192, 1 context + 3 targets), and where its time goes.
-// usage: bench_train_step [hypersim_root] [threads]; without a root a small scene is generated first.
+// usage: bench_train_step [hypersim_root] [threads] [config]; without a root (or with "") a small scene is
+// generated first; config defaults to configs/quickstart.json (e.g. configs/experiments/recipe.json).
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -32,10 +33,12 @@ int main(int argc, char** argv) {
   }
   set_log_level(LogLevel::Warn);
   const std::string weights = std::string(ISPLAT_SOURCE_DIR) + "/weights/squeezenet1_1_features.safetensors";
-  auto config = load_config<TrainConfig>(
-      std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json",
-      {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
-       "train.out=" + (tmp / "run").string(), "train.val_every=100000", "loss.perceptual_weights=" + weights});
+  const std::string config_path =
+      argc > 3 ? std::string(argv[3]) : std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json";
+  auto config =
+      load_config<TrainConfig>(config_path, {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
+                                             "train.out=" + (tmp / "run").string(), "train.val_every=100000",
+                                             "loss.perceptual_weights=" + weights});
   Trainer trainer(config);
   std::map<std::string, std::vector<double>> t;
   const int steps = 6;
@@ -51,7 +54,7 @@ int main(int argc, char** argv) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  std::printf("training step at quickstart settings (%d threads, %d steps after warm-up), median ms:\n",
+  std::printf("training step of %s (%d threads, %d steps after warm-up), median ms:\n", config_path.c_str(),
               at::get_num_threads(), steps - 1);
   for (const auto& [k, v] : t) std::printf("  %-12s %8.1f\n", k.c_str(), median(v));
   std::printf("(backward includes render_bwd; the decoder and encoder backward make up the rest)\n");
