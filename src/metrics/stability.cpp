@@ -42,9 +42,7 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
   const auto r = plane(ref_depth, H, W, "reference depth"), m = plane(mask, H, W, "mask");
   const double *pd = ds.data_ptr<double>(), *pa = a.data_ptr<double>(), *pr = r.data_ptr<double>(),
                *pm = m.data_ptr<double>();
-  auto usable = [&](int64_t p) {
-    return pm[p] != 0 && pa[p] >= o.hole_alpha && std::isfinite(pr[p]) && pr[p] > 0;
-  };
+  auto usable = [&](int64_t p) { return pm[p] != 0 && pa[p] >= o.hole_alpha && std::isfinite(pr[p]) && pr[p] > 0; };
   int64_t pairs = 0, cracks = 0;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
@@ -67,8 +65,8 @@ double normal_incoherence_deg(const torch::Tensor& normal_sum, const torch::Tens
                               const StabilityOptions& o) {
   ISPLAT_CHECK(mask.dim() == 2, "normal_incoherence: mask must be [H,W], got ", mask.sizes());
   const int64_t H = mask.size(0), W = mask.size(1), HW = H * W;
-  ISPLAT_CHECK(normal_sum.defined() && normal_sum.numel() == 3 * HW, "normal_incoherence: normals must be [3,", H,
-               ",", W, "]");
+  ISPLAT_CHECK(normal_sum.defined() && normal_sum.numel() == 3 * HW, "normal_incoherence: normals must be [3,", H, ",",
+               W, "]");
   ISPLAT_CHECK(K.defined() && K.numel() == 9, "normal_incoherence: K must be [3,3]");
   const auto n = normal_sum.detach().reshape({3, HW}).to(torch::kFloat64).contiguous();
   const auto a = plane(alpha, H, W, "alpha"), r = plane(ref_depth, H, W, "reference depth"),

@@ -6,10 +6,10 @@
 namespace isplat {
 
 struct StabilityOptions {
-  double hole_alpha = 0.5;      // a pixel is a hole when its rendered alpha stays below this
-  double crack_jump = 0.05;     // rendered depth jump between neighbours, relative to depth, that makes a crack
-  double smooth_jump = 0.01;    // ... where the reference depth changes by less than this (relative)
-  double planar_deg = 2.0;      // reference normals of neighbours within this angle mark a planar surface
+  double hole_alpha = 0.5;    // a pixel is a hole when its rendered alpha stays below this
+  double crack_jump = 0.05;   // rendered depth jump between neighbours, relative to depth, that makes a crack
+  double smooth_jump = 0.01;  // ... where the reference depth changes by less than this (relative)
+  double planar_deg = 2.0;    // reference normals of neighbours within this angle mark a planar surface
 };
 
 // Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
