@@ -142,10 +142,11 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
-// forward model. The AVX2 twin below has the same loops.
-template <class T>
+// forward model. The AVX2 twin below has the same loops. With kMaxWeight, best[i] receives the largest weight
+// α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
+template <class T, bool kMaxWeight = false>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                      int32_t* last) {
+                      int32_t* last, T* best = nullptr) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<T> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
@@ -154,7 +155,14 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<T> s = fwd_splat(rec);
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
-    for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1));
+    if constexpr (kMaxWeight) {
+      T m = 0;
+      auto keep_max = [&m](T w) { m = std::max(m, w); };
+      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1), keep_max);
+      best[i] = m;
+    } else {
+      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1));
+    }
   }
 }
 
@@ -184,7 +192,9 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
                         int32_t* n_contrib) {
   const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
-  auto tile_fn = fwd_tile_generic<T>;
+  void (*tile_fn)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*,
+                  int32_t*) = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                                 int32_t* last) { fwd_tile_generic<T>(local, count, x0, y0, x1, y1, st, last); };
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
     if (simd_enabled()) tile_fn = fwd_tile_avx2;
@@ -212,23 +222,9 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
 template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
-    T* st = scratch.pixel_planes(kFwdPlanes);
-    int32_t* last = scratch.last.data();
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    const T* local = scratch.gather(packed, ids + begin, count);
-    fwd_init(x0, y0, x1, y1, st, last);
-    Group<T> groups[kMaxGroups];
-    int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
-    for (int64_t i = 0; i < count && active > 0; ++i) {
-      const T* rec = local + i * kRec;
-      if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
-      Splat<T> s = fwd_splat(rec);
-      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
-      T best = 0;
-      auto keep_max = [&best](T w) { best = std::max(best, w); };
-      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1), keep_max);
-      per_entry[begin + i] = best;
-    }
+    fwd_tile_generic<T, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+                              scratch.pixel_planes(kFwdPlanes), scratch.last.data(), per_entry + begin);
   });
 }
 
