@@ -2,6 +2,7 @@
 #include "eval/eval_config.h"
 
 #include <cmath>
+#include <sstream>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -20,10 +21,68 @@ void MethodOptions::visit(ConfigVisitor& v) {
           "model: support budgets to sweep on the same pairs, one method each: px:<supports per pixel>, "
           "n:<supports>, detail:<supports per pixel at full detail> (see model.sampler.detail_floor)");
   v.section("prune", "model: drop Gaussians that contribute nothing visible after decoding", prune);
+  v.section("perturb", "perturbations of the source view before the method sees it (stability suite)", perturb);
+  v.field("sweep_key", sweep_key,
+          "sweep one key on the same pairs: an option of this method (perturb.depth_noise) or a model config key "
+          "set as an override (override:prior.sparse.prompts); empty = no sweep");
+  v.field("sweep_values", sweep_values, "values of sweep_key, one method each");
 }
 
-std::vector<MethodOptions> expand_budget_sweeps(const std::vector<MethodOptions>& methods) {
+namespace {
+std::string number_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// The method once per sweep value, each with the key set through the config schema (so types and ranges
+// are checked as in a config file).
+std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
+  if (m.sweep_key.empty()) return {m};
+  ISPLAT_CHECK(!m.sweep_values.empty(), "method '", m.name, "': sweep_key '", m.sweep_key, "' has no sweep_values");
   std::vector<MethodOptions> out;
+  const std::string last = m.sweep_key.substr(m.sweep_key.rfind('.') + 1);
+  const std::string override_prefix = "override:";
+  if (m.sweep_key.rfind(override_prefix, 0) == 0) {  // a model config key, set through the method's overrides
+    const std::string key = m.sweep_key.substr(override_prefix.size());
+    ISPLAT_CHECK(m.type == "model" && !key.empty(), "method '", m.name, "': sweep_key '", m.sweep_key,
+                 "' needs a model method and a key after 'override:'");
+    for (double value : m.sweep_values) {
+      MethodOptions e = m;
+      e.sweep_key.clear(), e.sweep_values.clear();
+      e.overrides.push_back(key + "=" + number_text(value));
+      e.name = m.name + "~" + last + number_text(value);
+      out.push_back(e);
+    }
+    return out;
+  }
+  for (double value : m.sweep_values) {
+    nlohmann::json j = config_to_json(m);
+    j.erase("sweep_key"), j.erase("sweep_values");
+    nlohmann::json* node = &j;
+    std::stringstream path(m.sweep_key);
+    std::string part;
+    std::vector<std::string> parts;
+    while (std::getline(path, part, '.')) parts.push_back(part);
+    for (size_t k = 0; k < parts.size(); ++k) {
+      ISPLAT_CHECK(node->is_object() && node->contains(parts[k]), "method '", m.name, "': sweep_key '", m.sweep_key,
+                   "' is not an option of a method");
+      node = &(*node)[parts[k]];
+    }
+    const bool integral = node->is_number_integer();
+    *node = integral ? nlohmann::json(std::llround(value)) : nlohmann::json(value);
+    MethodOptions e = config_from_json<MethodOptions>(j, cat("method '", m.name, "' sweep"));
+    e.name = m.name + "~" + last + number_text(value);
+    out.push_back(e);
+  }
+  return out;
+}
+}  // namespace
+
+std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input) {
+  std::vector<MethodOptions> methods, out;
+  for (const auto& m : input)
+    for (auto& e : expand_value_sweep(m)) methods.push_back(std::move(e));
   for (const auto& m : methods) {
     if (m.budgets.empty()) {
       out.push_back(m);
@@ -72,6 +131,12 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("examples", examples, "example panels (source, target, prediction, mask) per dataset and method",
           Range::at_least(0));
+  v.field("gallery", gallery,
+          "failure gallery: this many worst pairs by PSNR and by hole rate per dataset and method, re-rendered as "
+          "source, target, prediction, error, rendered normals, alpha (0 = none)",
+          Range::between(0, 64));
+  v.field("baseline_step", baseline_step, "metres per group of the finer baseline breakdown (report and baseline.png)",
+          Range::between(0.01, 100.0));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

@@ -6,6 +6,7 @@
 #include "core/runtime.h"
 #include "eval/datasets.h"
 #include "eval/pairs.h"
+#include "eval/perturb.h"
 #include "render/prune.h"
 #include "render/render.h"
 
@@ -20,21 +21,35 @@ struct MethodOptions {
   std::vector<std::string> overrides;  // model: overrides of its stored config, e.g. "prior.type=sparse"
   std::vector<std::string> budgets;    // model: support budgets to sweep ("px:0.5", "n:50000", "detail:1")
   PruneOptions prune;                  // model: pruning after decoding
+  PerturbOptions perturb;              // any method: perturbations of the source view (stability suite)
+  std::string sweep_key;               // a key of this method's options, e.g. perturb.depth_noise
+  std::vector<double> sweep_values;    // ... and the values it takes, one method each
   void visit(ConfigVisitor& v);
 };
 
+// A method with only a name and type set (the other options at their defaults).
+inline MethodOptions named_method(const std::string& name, const std::string& type) {
+  MethodOptions m;
+  m.name = name, m.type = type;
+  return m;
+}
+
 // A model method with budgets becomes one method per budget, named <name>@<budget> (e.g. full@px0.5), with
-// the sampler overrides appended; other methods pass through. Throws Error naming a malformed budget.
-std::vector<MethodOptions> expand_budget_sweeps(const std::vector<MethodOptions>& methods);
+// the sampler overrides appended. A method with a sweep becomes one method per value, named
+// <name>~<last key part><value> (e.g. full~depth_noise0.02). Other methods pass through. Throws Error
+// naming a malformed budget, an unknown sweep key or a value out of range.
+std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& methods);
 
 struct ScoringOptions {
   std::string out = "out/eval";
   std::vector<std::string> lpips = {"squeeze", "alex", "vgg"};
   std::string weights_dir = "weights";  // LPIPS backbones + heads (shipped in weights/)
   int64_t mask_radius = 2;
-  int64_t examples = 4;     // example panels saved per dataset and method
-  int64_t max_per_bin = 0;  // score only the first N pairs of each bin (0 = all)
-  std::string reference;    // method the others are compared with, pair by pair (empty = none)
+  int64_t examples = 4;        // example panels saved per dataset and method
+  int64_t gallery = 0;         // failure gallery: the worst pairs by PSNR and by hole rate, per dataset and method
+  double baseline_step = 0.5;  // metres: the finer baseline groups of the breakdown table
+  int64_t max_per_bin = 0;     // score only the first N pairs of each bin (0 = all)
+  std::string reference;       // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);
 };
@@ -43,8 +58,7 @@ struct EvalConfig {
   RuntimeOptions runtime;
   std::vector<EvalDatasetOptions> datasets;
   ProtocolOptions protocol;
-  std::vector<MethodOptions> methods = {MethodOptions{"lift", "lift", "", {}},
-                                        MethodOptions{"identity", "identity", "", {}}};
+  std::vector<MethodOptions> methods = {named_method("lift", "lift"), named_method("identity", "identity")};
   ScoringOptions scoring;
   void visit(ConfigVisitor& v);
 };

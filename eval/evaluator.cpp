@@ -11,17 +11,19 @@
 #include "core/paths.h"
 #include "core/progress.h"
 #include "data/colmap.h"
+#include "eval/perturb.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
 #include "io/panel.h"
 #include "metrics/mask.h"
+#include "metrics/stability.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
   ISPLAT_CHECK(!config_.datasets.empty(), "eval: no datasets (config key datasets)");
-  config_.methods = expand_budget_sweeps(config_.methods);
+  config_.methods = expand_sweeps(config_.methods);
   for (const auto& net : config_.scoring.lpips) {
     std::string why;
     auto lp = Lpips::from_folder(net, config_.scoring.weights_dir, why);
@@ -140,6 +142,77 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
   return run();
 }
 
+// The pair's motion type (eval/pairs motion_type): the target centre in the source frame, the angle between
+// optical axes and the source's median valid depth (1 m where the source has none).
+static std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt) {
+  const auto Ts = src.camera.T_cw.to(torch::kFloat64), Tt = tgt.camera.T_cw.to(torch::kFloat64);
+  const auto Rt = Tt.slice(0, 0, 3).slice(1, 0, 3), tt = Tt.slice(0, 0, 3).select(1, 3);
+  const auto centre = -torch::matmul(Rt.t(), tt);
+  const auto in_source = torch::matmul(Ts.slice(0, 0, 3).slice(1, 0, 3), centre) + Ts.slice(0, 0, 3).select(1, 3);
+  const auto axis_s = Ts.select(0, 2).slice(0, 0, 3), axis_t = Tt.select(0, 2).slice(0, 0, 3);
+  const double cosang = std::clamp(torch::dot(axis_s, axis_t).item<double>(), -1.0, 1.0);
+  const auto z = src.depth.defined() ? src.depth.masked_select(src.valid > 0) : torch::Tensor();
+  const double median = z.defined() && z.numel() > 0 ? z.median().item<double>() : 1.0;
+  return motion_type({in_source[0].item<double>(), in_source[1].item<double>(), in_source[2].item<double>()},
+                     std::acos(cosang) * 180.0 / M_PI, median > 0 ? median : 1.0);
+}
+
+ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
+                                 const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
+                                 bool has_depth) {
+  const auto& ds = config_.datasets[d];
+  ISPLAT_CHECK(i >= 0 && i < static_cast<int64_t>(m.pairs.size()), "eval: pair ", i, " is not in the manifest of ",
+               ds.name);
+  const Pair& p = m.pairs[static_cast<size_t>(i)];
+  ISPLAT_CHECK(p.sequence_index < sequences.size(), "eval: manifest pair ", i, " names sequence ", p.sequence_index,
+               " but the dataset has ", sequences.size(), " (re-draw the manifest)");
+  const Sequence& seq = sequences[p.sequence_index];
+  const LoadedFrame sf = load_frame(seq, p.source), tf = load_frame(seq, p.target, /*with_depth=*/has_depth);
+  const int64_t W = ds.width ? ds.width : sf.image.cols, H = ds.height ? ds.height : sf.image.rows;
+  const ViewTensors src = make_view_tensors(sf, p.source_name, W, H);
+  const ViewTensors tgt = make_view_tensors(tf, p.target_name, W, H);
+  // Without reference depth the paper scores the whole frame; with it, where the source projects.
+  const torch::Tensor mask = src.valid.sum().item<double>() > 0
+                                 ? projected_mask(src.depth, src.valid, to_view(src.camera), to_view(tgt.camera),
+                                                  static_cast<int>(config_.scoring.mask_radius))
+                                 : torch::ones({H, W});
+  const torch::Tensor prompts =
+      points.empty() ? torch::Tensor() : points3d_prompts(points.at(p.sequence_index), sf, src);
+  // Masks come from the unperturbed source, so a perturbation never changes which pixels are scored.
+  const ViewTensors seen = perturb_source(src, mo.perturb, static_cast<uint64_t>(i));
+  const MethodOutput o = method.predict(seen, tgt.camera, static_cast<uint64_t>(i),
+                                        perturb_prompts(prompts, mo.perturb, static_cast<uint64_t>(i), W, H));
+  PairResult r;
+  r.index = i;
+  r.bin = p.bin;
+  r.baseline = p.baseline;
+  r.rotation_deg = p.rotation_deg;
+  r.motion = pair_motion(src, tgt);
+  r.mask_fraction = mask.mean().item<double>();
+  r.psnr = psnr(o.image, tgt.image, mask);
+  r.ssim = ssim(o.image, tgt.image, mask);
+  for (const auto& net : config_.scoring.lpips) {
+    auto it = lpips_.find(net);
+    r.lpips[net] =
+        it == lpips_.end() ? std::numeric_limits<double>::quiet_NaN() : (*it->second)(o.image, tgt.image, mask);
+  }
+  r.infer_ms = o.infer_ms;
+  r.render_ms = o.render_ms;
+  r.gaussians = o.gaussians;
+  r.decoded = o.decoded;
+  r.stage_ms = o.stage_ms;
+  r.peak_mb = o.peak_mb;
+  if (o.alpha.defined()) {
+    r.hole_rate = hole_rate(o.alpha, mask);
+    if (tgt.valid.defined() && tgt.valid.sum().item<double>() > 0) {
+      const auto ref = tgt.depth * (tgt.valid > 0);
+      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask);
+      r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
+    }
+  }
+  return {r, src, tgt, mask, o};
+}
+
 std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
                                          const std::vector<int64_t>& pairs, const MethodOptions& mo,
                                          const std::vector<ColmapModel>& points) {
@@ -162,48 +235,15 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     log_info("eval: ", ds.name, " / ", mo.name, " (", method->describe(), "): ", todo.size(), " pairs to score",
              todo.size() == pairs.size() ? "" : cat(", ", pairs.size() - todo.size(), " resumed"));
     ProgressBar bar(cat("eval ", ds.name, "/", mo.name), static_cast<int64_t>(todo.size()), "pair");
+    const bool has_depth = dataset_has_depth(sequences);
     int64_t examples = 0;
     for (int64_t i : todo) {
-      ISPLAT_CHECK(i >= 0 && i < static_cast<int64_t>(m.pairs.size()), "eval: pair ", i, " is not in the manifest of ",
-                   ds.name);
-      const Pair& p = m.pairs[static_cast<size_t>(i)];
-      ISPLAT_CHECK(p.sequence_index < sequences.size(), "eval: manifest pair ", i, " names sequence ", p.sequence_index,
-                   " but the dataset has ", sequences.size(), " (re-draw the manifest)");
-      const Sequence& seq = sequences[p.sequence_index];
-      const LoadedFrame sf = load_frame(seq, p.source), tf = load_frame(seq, p.target, /*with_depth=*/false);
-      const int64_t W = ds.width ? ds.width : sf.image.cols, H = ds.height ? ds.height : sf.image.rows;
-      const ViewTensors src = make_view_tensors(sf, p.source_name, W, H);
-      const ViewTensors tgt = make_view_tensors(tf, p.target_name, W, H);
-      // Without reference depth the paper scores the whole frame; with it, where the source projects.
-      const torch::Tensor mask = src.valid.sum().item<double>() > 0
-                                     ? projected_mask(src.depth, src.valid, to_view(src.camera), to_view(tgt.camera),
-                                                      static_cast<int>(config_.scoring.mask_radius))
-                                     : torch::ones({H, W});
-      const torch::Tensor prompts =
-          points.empty() ? torch::Tensor() : points3d_prompts(points.at(p.sequence_index), sf, src);
-      const MethodOutput o = method->predict(src, tgt.camera, static_cast<uint64_t>(i), prompts);
-      PairResult r;
-      r.index = i;
-      r.bin = p.bin;
-      r.baseline = p.baseline;
-      r.mask_fraction = mask.mean().item<double>();
-      r.psnr = psnr(o.image, tgt.image, mask);
-      r.ssim = ssim(o.image, tgt.image, mask);
-      for (const auto& net : config_.scoring.lpips) {
-        auto it = lpips_.find(net);
-        r.lpips[net] =
-            it == lpips_.end() ? std::numeric_limits<double>::quiet_NaN() : (*it->second)(o.image, tgt.image, mask);
-      }
-      r.infer_ms = o.infer_ms;
-      r.render_ms = o.render_ms;
-      r.gaussians = o.gaussians;
-      r.decoded = o.decoded;
-      r.stage_ms = o.stage_ms;
-      r.peak_mb = o.peak_mb;
+      const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
+      const PairResult& r = sp.result;
       log.append(r);
       if (examples++ < config_.scoring.examples)
         write_panel((dir / "examples" / cat(safe_name(mo.name), "_pair", i, ".png")).string(),
-                    {{src.image, tgt.image, outline_mask(o.image, mask), mask.unsqueeze(0)}});
+                    {{sp.source.image, sp.target.image, outline_mask(sp.output.image, sp.mask), sp.mask.unsqueeze(0)}});
       bar.postfix(cat("PSNR ", std::setprecision(3), r.psnr));
       bar.tick();
     }
@@ -213,7 +253,49 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   }
   std::vector<PairResult> results;
   for (int64_t i : pairs) results.push_back(log.done().at(i));
+  if (config_.scoring.gallery > 0 && shard_count_ == 1)
+    write_gallery(d, sequences, m, results, mo, points, dataset_has_depth(sequences));
   return results;
+}
+
+void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
+                              const std::vector<PairResult>& results, const MethodOptions& mo,
+                              const std::vector<ColmapModel>& points, bool has_depth) {
+  std::vector<const PairResult*> by_psnr, by_holes;
+  for (const auto& r : results) {
+    if (std::isfinite(r.psnr)) by_psnr.push_back(&r);
+    if (std::isfinite(r.hole_rate) && r.hole_rate > 0) by_holes.push_back(&r);
+  }
+  std::stable_sort(by_psnr.begin(), by_psnr.end(), [](auto* a, auto* b) { return a->psnr < b->psnr; });
+  std::stable_sort(by_holes.begin(), by_holes.end(), [](auto* a, auto* b) { return a->hole_rate > b->hole_rate; });
+  const fs::path dir = fs::path(dataset_dir(d)) / "gallery";
+  std::vector<std::pair<fs::path, int64_t>> wanted;
+  for (size_t k = 0; k < static_cast<size_t>(config_.scoring.gallery); ++k) {
+    if (k < by_psnr.size())
+      wanted.push_back(
+          {dir / cat(safe_name(mo.name), "_worst_psnr", k + 1, "_pair", by_psnr[k]->index, ".png"), by_psnr[k]->index});
+    if (k < by_holes.size())
+      wanted.push_back({dir / cat(safe_name(mo.name), "_worst_holes", k + 1, "_pair", by_holes[k]->index, ".png"),
+                        by_holes[k]->index});
+  }
+  std::unique_ptr<Method> method;
+  for (const auto& [path, i] : wanted) {
+    if (fs::exists(path)) continue;
+    if (!method) method = make_method(mo, config_.scoring.render);
+    const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
+    const auto& o = sp.output;
+    const int64_t H = sp.mask.size(0), W = sp.mask.size(1);
+    const auto error = torch::clamp(4 * (o.image - sp.target.image).abs().mean(0, true), 0.0, 1.0);  // |error| x4
+    const auto normals =
+        o.normal.defined()
+            ? (torch::nn::functional::normalize(o.normal, torch::nn::functional::NormalizeFuncOptions().dim(0)) + 1) / 2
+            : torch::zeros({3, H, W});
+    const auto alpha = o.alpha.defined() ? o.alpha.reshape({1, H, W}) : torch::zeros({1, H, W});
+    write_panel(path.string(),
+                {{sp.source.image, sp.target.image, outline_mask(o.image, sp.mask), error, normals, alpha}});
+  }
+  if (!wanted.empty())
+    log_info("eval: failure gallery of ", config_.datasets[d].name, " / ", mo.name, " in ", dir.string());
 }
 
 std::vector<ReportRow> Evaluator::run(bool pairs_only) {
@@ -222,6 +304,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   const std::vector<std::string>& nets = config_.scoring.lpips;
   std::vector<ReportRow> rows;
   std::vector<DiffRow> differences;
+  std::vector<ReportRow> breakdowns;
   if (config_.scoring.max_per_bin > 0)
     notes_.push_back(cat("only the first ", config_.scoring.max_per_bin,
                          " pairs of each bin were scored "
@@ -259,6 +342,8 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
       if (results.empty() && !pairs.empty()) continue;  // not applicable here; score() left a note
       auto r = summarize(ds.name, mo.name, labels, requested, results, nets);
       rows.insert(rows.end(), r.begin(), r.end());
+      auto b = breakdown(ds.name, mo.name, results, nets, config_.scoring.baseline_step);
+      breakdowns.insert(breakdowns.end(), b.begin(), b.end());
       by_method[mo.name] = std::move(results);
     }
     if (!config_.scoring.reference.empty()) {
@@ -272,7 +357,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     return rows;
   }
   if (!pairs_only) {
-    write_reports(config_.scoring.out, rows, nets, notes_, differences);
+    write_reports(config_.scoring.out, rows, nets, notes_, differences, breakdowns);
     log_info("eval: reports in ", config_.scoring.out, " (report.md, report.csv, report.json, speed_quality.png)");
   }
   return rows;

@@ -13,6 +13,14 @@
 
 namespace isplat {
 
+// One scored pair with what produced it (for example panels and the failure gallery).
+struct ScoredPair {
+  PairResult result;
+  ViewTensors source, target;  // unperturbed
+  torch::Tensor mask;          // [H,W] the scored region
+  MethodOutput output;
+};
+
 class Evaluator {
  public:
   explicit Evaluator(EvalConfig config);
@@ -46,6 +54,16 @@ class Evaluator {
                                 const std::vector<ColmapModel>& points = {});
 
  private:
+  // Loads, (perturbs,) predicts and scores manifest pair i.
+  ScoredPair score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
+                        const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
+                        bool has_depth);
+  // The failure gallery (scoring.gallery): the worst pairs by PSNR and by hole rate, re-rendered into
+  // <dataset>/gallery/ as source, target, prediction, error, rendered normals and alpha. Existing panels are kept.
+  void write_gallery(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
+                     const std::vector<PairResult>& results, const MethodOptions& mo,
+                     const std::vector<ColmapModel>& points, bool has_depth);
+
   EvalConfig config_;
   std::map<std::string, std::unique_ptr<Lpips>> lpips_;  // available variants
   std::vector<std::string> notes_;

@@ -4,11 +4,13 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <functional>
 
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "decoder/composer.h"
+#include "eval/perturb.h"
 #include "geometry/color.h"
 #include "model/model_io.h"
 #include "render/prune.h"
@@ -37,7 +39,16 @@ class ModelMethod final : public Method {
     const bool peak = reset_peak_memory();
     PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
     auto t0 = Clock::now();
-    const Prediction p = pipeline_->run(in, src.camera.T_cw, false);
+    // Depth perturbations reach a dataset or sparse prior through the source depth (eval/evaluator); an
+    // image-only prior ignores that depth, so its own output is perturbed instead.
+    const std::string& type = pipeline_->model()->options.prior.type;
+    std::function<void(PriorOutput&)> perturb_prior;
+    if (options_.perturb.any_depth() && type != "dataset" && type != "sparse")
+      perturb_prior = [&](PriorOutput& po) {
+        const PerturbedDepth d = perturb_depth(po.depth, po.valid, options_.perturb, seed);
+        po.depth = d.depth, po.valid = d.valid;
+      };
+    const Prediction p = pipeline_->run(in, src.camera.T_cw, false, perturb_prior);
     MethodOutput out;
     out.stage_ms = p.timings_ms;
     out.decoded = p.gaussians.count();
@@ -50,6 +61,7 @@ class ModelMethod final : public Method {
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
     out.gaussians = pr.kept.count();
+    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal;
     if (peak) out.peak_mb = peak_memory_mb();
     return out;
   }
@@ -85,6 +97,7 @@ class LiftMethod final : public Method {
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, true);
     out.gaussians = out.decoded = gs.count();
+    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal;
     return out;
   }
   std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }

@@ -2,6 +2,7 @@
 // views, filtered by frustum overlap and rotation, binned by baseline, drawn under a fixed seed with a
 // per-scene cap, and written to a manifest that every method is scored on.
 #pragma once
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -83,6 +84,12 @@ class OverlapDepthSource {
 // `models` (optional, one per sequence) gives depth-free COLMAP captures their points3D for the overlap.
 Manifest draw_manifest(const std::string& dataset, const std::vector<Sequence>& sequences,
                        const ProtocolOptions& options, const std::vector<ColmapModel>& models = {});
+
+// The kind of viewpoint change of a pair, by which moves the image most: "lateral" (translation across
+// the view, |t_xy| / z), "forward" (along the optical axis, 0.5 |t_z| / z: a point half-way to the
+// frame edge shifts by that much) or "rotation" (the angle between optical axes, radians). `t` is the
+// target camera's centre in the source camera frame (metres), `z` the source's median depth.
+std::string motion_type(const std::array<double, 3>& t, double rotation_deg, double median_depth);
 
 void write_manifest(const std::string& path, const Manifest& m);  // atomic; byte-identical for equal input
 Manifest read_manifest(const std::string& path);

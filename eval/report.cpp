@@ -86,12 +86,74 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
   return charts;
 }
 
-std::string method_family(const std::string& method) {
-  const auto at = method.find('@');
-  if (at == std::string::npos) return method;
+namespace {
+// Position of the sweep marker ('@' budget or '~' value sweep) and the end of the key after it.
+std::pair<size_t, size_t> sweep_marker(const std::string& method) {
+  const auto at = method.find_last_of("@~");
+  if (at == std::string::npos) return {at, at};
   size_t k = at + 1;
-  while (k < method.size() && std::isalpha(static_cast<unsigned char>(method[k]))) ++k;
+  while (k < method.size() && (std::isalpha(static_cast<unsigned char>(method[k])) || method[k] == '_')) ++k;
+  return {at, k};
+}
+}  // namespace
+
+std::string method_family(const std::string& method) {
+  const auto [at, k] = sweep_marker(method);
+  if (at == std::string::npos) return method;
   return method.substr(0, at) + " " + method.substr(at + 1, k - at - 1);
+}
+
+double sweep_value(const std::string& method) {
+  const auto [at, k] = sweep_marker(method);
+  if (at == std::string::npos || k >= method.size()) return std::numeric_limits<double>::quiet_NaN();
+  try {
+    return std::stod(method.substr(k));
+  } catch (const std::exception&) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
+  std::vector<std::string> datasets;
+  for (const auto& r : rows)
+    if (r.bin == "all" && r.method.find('~') != std::string::npos &&
+        std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end())
+      datasets.push_back(r.dataset);
+  std::vector<Chart> charts;
+  struct Measure {
+    const char* title;
+    double scale;
+    double ReportRow::*field;
+  };
+  const Measure measures[] = {{"masked PSNR (dB)", 1, &ReportRow::psnr},
+                              {"holes (% of masked pixels)", 100, &ReportRow::hole_rate},
+                              {"cracks (% of neighbour pairs)", 100, &ReportRow::crack_rate},
+                              {"normal incoherence (deg)", 1, &ReportRow::normal_deg}};
+  for (const auto& d : datasets)
+    for (const auto& m : measures) {
+      Chart c;
+      c.title = d + ": " + m.title;
+      c.x_label = "perturbation strength (the swept value)";
+      c.y_label = m.title;
+      std::vector<std::string> families;
+      for (const auto& r : rows)
+        if (r.dataset == d && r.bin == "all" && std::isfinite(sweep_value(r.method)) &&
+            r.method.find('~') != std::string::npos &&
+            std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
+          families.push_back(method_family(r.method));
+      for (size_t k = 0; k < families.size(); ++k) {
+        std::vector<std::pair<double, double>> pts;
+        for (const auto& r : rows)
+          if (r.dataset == d && r.bin == "all" && method_family(r.method) == families[k])
+            pts.push_back({sweep_value(r.method), m.scale * (r.*m.field)});
+        std::sort(pts.begin(), pts.end());
+        ChartSeries s{families[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
+        for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
+        c.series.push_back(s);
+      }
+      charts.push_back(c);
+    }
+  return charts;
 }
 
 std::vector<ReportRow> summarize(const std::string& dataset, const std::string& method,
@@ -105,6 +167,8 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
     r.bin = label;
     r.requested = req;
     double p = 0, s = 0, inf = 0, ren = 0, g = 0, dec = 0;
+    double stab[3] = {0, 0, 0};
+    int64_t stab_n[3] = {0, 0, 0};
     std::map<std::string, double> stage;
     r.peak_mb = std::numeric_limits<double>::quiet_NaN();
     std::map<std::string, double> lp;
@@ -116,6 +180,9 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
       if (std::isfinite(x.psnr)) p += x.psnr, ++psnr_n;
       s += x.ssim, inf += x.infer_ms, ren += x.render_ms, g += x.gaussians, dec += x.decoded;
       for (const auto& [k, v] : x.stage_ms) stage[k] += v;
+      const double measures[3] = {x.hole_rate, x.crack_rate, x.normal_deg};
+      for (int k = 0; k < 3; ++k)
+        if (std::isfinite(measures[k])) stab[k] += measures[k], ++stab_n[k];
       if (std::isfinite(x.peak_mb)) r.peak_mb = std::isfinite(r.peak_mb) ? std::max(r.peak_mb, x.peak_mb) : x.peak_mb;
       for (const auto& net : lpips_nets) {
         auto it = x.lpips.find(net);
@@ -131,6 +198,8 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
     r.gaussians = r.pairs ? g / n : nan;
     r.decoded = r.pairs ? dec / n : nan;
     for (const auto& [k, v] : stage) r.stage_ms[k] = v / n;
+    double* outs[3] = {&r.hole_rate, &r.crack_rate, &r.normal_deg};
+    for (int k = 0; k < 3; ++k) *outs[k] = stab_n[k] ? stab[k] / static_cast<double>(stab_n[k]) : nan;
     for (const auto& net : lpips_nets) r.lpips[net] = lp_n[net] ? lp[net] / lp_n[net] : nan;
     rows.push_back(r);
   };
@@ -141,6 +210,35 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
   }
   make("all", -1, total_req);
   return rows;
+}
+
+std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& method,
+                                 const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets,
+                                 double step_m) {
+  ISPLAT_CHECK(step_m > 0 && std::isfinite(step_m), "breakdown: baseline step ", step_m, " is not positive");
+  std::vector<ReportRow> out;
+  auto keep = [&](std::vector<ReportRow> rows, const std::string& prefix) {
+    for (auto& r : rows)
+      if (r.bin != "all" && r.pairs > 0) r.bin = prefix + r.bin, out.push_back(std::move(r));
+  };
+  double largest = 0;
+  for (const auto& x : results) largest = std::max(largest, x.baseline);
+  const int groups = static_cast<int>(std::floor(largest / step_m)) + 1;
+  std::vector<PairResult> regrouped = results;
+  for (auto& x : regrouped) x.bin = static_cast<int>(std::floor(x.baseline / step_m));
+  std::vector<std::string> labels;
+  for (int k = 0; k < groups; ++k) {
+    std::ostringstream l;
+    l << "[" << k * step_m << "," << (k + 1) * step_m << ")";
+    labels.push_back(l.str());
+  }
+  keep(summarize(dataset, method, labels, std::vector<int64_t>(labels.size(), 0), regrouped, lpips_nets), "baseline ");
+  const std::vector<std::string> motions = {"lateral", "forward", "rotation"};
+  regrouped = results;
+  for (auto& x : regrouped)
+    x.bin = static_cast<int>(std::find(motions.begin(), motions.end(), x.motion) - motions.begin());
+  keep(summarize(dataset, method, motions, std::vector<int64_t>(motions.size(), 0), regrouped, lpips_nets), "motion ");
+  return out;
 }
 
 std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
@@ -173,8 +271,103 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
   return out;
 }
 
+// Per swept family: PSNR against the swept value, its least-squares slope (per 1% for shares and noise
+// sigmas) and whether PSNR is monotone in the value (graceful degradation falls steadily with noise).
+static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportRow>& rows, const std::string& d) {
+  std::map<std::string, std::vector<std::pair<double, double>>> families;
+  for (const auto& r : rows)
+    if (r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
+        std::isfinite(sweep_value(r.method)) && std::isfinite(r.psnr))
+      families[method_family(r.method)].push_back({sweep_value(r.method), r.psnr});
+  bool header = false;
+  for (auto& [family, pts] : families) {
+    if (pts.size() < 2) continue;
+    std::sort(pts.begin(), pts.end());
+    const std::string key = family.substr(family.rfind(' ') + 1);
+    const bool percent = key.find("noise") != std::string::npos || key == "depth_holes";
+    double mx = 0, my = 0;
+    for (const auto& [x, y] : pts) mx += x, my += y;
+    mx /= static_cast<double>(pts.size()), my /= static_cast<double>(pts.size());
+    double sxy = 0, sxx = 0;
+    bool falls = true, rises = true;
+    for (const auto& [x, y] : pts) sxy += (x - mx) * (y - my), sxx += (x - mx) * (x - mx);
+    for (size_t k = 1; k < pts.size(); ++k)
+      falls = falls && pts[k].second <= pts[k - 1].second, rises = rises && pts[k].second >= pts[k - 1].second;
+    const double slope = sxx > 0 ? sxy / sxx : std::numeric_limits<double>::quiet_NaN();
+    if (!header)
+      md << "\nSweeps: PSNR (all bins) against the swept value, its least-squares slope, and whether PSNR is "
+            "monotone in the value:\n\n| sweep | values | PSNR | slope | monotone |\n|---|---|---|---|---|\n",
+          header = true;
+    std::string xs, ys;
+    for (const auto& [x, y] : pts) {
+      std::ostringstream v;
+      v << std::setprecision(4) << x;
+      xs += (xs.empty() ? "" : ", ") + v.str(), ys += (ys.empty() ? "" : ", ") + fmt(y, 2);
+    }
+    md << "| " << family << " | " << xs << " | " << ys << " | "
+       << (percent ? fmt(slope / 100, 3) + " dB per %" : fmt(slope, 3) + " dB per unit") << " | "
+       << (falls   ? "falling"
+           : rises ? "rising"
+                   : "no")
+       << " |\n";
+  }
+}
+
+// Finer baseline groups and motion types (see breakdown()).
+static void write_breakdown_table(std::ostringstream& md, const std::vector<ReportRow>& breakdowns,
+                                  const std::string& d, const std::vector<std::string>& nets) {
+  bool header = false;
+  for (const auto& r : breakdowns) {
+    if (r.dataset != d) continue;
+    if (!header) {
+      md << "\nBy baseline (finer than the protocol's bins) and by motion type (what moves the image most: "
+            "lateral or forward translation, or rotation):\n\n| method | group | pairs | PSNR | SSIM |"
+         << (nets.empty() ? "" : " LPIPS |") << " holes % | cracks % |\n|---|---|---|---|---|"
+         << (nets.empty() ? "" : "---|") << "---|---|\n";
+      header = true;
+    }
+    md << "| " << r.method << " | " << r.bin << " | " << r.pairs << " | " << fmt(r.psnr, 2) << " | " << fmt(r.ssim, 3)
+       << " |" << (nets.empty() ? "" : " " + fmt(r.lpips.at(nets[0]), 3) + " |") << " " << fmt(100 * r.hole_rate, 2)
+       << " | " << fmt(100 * r.crack_rate, 2) << " |\n";
+  }
+}
+
+// Per dataset: PSNR and hole rate against the baseline group's centre, one series per method that is not
+// a sweep point.
+static std::vector<Chart> baseline_charts(const std::vector<ReportRow>& breakdowns) {
+  std::vector<std::string> datasets;
+  for (const auto& r : breakdowns)
+    if (std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end()) datasets.push_back(r.dataset);
+  std::vector<Chart> charts;
+  for (const auto& d : datasets)
+    for (int measure = 0; measure < 2; ++measure) {
+      Chart c;
+      c.title = d + (measure == 0 ? ": masked PSNR against baseline" : ": holes against baseline");
+      c.x_label = "baseline (m, group centre)";
+      c.y_label = measure == 0 ? "PSNR (dB)" : "holes (% of masked pixels)";
+      std::vector<std::string> methods;
+      for (const auto& r : breakdowns)
+        if (r.dataset == d && r.method.find_first_of("@~") == std::string::npos &&
+            std::find(methods.begin(), methods.end(), r.method) == methods.end())
+          methods.push_back(r.method);
+      for (size_t k = 0; k < methods.size(); ++k) {
+        ChartSeries s{methods[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
+        for (const auto& r : breakdowns) {
+          if (r.dataset != d || r.method != methods[k] || r.bin.rfind("baseline [", 0) != 0) continue;
+          const double lo = std::stod(r.bin.substr(10)), hi = std::stod(r.bin.substr(r.bin.find(',') + 1));
+          s.x.push_back(0.5 * (lo + hi));
+          s.y.push_back(measure == 0 ? r.psnr : 100 * r.hole_rate);
+        }
+        c.series.push_back(s);
+      }
+      charts.push_back(c);
+    }
+  return charts;
+}
+
 void write_reports(const std::string& out, const std::vector<ReportRow>& rows, const std::vector<std::string>& nets,
-                   const std::vector<std::string>& notes, const std::vector<DiffRow>& differences) {
+                   const std::vector<std::string>& notes, const std::vector<DiffRow>& differences,
+                   const std::vector<ReportRow>& breakdowns) {
   // Markdown: one table per dataset.
   std::ostringstream md;
   md << "# Evaluation report\n\nMasked metrics on the protocol's pairs (DESIGN §5). PSNR and SSIM higher is better, "
@@ -212,6 +405,16 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
       for (const char* st : kStages) md << " " << (r.stage_ms.count(st) ? fmt(r.stage_ms.at(st), 1) : "-") << " |";
       md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 1) << " | " << fmt(r.peak_mb, 0) << " |\n";
     }
+    md << "\nStability: holes = masked pixels with rendered alpha < 0.5; cracks = neighbour pairs whose "
+          "rendered depth jumps by > 5% where the reference depth is smooth; normals = mean angle (degrees) "
+          "between neighbouring rendered normals on reference-planar surfaces:\n\n| method | bin | holes % | "
+          "cracks % | normals deg |\n|---|---|---|---|---|\n";
+    for (const auto& r : rows)
+      if (r.dataset == d && std::isfinite(r.hole_rate))
+        md << "| " << r.method << " | " << r.bin << " | " << fmt(100 * r.hole_rate, 2) << " | "
+           << fmt(100 * r.crack_rate, 2) << " | " << fmt(r.normal_deg, 2) << " |\n";
+    write_sweep_slopes(md, rows, d);
+    write_breakdown_table(md, breakdowns, d, nets);
     md << "\n";
   }
   if (!differences.empty()) {
@@ -245,7 +448,9 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   CsvTable csv;
   csv.header = {"dataset", "method", "bin", "pairs", "requested", "psnr", "ssim"};
   for (const auto& n : nets) csv.header.push_back("lpips_" + n);
-  for (const char* h : {"infer_ms", "render_ms", "gaussians", "decoded", "peak_mb"}) csv.header.push_back(h);
+  for (const char* h :
+       {"infer_ms", "render_ms", "gaussians", "decoded", "peak_mb", "hole_rate", "crack_rate", "normal_deg"})
+    csv.header.push_back(h);
   for (const char* st : kStages) csv.header.push_back(std::string(st) + "_ms");
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& r : rows) {
@@ -266,6 +471,9 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     row.push_back(fmt(r.gaussians, 0));
     row.push_back(fmt(r.decoded, 0));
     row.push_back(fmt(r.peak_mb, 1));
+    row.push_back(fmt(r.hole_rate, 5));
+    row.push_back(fmt(r.crack_rate, 5));
+    row.push_back(fmt(r.normal_deg, 3));
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
     for (const char* st : kStages) row.push_back(r.stage_ms.count(st) ? fmt(r.stage_ms.at(st), 2) : "");
     j["infer_ms"] = num(r.infer_ms);
@@ -274,6 +482,9 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     j["decoded"] = num(r.decoded);
     j["peak_mb"] = num(r.peak_mb);
     j["stage_ms"] = r.stage_ms;
+    j["hole_rate"] = num(r.hole_rate);
+    j["crack_rate"] = num(r.crack_rate);
+    j["normal_deg"] = num(r.normal_deg);
     csv.rows.push_back(row);
     js.push_back(j);
   }
@@ -281,6 +492,25 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   write_file_atomic((fs::path(out) / "report.json").string(), js.dump(2) + "\n");
 
   write_charts((fs::path(out) / "speed_quality.png").string(), speed_quality_charts(rows), 2, 620, 420);
+  const auto stability = stability_charts(rows);
+  if (!stability.empty()) write_charts((fs::path(out) / "stability.png").string(), stability, 4, 420, 320);
+  if (!breakdowns.empty()) {
+    write_charts((fs::path(out) / "baseline.png").string(), baseline_charts(breakdowns), 2, 560, 380);
+    CsvTable b;
+    b.header = {"dataset", "method", "group", "pairs", "psnr", "ssim"};
+    for (const auto& n : nets) b.header.push_back("lpips_" + n);
+    for (const char* h : {"hole_rate", "crack_rate", "normal_deg"}) b.header.push_back(h);
+    for (const auto& r : breakdowns) {
+      std::vector<std::string> row = {r.dataset,      r.method,      r.bin, std::to_string(r.pairs),
+                                      fmt(r.psnr, 4), fmt(r.ssim, 5)};
+      for (const auto& n : nets) row.push_back(fmt(r.lpips.at(n), 5));
+      row.push_back(fmt(r.hole_rate, 5));
+      row.push_back(fmt(r.crack_rate, 5));
+      row.push_back(fmt(r.normal_deg, 3));
+      b.rows.push_back(row);
+    }
+    write_csv((fs::path(out) / "breakdown.csv").string(), b);
+  }
 }
 
 }  // namespace isplat

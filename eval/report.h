@@ -23,6 +23,12 @@ struct PairResult {
   double mask_fraction = 0;
   std::map<std::string, double> stage_ms;  // inference stages: prior, sampler, encoder, decoder, composer, prune
   double peak_mb = std::numeric_limits<double>::quiet_NaN();
+  // Stability (metrics/stability): NaN where the method does not render or the target has no depth.
+  double hole_rate = std::numeric_limits<double>::quiet_NaN();
+  double crack_rate = std::numeric_limits<double>::quiet_NaN();
+  double normal_deg = std::numeric_limits<double>::quiet_NaN();
+  double rotation_deg = std::numeric_limits<double>::quiet_NaN();  // between optical axes
+  std::string motion;  // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
 };
 
 struct ReportRow {
@@ -31,14 +37,21 @@ struct ReportRow {
   double psnr = 0, ssim = 0;
   std::map<std::string, double> lpips;
   double infer_ms = 0, render_ms = 0, gaussians = 0, decoded = 0;
-  std::map<std::string, double> stage_ms;  // means over pairs
-  double peak_mb = 0;                      // largest over pairs (NaN when not measured)
+  std::map<std::string, double> stage_ms;                // means over pairs
+  double peak_mb = 0;                                    // largest over pairs (NaN when not measured)
+  double hole_rate = 0, crack_rate = 0, normal_deg = 0;  // means over the pairs where measured (else NaN)
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".
 std::vector<ReportRow> summarize(const std::string& dataset, const std::string& method,
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets);
+
+// The same rows regrouped beyond the protocol's bins: by baseline in steps of `step_m` up to the largest
+// scored (bin "baseline [1.5,2)") and by motion type (bin "motion lateral"); groups without pairs are left out.
+std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& method,
+                                 const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets,
+                                 double step_m = 0.5);
 
 // One method against the reference method on the same pairs: paired bootstrap 95% intervals.
 struct DiffRow {
@@ -52,8 +65,12 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
                                         const std::map<std::string, std::vector<PairResult>>& results,
                                         const std::string& lpips_net, int64_t resamples = 2000);
 
-// "full@px0.5" -> "full px" (a budget sweep's points form one series); other names pass through.
+// "full@px0.5" -> "full px", "full~depth_noise0.02" -> "full depth_noise" (a sweep's points form one
+// series); other names pass through.
 std::string method_family(const std::string& method);
+
+// The swept value in "full~depth_noise0.02" (0.02) or "full@px0.5" (0.5); NaN when there is none.
+double sweep_value(const std::string& method);
 
 // Indices of the points (x = cost, y = quality) not dominated by a cheaper-or-equal, better one, by cost.
 std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& points);
@@ -62,6 +79,6 @@ std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& p
 // against Gaussians, log scale, one series per method family, the Pareto front marked) into `out`.
 void write_reports(const std::string& out, const std::vector<ReportRow>& rows,
                    const std::vector<std::string>& lpips_nets, const std::vector<std::string>& notes,
-                   const std::vector<DiffRow>& differences = {});
+                   const std::vector<DiffRow>& differences = {}, const std::vector<ReportRow>& breakdowns = {});
 
 }  // namespace isplat

@@ -11,12 +11,22 @@ namespace isplat {
 
 nlohmann::json result_json(const PairResult& r) {
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  nlohmann::json j = {{"index", r.index},         {"bin", r.bin},
-                      {"baseline", r.baseline},   {"psnr", num(r.psnr)},
-                      {"ssim", r.ssim},           {"infer_ms", r.infer_ms},
-                      {"render_ms", r.render_ms}, {"gaussians", r.gaussians},
-                      {"decoded", r.decoded},     {"mask_fraction", r.mask_fraction},
-                      {"peak_mb", num(r.peak_mb)}};
+  nlohmann::json j = {{"index", r.index},
+                      {"bin", r.bin},
+                      {"baseline", r.baseline},
+                      {"psnr", num(r.psnr)},
+                      {"ssim", r.ssim},
+                      {"infer_ms", r.infer_ms},
+                      {"render_ms", r.render_ms},
+                      {"gaussians", r.gaussians},
+                      {"decoded", r.decoded},
+                      {"mask_fraction", r.mask_fraction},
+                      {"peak_mb", num(r.peak_mb)},
+                      {"hole_rate", num(r.hole_rate)},
+                      {"crack_rate", num(r.crack_rate)},
+                      {"normal_deg", num(r.normal_deg)},
+                      {"rotation_deg", num(r.rotation_deg)}};
+  if (!r.motion.empty()) j["motion"] = r.motion;
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
   return j;
@@ -58,6 +68,20 @@ PairResult result_from_json(const nlohmann::json& j) {
   ISPLAT_CHECK(r.decoded >= 0, "'decoded' = ", r.decoded, " is negative");
   r.peak_mb = j.contains("peak_mb") && !j.at("peak_mb").is_null() ? j.at("peak_mb").get<double>() : nan;
   if (std::isfinite(r.peak_mb)) check_range("peak_mb", r.peak_mb, 0, 1e8);
+  auto optional = [&](const char* key, double& v, double hi) {
+    if (!j.contains(key) || j.at(key).is_null()) return;
+    v = j.at(key).get<double>();
+    check_range(key, v, 0, hi);
+  };
+  optional("hole_rate", r.hole_rate, 1);
+  optional("crack_rate", r.crack_rate, 1);
+  optional("normal_deg", r.normal_deg, 180);
+  optional("rotation_deg", r.rotation_deg, 180);
+  if (j.contains("motion")) {
+    r.motion = j.at("motion").get<std::string>();
+    ISPLAT_CHECK(r.motion == "lateral" || r.motion == "forward" || r.motion == "rotation", "'motion' = '", r.motion,
+                 "' is not lateral, forward or rotation");
+  }
   if (j.contains("stage_ms"))
     for (auto it = j.at("stage_ms").begin(); it != j.at("stage_ms").end(); ++it) {
       r.stage_ms[it.key()] = it.value().get<double>();

@@ -11,11 +11,14 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/error.h"
 #include "core/log.h"
 #include "data/nerfstudio.h"
 #include "eval/evaluator.h"
 #include "eval/pairs.h"
+#include "eval/perturb.h"
 #include "io/jsonl.h"
+#include "metrics/metrics.h"
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
 #include "support/tiny_model.h"
@@ -153,7 +156,7 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
   MethodOptions m{"full", "model", "ck.safetensors", {"prior.type=dataset"}};
   m.budgets = {"px:0.5", "n:50000", "detail:1"};
-  const auto out = expand_budget_sweeps({MethodOptions{"lift", "lift", "", {}}, m});
+  const auto out = expand_sweeps({MethodOptions{"lift", "lift", "", {}}, m});
   REQUIRE(out.size() == 4);
   CHECK(out[0].name == "lift");
   CHECK(out[1].name == "full@px0.5");
@@ -163,10 +166,10 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   CHECK(out[3].overrides[1] == "sampler.budget_mode=detail");
   for (const char* bad : {"px", "px:", "px:-1", "px:0.5x", "budget:3"}) {
     m.budgets = {bad};
-    CHECK_THROWS_WITH(expand_budget_sweeps({m}), Catch::Contains(std::string("budget '") + bad + "'"));
+    CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains(std::string("budget '") + bad + "'"));
   }
   m.budgets = {"px:1", "px:1"};
-  CHECK_THROWS_WITH(expand_budget_sweeps({m}), Catch::Contains("two methods are named 'full@px1'"));
+  CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("two methods are named 'full@px1'"));
   CHECK(method_family("full@px0.25") == "full px");
   CHECK(method_family("full+prune@detail2") == "full+prune detail");
   CHECK(method_family("lift") == "lift");
@@ -193,6 +196,144 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   CHECK(paired_differences("set", "absent", res, "squeeze").empty());
 }
 
+TEST_CASE("eval: perturbations have the requested strength, are deterministic, and sweep by key", "[eval]") {
+  const int64_t H = 48, W = 64;
+  ViewTensors v;
+  torch::manual_seed(1);
+  v.image = torch::rand({3, H, W});
+  v.depth = torch::full({H, W}, 4.0f);
+  v.depth.narrow(1, 32, 32).fill_(2.0f);  // one vertical depth edge between columns 31 and 32
+  v.valid = torch::ones({H, W});
+  const int64_t edge_pixels = 2 * H;
+  CHECK(depth_edges(v.depth, v.valid).sum().item<int64_t>() == edge_pixels);
+
+  PerturbOptions o;
+  CHECK_FALSE(o.any());
+  CHECK(torch::equal(perturb_source(v, o, 3).depth, v.depth));
+  o.depth_noise = 0.03;
+  const ViewTensors a = perturb_source(v, o, 3), b = perturb_source(v, o, 3), c = perturb_source(v, o, 4);
+  CHECK(torch::equal(a.depth, b.depth));  // same seed, same perturbation
+  CHECK_FALSE(torch::equal(a.depth, c.depth));
+  const double sigma = (a.depth / v.depth - 1).std().item<double>();
+  CHECK(sigma == Approx(0.03).epsilon(0.05));  // 3072 samples: the estimate is within 5%
+  CHECK(torch::equal(a.image, v.image));
+
+  o = PerturbOptions{};
+  o.depth_holes = 0.3;
+  const ViewTensors h = perturb_source(v, o, 5);
+  CHECK(h.valid.sum().item<int64_t>() == H * W - std::llround(0.3 * H * W));  // exactly the requested share
+  CHECK((h.depth * (1 - h.valid)).abs().sum().item<double>() == 0);
+
+  o = PerturbOptions{};
+  o.depth_scale = 1.3;
+  CHECK(torch::allclose(perturb_source(v, o, 0).depth, v.depth * 1.3));
+  o.depth_scale = 1.0;
+  o.depth_side = "left";
+  const ViewTensors left = perturb_source(v, o, 0);
+  CHECK(left.valid.narrow(1, 0, 32).min().item<float>() == 1.0f);
+  CHECK(left.valid.narrow(1, 32, 32).max().item<float>() == 0.0f);
+
+  o = PerturbOptions{};
+  o.depth_edge_noise = 0.1;
+  const auto moved = (perturb_source(v, o, 2).depth != v.depth).to(torch::kFloat32);
+  CHECK(moved.sum().item<int64_t>() == edge_pixels);  // only the edge pixels change
+  o = PerturbOptions{};
+  o.depth_blur_px = 3;
+  const auto blurred = perturb_source(v, o, 0).depth;
+  CHECK(blurred[10][5].item<float>() == Approx(4.0f));  // flat regions keep their depth
+  CHECK(blurred[10][31].item<float>() < 3.9f);          // the edge is smeared
+  CHECK(blurred[10][31].item<float>() > 2.1f);
+
+  o = PerturbOptions{};
+  o.exposure = 2.0;
+  const auto bright = perturb_source(v, o, 0).image;
+  CHECK(bright.mean().item<double>() > v.image.mean().item<double>());
+  o.exposure = 1.0;
+  o.jpeg_quality = 10;
+  ViewTensors smooth = v;  // JPEG keeps smooth content well at high quality (noise it cannot)
+  const auto ramp = torch::linspace(0, 1, W).view({1, 1, W}).expand({3, H, W});
+  smooth.image = (0.5 + 0.4 * torch::sin(12 * ramp + torch::linspace(0, 3, H).view({1, H, 1}))).contiguous();
+  const double q10 = psnr(perturb_source(smooth, o, 0).image, smooth.image);
+  o.jpeg_quality = 95;
+  const double q95 = psnr(perturb_source(smooth, o, 0).image, smooth.image);
+  CHECK(q95 > q10 + 3);
+
+  MethodOptions m{"full", "model", "ck.safetensors", {}};
+  m.sweep_key = "perturb.depth_noise";
+  m.sweep_values = {0, 0.02};
+  const auto out = expand_sweeps({m});
+  REQUIRE(out.size() == 2);
+  CHECK(out[0].name == "full~depth_noise0");
+  CHECK(out[1].name == "full~depth_noise0.02");
+  CHECK(out[1].perturb.depth_noise == 0.02);
+  CHECK(out[1].sweep_key.empty());
+  CHECK(sweep_value(out[1].name) == Approx(0.02));
+  CHECK(method_family(out[1].name) == "full depth_noise");
+  m.sweep_key = "perturb.jpeg_quality";
+  m.sweep_values = {90};
+  CHECK(expand_sweeps({m})[0].perturb.jpeg_quality == 90);
+  m.sweep_key = "override:prior.sparse.prompts";  // a model config key goes through the overrides
+  m.sweep_values = {500, 20};
+  const auto prompts = expand_sweeps({m});
+  REQUIRE(prompts.size() == 2);
+  CHECK(prompts[1].name == "full~prompts20");
+  CHECK(prompts[1].overrides.back() == "prior.sparse.prompts=20");
+  CHECK(sweep_value(prompts[0].name) == Approx(500));
+  // The same depth options act on a prior's output map as on the source view's depth.
+  o = PerturbOptions{};
+  o.depth_holes = 0.5;
+  CHECK(o.any_depth());
+  const PerturbedDepth holed = perturb_depth(v.depth, v.valid, o, 9);
+  CHECK(torch::equal(holed.valid, perturb_source(v, o, 9).valid));
+  // Prompts given directly: noise on z, holes drop that share, a side keeps only its half.
+  const auto given = torch::stack(
+      {torch::arange(100).to(torch::kFloat32) * 0.64f, torch::full({100}, 10.0f), torch::full({100}, 5.0f)}, 1);
+  CHECK(torch::equal(perturb_prompts(given, PerturbOptions{}, 1, W, H), given));
+  CHECK(perturb_prompts(given, o, 1, W, H).size(0) == 50);
+  o = PerturbOptions{};
+  o.depth_side = "left";
+  CHECK(perturb_prompts(given, o, 1, W, H).size(0) == 50);  // u < 32
+  o = PerturbOptions{};
+  o.depth_noise = 0.05;
+  const auto noisy = perturb_prompts(given, o, 1, W, H);
+  CHECK((noisy.select(1, 2) / 5 - 1).std().item<double>() == Approx(0.05).epsilon(0.3));
+  CHECK(torch::equal(noisy.narrow(1, 0, 2), given.narrow(1, 0, 2)));
+  o = PerturbOptions{};
+  o.exposure = 1.5;
+  CHECK_FALSE(o.any_depth());
+  m.sweep_key = "perturb.no_such_key";
+  CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("sweep_key 'perturb.no_such_key'"));
+  m.sweep_key = "perturb.depth_noise";
+  m.sweep_values = {2.0};  // outside the option's range
+  CHECK_THROWS_AS(expand_sweeps({m}), Error);
+}
+
+TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
+  CHECK(motion_type({0.8, 0.1, 0.2}, 2.0, 4.0) == "lateral");
+  CHECK(motion_type({0.1, 0.0, 1.5}, 2.0, 4.0) == "forward");     // 0.5 * 1.5 / 4 > 0.1 / 4
+  CHECK(motion_type({0.05, 0.0, 0.0}, 20.0, 2.0) == "rotation");  // 0.35 rad against 0.025
+  CHECK_THROWS_AS(motion_type({1, 0, 0}, 0.0, 0.0), Error);
+  std::vector<PairResult> results(4);
+  const double baselines[4] = {0.2, 0.7, 0.8, 2.6}, psnrs[4] = {30, 24, 20, 15};
+  const char* motions[4] = {"lateral", "forward", "lateral", "rotation"};
+  for (int k = 0; k < 4; ++k) {
+    results[k].index = k, results[k].baseline = baselines[k], results[k].psnr = psnrs[k];
+    results[k].motion = motions[k];
+  }
+  std::map<std::string, ReportRow> by;
+  for (const auto& r : breakdown("set", "m", results, {}, 0.5)) by[r.bin] = r;
+  REQUIRE(by.size() == 6);  // 3 baseline groups with pairs (of 6) and 3 motion types
+  CHECK(by.at("baseline [0,0.5)").pairs == 1);
+  CHECK(by.at("baseline [0.5,1)").pairs == 2);
+  CHECK(by.at("baseline [0.5,1)").psnr == Approx(22));
+  CHECK(by.at("baseline [2.5,3)").psnr == Approx(15));
+  CHECK(by.count("baseline [1,1.5)") == 0);  // empty groups are left out
+  CHECK(by.at("motion lateral").pairs == 2);
+  CHECK(by.at("motion lateral").psnr == Approx(25));
+  CHECK(by.at("motion rotation").psnr == Approx(15));
+  CHECK_THROWS_AS(breakdown("set", "m", results, {}, 0.0), Error);
+}
+
 TEST_CASE("eval: a support-budget sweep with pruning scores every budget and writes the chart and tables", "[eval]") {
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_sweep", 16);
@@ -203,6 +344,9 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   c.methods = {{"tiny", "model", ck, {"prior.type=dataset"}}, {"tiny+prune", "model", ck, {"prior.type=dataset"}}};
   c.methods[0].budgets = {"px:0.25", "n:900", "detail:1"};
   c.methods[1].budgets = {"n:900"};
+  c.methods.push_back({"lift", "lift", "", {}});
+  c.methods.back().sweep_key = "perturb.depth_scale";
+  c.methods.back().sweep_values = {0.8, 1.0};
   c.methods[1].prune.enabled = true;
   c.methods[1].prune.min_contribution = 0.02;
   c.protocol.pairs_per_bin = 2;
@@ -210,12 +354,13 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   c.scoring.weights_dir = test::project_weights_dir();
   c.scoring.lpips = {"squeeze"};
   c.scoring.examples = 0;
+  c.scoring.gallery = 1;
   c.scoring.reference = "tiny@n900";
   const auto rows = Evaluator(c).run();
   std::map<std::string, ReportRow> all;
   for (const auto& r : rows)
     if (r.bin == "all") all[r.method] = r;
-  REQUIRE(all.size() == 4);
+  REQUIRE(all.size() == 6);
   const ReportRow &px = all.at("tiny@px0.25"), &n = all.at("tiny@n900"), &pruned = all.at("tiny+prune@n900");
   REQUIRE(n.pairs > 0);
   CHECK(n.decoded == 900);
@@ -240,6 +385,28 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   const std::string diffs = test::read_bytes(c.scoring.out + "/differences.csv");
   CHECK_THAT(diffs, Catch::Contains("tiny+prune@n900,tiny@n900"));
   CHECK_THAT(diffs, Catch::Contains("tiny@px0.25,tiny@n900"));
+  // Stability measures on every rendering method, and the perturbation sweep's chart.
+  CHECK(n.hole_rate >= 0);
+  CHECK(n.hole_rate <= 1);
+  CHECK(std::isfinite(n.crack_rate));
+  CHECK(std::isfinite(n.normal_deg));
+  CHECK(all.at("lift~depth_scale0.8").psnr < all.at("lift~depth_scale1").psnr);  // a wrong scale costs quality
+  CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
+  CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));
+  CHECK_THAT(md, Catch::Contains("| lift depth_scale | 0.8, 1 | "));  // the sweep's slope row
+  // The finer baseline and motion breakdown, its chart, and the failure gallery (worst by PSNR and holes).
+  CHECK_THAT(md, Catch::Contains("| tiny@n900 | baseline [0,0.5) |"));
+  CHECK_THAT(md, Catch::Contains("| tiny@n900 | motion "));
+  CHECK(fs::exists(fs::path(c.scoring.out) / "baseline.png"));
+  CHECK_THAT(test::read_bytes(c.scoring.out + "/breakdown.csv"), Catch::Contains("tiny@n900,\"baseline [0,0.5)\""));
+  int64_t gallery_psnr = 0, gallery_holes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(c.scoring.out)) {
+    const std::string f = e.path().filename().string();
+    if (f.rfind("tiny_n900_worst_psnr1_pair", 0) == 0) ++gallery_psnr;
+    if (f.rfind("tiny_n900_worst_holes1_pair", 0) == 0) ++gallery_holes;
+  }
+  CHECK(gallery_psnr == 1);
+  CHECK(gallery_holes == 1);
   // The per-pair log keeps the new fields, so a resumed run reports the same timings.
   const auto again = Evaluator(c).run();
   for (const auto& r : again)

@@ -80,9 +80,11 @@ Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Ten
 Pipeline::Pipeline(const ModelOptions& options, const std::map<std::string, torch::Tensor>* embedded_prior)
     : prior_(make_depth_prior(options.prior, embedded_prior)), model_(options) {}
 
-Prediction Pipeline::run(const PriorInput& input, const torch::Tensor& T_cw, bool train) {
+Prediction Pipeline::run(const PriorInput& input, const torch::Tensor& T_cw, bool train,
+                         const std::function<void(PriorOutput&)>& after_prior) {
   auto t0 = std::chrono::steady_clock::now();
-  const PriorOutput prior = prior_->predict(input);
+  PriorOutput prior = prior_->predict(input);
+  if (after_prior) after_prior(prior);
   const double prior_ms = ms_since(t0);
   Prediction p = train ? model_->forward(input.image, prior.K, T_cw, prior.depth, prior.valid, input.seed)
                        : model_->predict(input.image, prior.K, T_cw, prior.depth, prior.valid, input.seed);

@@ -1,6 +1,7 @@
 // The InfiniSplat model, end to end: supports from depth -> base Gaussians; image -> dual features;
 // implicit decoder -> 14-dim updates; composer -> metric Gaussians in the world frame.
 #pragma once
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -63,7 +64,10 @@ TORCH_MODULE(InfiniSplat);
 class Pipeline {
  public:
   explicit Pipeline(const ModelOptions& options, const std::map<std::string, torch::Tensor>* embedded_prior = nullptr);
-  Prediction run(const PriorInput& input, const torch::Tensor& T_cw, bool train);
+  // after_prior, when set, may change the prior's output before the model sees it (the stability suite
+  // perturbs an image-only prior's depth this way).
+  Prediction run(const PriorInput& input, const torch::Tensor& T_cw, bool train,
+                 const std::function<void(PriorOutput&)>& after_prior = {});
   InfiniSplat& model() { return model_; }
   const DepthPrior& prior() const { return *prior_; }
 

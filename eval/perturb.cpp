@@ -1,0 +1,150 @@
+// Source-view perturbations with a seeded generator: noise, holes and blur on depth, exposure and JPEG on the image.
+#include "eval/perturb.h"
+
+#include <ATen/CPUGeneratorImpl.h>
+#include <torch/torch.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "geometry/color.h"
+#include "io/tensor_image.h"
+
+namespace isplat {
+
+bool PerturbOptions::any_depth() const {
+  return depth_scale != 1.0 || depth_noise > 0 || depth_blur_px > 0 || depth_holes > 0 || depth_edge_noise > 0 ||
+         depth_side != "all";
+}
+
+bool PerturbOptions::any() const {
+  return any_depth() || exposure != 1.0 || jpeg_quality > 0;
+}
+
+void PerturbOptions::visit(ConfigVisitor& v) {
+  v.field("depth_scale", depth_scale, "global scale error of the source depth (prior output): z x s",
+          Range::above(0.0));
+  v.field("depth_noise", depth_noise, "multiplicative depth noise sigma on every pixel, z(1 + eps)",
+          Range::between(0.0, 1.0));
+  v.field("depth_blur_px", depth_blur_px, "Gaussian blur sigma of the depth map in pixels", Range::between(0.0, 100.0));
+  v.field("depth_holes", depth_holes, "share of valid depth pixels made invalid", Range::between(0.0, 0.99));
+  v.field("depth_edge_noise", depth_edge_noise, "multiplicative depth noise sigma at depth edges only",
+          Range::between(0.0, 1.0));
+  v.field("depth_side", depth_side, "keep depth (and the prompts drawn from it) only on this side of the image",
+          {"all", "left", "right", "top", "bottom"});
+  v.field("exposure", exposure, "source image multiplied by this in linear light", Range::above(0.0));
+  v.field("jpeg_quality", jpeg_quality, "re-encode the source image as JPEG at this quality (0 = off)",
+          Range::between(0, 100));
+}
+
+torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
+  const auto z = depth.contiguous(), ok = valid.to(torch::kFloat32).contiguous();
+  const int64_t H = z.size(0), W = z.size(1);
+  auto out = torch::zeros({H, W});
+  const float *pz = z.data_ptr<float>(), *pv = ok.data_ptr<float>();
+  float* po = out.data_ptr<float>();
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      const int64_t p = i * W + j;
+      if (pv[p] == 0) continue;
+      for (const int64_t q : {j > 0 ? p - 1 : -1, j + 1 < W ? p + 1 : -1, i > 0 ? p - W : -1, i + 1 < H ? p + W : -1})
+        if (q >= 0 && pv[q] != 0 && std::abs(pz[q] - pz[p]) > relative * pz[p]) po[p] = 1;
+    }
+  return out;
+}
+
+PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor& valid_in, const PerturbOptions& o,
+                             uint64_t seed) {
+  if (!o.any_depth()) return {depth_in, valid_in};
+  auto gen = at::make_generator<at::CPUGeneratorImpl>(seed * 0x9E3779B97F4A7C15ull + 1);
+  auto depth = depth_in.to(torch::kFloat32).clone();
+  auto valid = (valid_in > 0).logical_and(depth > 0).logical_and(torch::isfinite(depth)).to(torch::kFloat32);
+  depth = torch::nan_to_num(depth, 0.0, 0.0, 0.0);
+  const int64_t H = depth.size(0), W = depth.size(1);
+  depth = depth * valid;
+  if (o.depth_blur_px > 0) {  // normalized convolution: blur depth·valid and valid, then divide
+    cv::Mat d(static_cast<int>(H), static_cast<int>(W), CV_32F, depth.data_ptr<float>());
+    auto vc = valid.contiguous();
+    cv::Mat m(static_cast<int>(H), static_cast<int>(W), CV_32F, vc.data_ptr<float>());
+    cv::Mat bd, bm;
+    cv::GaussianBlur(d, bd, cv::Size(0, 0), o.depth_blur_px, o.depth_blur_px, cv::BORDER_REFLECT);
+    cv::GaussianBlur(m, bm, cv::Size(0, 0), o.depth_blur_px, o.depth_blur_px, cv::BORDER_REFLECT);
+    cv::Mat blurred = bd / cv::max(bm, 1e-6f);
+    depth = torch::from_blob(blurred.data, {H, W}, torch::kFloat32).clone() * valid;
+  }
+  if (o.depth_edge_noise > 0) {
+    const auto edges = depth_edges(depth, valid);
+    depth = depth * (1.0 + o.depth_edge_noise * torch::randn({H, W}, gen) * edges);
+  }
+  if (o.depth_noise > 0) depth = depth * (1.0 + o.depth_noise * torch::randn({H, W}, gen));
+  depth = depth * o.depth_scale;
+  if (o.depth_holes > 0) {  // exactly round(share · valid) of the valid pixels, chosen by a seeded permutation
+    const auto idx = torch::nonzero(valid.view({-1}) > 0).view({-1});
+    const int64_t k = std::llround(o.depth_holes * static_cast<double>(idx.numel()));
+    const auto drop = idx.index({torch::randperm(idx.numel(), gen, torch::kLong).narrow(0, 0, k)});
+    valid.view({-1}).index_fill_(0, drop, 0.0);
+  }
+  if (o.depth_side != "all") {
+    auto keep = torch::zeros({H, W});
+    if (o.depth_side == "left") keep.narrow(1, 0, W / 2).fill_(1);
+    if (o.depth_side == "right") keep.narrow(1, W / 2, W - W / 2).fill_(1);
+    if (o.depth_side == "top") keep.narrow(0, 0, H / 2).fill_(1);
+    if (o.depth_side == "bottom") keep.narrow(0, H / 2, H - H / 2).fill_(1);
+    valid = valid * keep;
+  }
+  valid = valid * (depth > 0).to(torch::kFloat32);  // noise can never leave a negative depth behind
+  return {(depth * valid).contiguous(), valid.contiguous()};
+}
+
+torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions& o, uint64_t seed, int64_t width,
+                              int64_t height) {
+  if (!prompts.defined() || prompts.numel() == 0 || !o.any_depth()) return prompts;
+  ISPLAT_CHECK(prompts.dim() == 2 && prompts.size(1) == 3, "perturb: prompts must be [P,3] (u, v, z), got ",
+               prompts.sizes());
+  auto gen = at::make_generator<at::CPUGeneratorImpl>(seed * 0x9E3779B97F4A7C15ull + 2);
+  auto p = prompts.to(torch::kFloat32).clone();
+  auto z = p.select(1, 2);
+  if (o.depth_noise > 0) z.mul_(1.0 + o.depth_noise * torch::randn({p.size(0)}, gen));
+  z.mul_(o.depth_scale);
+  auto keep = z > 0;
+  const auto u = p.select(1, 0), v = p.select(1, 1);
+  if (o.depth_side == "left") keep = keep.logical_and(u < width / 2.0);
+  if (o.depth_side == "right") keep = keep.logical_and(u >= width / 2.0);
+  if (o.depth_side == "top") keep = keep.logical_and(v < height / 2.0);
+  if (o.depth_side == "bottom") keep = keep.logical_and(v >= height / 2.0);
+  if (o.depth_holes > 0) {
+    const auto idx = torch::nonzero(keep).view({-1});
+    const int64_t k = std::llround(o.depth_holes * static_cast<double>(idx.numel()));
+    keep.index_fill_(0, idx.index({torch::randperm(idx.numel(), gen, torch::kLong).narrow(0, 0, k)}), false);
+  }
+  return p.index({keep}).contiguous();
+}
+
+ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& o, uint64_t seed) {
+  ViewTensors v = source;
+  if (!o.any()) return v;
+  if (o.any_depth() && source.depth.defined()) {
+    PerturbedDepth d = perturb_depth(source.depth, source.valid, o, seed);
+    v.depth = d.depth, v.valid = d.valid;
+  }
+  if (o.exposure != 1.0)
+    v.image = torch::clamp(linear_to_srgb(srgb_to_linear(source.image) * o.exposure), 0.0, 1.0).contiguous();
+  if (o.jpeg_quality > 0) {
+    cv::Mat rgb8, bgr8, back;
+    tensor_to_image(v.image).convertTo(rgb8, CV_8UC3, 255.0);
+    cv::cvtColor(rgb8, bgr8, cv::COLOR_RGB2BGR);
+    std::vector<uchar> bytes;
+    cv::imencode(".jpg", bgr8, bytes, {cv::IMWRITE_JPEG_QUALITY, static_cast<int>(o.jpeg_quality)});
+    cv::cvtColor(cv::imdecode(bytes, cv::IMREAD_COLOR), rgb8, cv::COLOR_BGR2RGB);
+    rgb8.convertTo(back, CV_32FC3, 1.0 / 255.0);
+    v.image = image_to_tensor(back).contiguous();
+  }
+  return v;
+}
+
+}  // namespace isplat

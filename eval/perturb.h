@@ -1,0 +1,49 @@
+// Perturbations of a source view for the stability suite: depth errors (global scale, multiplicative noise,
+// blur, holes, noise at depth edges, depth on one side only; the sparse prior draws its prompts from this
+// depth) and image changes (exposure, JPEG). Deterministic for a seed.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "data/tuples.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct PerturbOptions {
+  double depth_scale = 1.0;        // global scale error: z·s
+  double depth_noise = 0.0;        // multiplicative noise sigma on every pixel: z(1 + ε), ε ~ N(0, σ²)
+  double depth_blur_px = 0.0;      // Gaussian blur sigma of the depth map, pixels (valid pixels only)
+  double depth_holes = 0.0;        // share of valid depth pixels made invalid
+  double depth_edge_noise = 0.0;   // multiplicative noise sigma at depth edges only
+  std::string depth_side = "all";  // all | left | right | top | bottom: depth (and prompts) only there
+  double exposure = 1.0;           // source image scaled by this in linear light
+  int64_t jpeg_quality = 0;        // 0 = off; else the source image re-encoded as JPEG at this quality
+  bool any() const;
+  bool any_depth() const;  // any option that changes depth or its valid mask
+  void visit(ConfigVisitor& v);
+};
+
+struct PerturbedDepth {
+  torch::Tensor depth, valid;  // [H,W] metres (0 where invalid), float 0/1
+};
+
+// The depth options applied to a depth map (a copy). Used on the source depth (dataset and sparse priors
+// consume it; prompts are drawn from it) and on an image-only prior's output (see eval/methods).
+PerturbedDepth perturb_depth(const torch::Tensor& depth, const torch::Tensor& valid, const PerturbOptions& options,
+                             uint64_t seed);
+
+// The depth options that make sense for sparse prompts [P,3] (u, v, z) given directly (COLMAP points3D):
+// scale, multiplicative noise (depth_noise), holes (that share of prompts dropped) and side (by u or v in an
+// image of `width` x `height`). Blur and edge noise need a dense map and leave prompts unchanged.
+torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions& options, uint64_t seed, int64_t width,
+                              int64_t height);
+
+// Applies the options to the source view's image, depth and valid mask (a copy; the input is unchanged).
+ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& options, uint64_t seed);
+
+// Depth edges: valid pixels whose depth differs from a 4-neighbour's by more than `relative` of itself.
+torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative = 0.05);
+
+}  // namespace isplat
