@@ -285,7 +285,8 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
     const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
     const auto& o = sp.output;
     const int64_t H = sp.mask.size(0), W = sp.mask.size(1);
-    const auto error = torch::clamp(4 * (o.image - sp.target.image).abs().mean(0, true), 0.0, 1.0);  // |error| x4
+    // |error| x4 inside the scored mask (outside it the prediction is not judged)
+    const auto error = torch::clamp(4 * (o.image - sp.target.image).abs().mean(0, true), 0.0, 1.0) * sp.mask;
     const auto normals =
         o.normal.defined()
             ? (torch::nn::functional::normalize(o.normal, torch::nn::functional::NormalizeFuncOptions().dim(0)) + 1) / 2

@@ -33,6 +33,10 @@ void PerturbOptions::visit(ConfigVisitor& v) {
           Range::between(0.0, 1.0));
   v.field("depth_blur_px", depth_blur_px, "Gaussian blur sigma of the depth map in pixels", Range::between(0.0, 100.0));
   v.field("depth_holes", depth_holes, "share of valid depth pixels made invalid", Range::between(0.0, 0.99));
+  v.field("depth_hole_size", depth_hole_size,
+          "holes are blobs of about this radius in pixels (a smooth random field's highest values); 0 = "
+          "independent pixels",
+          Range::between(0.0, 100.0));
   v.field("depth_edge_noise", depth_edge_noise, "multiplicative depth noise sigma at depth edges only",
           Range::between(0.0, 1.0));
   v.field("depth_side", depth_side, "keep depth (and the prompts drawn from it) only on this side of the image",
@@ -83,10 +87,19 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
   }
   if (o.depth_noise > 0) depth = depth * (1.0 + o.depth_noise * torch::randn({H, W}, gen));
   depth = depth * o.depth_scale;
-  if (o.depth_holes > 0) {  // exactly round(share · valid) of the valid pixels, chosen by a seeded permutation
+  if (o.depth_holes > 0) {  // exactly round(share · valid) of the valid pixels
     const auto idx = torch::nonzero(valid.view({-1}) > 0).view({-1});
     const int64_t k = std::llround(o.depth_holes * static_cast<double>(idx.numel()));
-    const auto drop = idx.index({torch::randperm(idx.numel(), gen, torch::kLong).narrow(0, 0, k)});
+    torch::Tensor drop;
+    if (o.depth_hole_size > 0) {  // blobs: the k valid pixels where a smooth random field is highest
+      auto field = torch::randn({H, W}, gen).contiguous();
+      cv::Mat f(static_cast<int>(H), static_cast<int>(W), CV_32F, field.data_ptr<float>()), smooth;
+      cv::GaussianBlur(f, smooth, cv::Size(0, 0), o.depth_hole_size, o.depth_hole_size, cv::BORDER_REFLECT);
+      const auto at_valid = torch::from_blob(smooth.data, {H * W}, torch::kFloat32).index({idx});
+      drop = idx.index({std::get<1>(at_valid.topk(k))});
+    } else {  // independent pixels, chosen by a seeded permutation
+      drop = idx.index({torch::randperm(idx.numel(), gen, torch::kLong).narrow(0, 0, k)});
+    }
     valid.view({-1}).index_fill_(0, drop, 0.0);
   }
   if (o.depth_side != "all") {

@@ -16,6 +16,7 @@ struct PerturbOptions {
   double depth_noise = 0.0;        // multiplicative noise sigma on every pixel: z(1 + ε), ε ~ N(0, σ²)
   double depth_blur_px = 0.0;      // Gaussian blur sigma of the depth map, pixels (valid pixels only)
   double depth_holes = 0.0;        // share of valid depth pixels made invalid
+  double depth_hole_size = 8.0;    // ... as blobs of about this radius (pixels); 0 = independent pixels
   double depth_edge_noise = 0.0;   // multiplicative noise sigma at depth edges only
   std::string depth_side = "all";  // all | left | right | top | bottom: depth (and prompts) only there
   double exposure = 1.0;           // source image scaled by this in linear light

@@ -113,6 +113,30 @@ double sweep_value(const std::string& method) {
   }
 }
 
+// A sweep's points (value, field) on dataset d, all bins. When the sweep leaves out the unperturbed value of
+// a perturbation (scale and exposure 1, the others 0) and the same method runs unperturbed (the family's
+// name before the key), that run is the point there.
+static std::vector<std::pair<double, double>> sweep_points(const std::vector<ReportRow>& rows, const std::string& d,
+                                                           const std::string& family, double ReportRow::*field,
+                                                           double scale = 1) {
+  static const std::map<std::string, double> neutral = {
+      {"depth_scale", 1}, {"exposure", 1},         {"depth_noise", 0},    {"depth_blur_px", 0},
+      {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}};
+  std::vector<std::pair<double, double>> pts;
+  for (const auto& r : rows)
+    if (r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
+        method_family(r.method) == family && std::isfinite(sweep_value(r.method)))
+      pts.push_back({sweep_value(r.method), scale * (r.*field)});
+  const auto space = family.rfind(' ');
+  const auto it = space == std::string::npos ? neutral.end() : neutral.find(family.substr(space + 1));
+  if (it != neutral.end() && std::none_of(pts.begin(), pts.end(), [&](auto& p) { return p.first == it->second; }))
+    for (const auto& r : rows)
+      if (r.dataset == d && r.bin == "all" && r.method == family.substr(0, space))
+        pts.push_back({it->second, scale * (r.*field)});
+  std::sort(pts.begin(), pts.end());
+  return pts;
+}
+
 static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
   std::vector<std::string> datasets;
   for (const auto& r : rows)
@@ -142,11 +166,7 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
             std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
           families.push_back(method_family(r.method));
       for (size_t k = 0; k < families.size(); ++k) {
-        std::vector<std::pair<double, double>> pts;
-        for (const auto& r : rows)
-          if (r.dataset == d && r.bin == "all" && method_family(r.method) == families[k])
-            pts.push_back({sweep_value(r.method), m.scale * (r.*m.field)});
-        std::sort(pts.begin(), pts.end());
+        const auto pts = sweep_points(rows, d, families[k], m.field, m.scale);
         ChartSeries s{families[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
         for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
         c.series.push_back(s);
@@ -272,17 +292,21 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
 }
 
 // Per swept family: PSNR against the swept value, its least-squares slope (per 1% for shares and noise
-// sigmas) and whether PSNR is monotone in the value (graceful degradation falls steadily with noise).
+// sigmas) and whether PSNR is monotone in the value (graceful degradation falls steadily with noise). The
+// unperturbed run counts as the neutral value (see sweep_points).
 static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportRow>& rows, const std::string& d) {
-  std::map<std::string, std::vector<std::pair<double, double>>> families;
+  std::vector<std::string> families;
   for (const auto& r : rows)
     if (r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
-        std::isfinite(sweep_value(r.method)) && std::isfinite(r.psnr))
-      families[method_family(r.method)].push_back({sweep_value(r.method), r.psnr});
+        std::isfinite(sweep_value(r.method)) &&
+        std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
+      families.push_back(method_family(r.method));
+  std::sort(families.begin(), families.end());
   bool header = false;
-  for (auto& [family, pts] : families) {
+  for (const auto& family : families) {
+    auto pts = sweep_points(rows, d, family, &ReportRow::psnr);
+    pts.erase(std::remove_if(pts.begin(), pts.end(), [](auto& p) { return !std::isfinite(p.second); }), pts.end());
     if (pts.size() < 2) continue;
-    std::sort(pts.begin(), pts.end());
     const std::string key = family.substr(family.rfind(' ') + 1);
     const bool percent = key.find("noise") != std::string::npos || key == "depth_holes";
     double mx = 0, my = 0;

@@ -223,6 +223,16 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   const ViewTensors h = perturb_source(v, o, 5);
   CHECK(h.valid.sum().item<int64_t>() == H * W - std::llround(0.3 * H * W));  // exactly the requested share
   CHECK((h.depth * (1 - h.valid)).abs().sum().item<double>() == 0);
+  // Blobs by default: a hole pixel's right neighbour is far more often a hole than for independent pixels.
+  auto clustered = [&](const torch::Tensor& valid) {
+    const auto hole = valid < 0.5, left = hole.narrow(1, 0, W - 1), right = hole.narrow(1, 1, W - 1);
+    return left.logical_and(right).sum().item<double>() / left.sum().item<double>();
+  };
+  CHECK(clustered(h.valid) > 0.8);
+  o.depth_hole_size = 0;
+  const ViewTensors scattered = perturb_source(v, o, 5);
+  CHECK(scattered.valid.sum().item<int64_t>() == h.valid.sum().item<int64_t>());
+  CHECK(clustered(scattered.valid) < 0.45);
 
   o = PerturbOptions{};
   o.depth_scale = 1.3;
@@ -332,6 +342,21 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
   CHECK(by.at("motion lateral").psnr == Approx(25));
   CHECK(by.at("motion rotation").psnr == Approx(15));
   CHECK_THROWS_AS(breakdown("set", "m", results, {}, 0.0), Error);
+
+  // A sweep without its neutral value takes the unperturbed run of the same method as that point.
+  std::vector<ReportRow> rows;
+  for (const auto& [name, value] : std::vector<std::pair<std::string, double>>{
+           {"m", 30}, {"m~depth_holes0.2", 25}, {"m~depth_holes0.4", 20}, {"m~depth_noise0.01", 29}}) {
+    ReportRow r;
+    r.dataset = "set", r.method = name, r.bin = "all", r.pairs = 1, r.psnr = value;
+    rows.push_back(r);
+  }
+  const std::string out = test::temp_dir("eval_slopes");
+  write_reports(out, rows, {}, {});
+  const std::string md = test::read_bytes(out + "/report.md");
+  CHECK_THAT(md, Catch::Contains("| m depth_holes | 0, 0.2, 0.4 | 30.00, 25.00, 20.00 | -0.250 dB per % | falling |"));
+  CHECK_THAT(md, Catch::Contains("| m depth_noise | 0, 0.01 | 30.00, 29.00 | -1.000 dB per % | falling |"));
+  CHECK(fs::exists(fs::path(out) / "stability.png"));
 }
 
 TEST_CASE("eval: a support-budget sweep with pruning scores every budget and writes the chart and tables", "[eval]") {
