@@ -38,7 +38,14 @@ std::string number_text(double v) {
 // The method once per sweep value, each with the key set through the config schema (so types and ranges
 // are checked as in a config file).
 std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
-  if (m.sweep_key.empty()) return {m};
+  ISPLAT_CHECK(!(m.type == "identity" && m.perturb.any_depth()), "method '", m.name,
+               "': identity uses no depth, so its depth perturbations would do nothing");
+  if (m.sweep_key.empty()) {
+    ISPLAT_CHECK(m.sweep_values.empty(), "method '", m.name, "': sweep_values are given but sweep_key is empty");
+    return {m};
+  }
+  ISPLAT_CHECK(m.budgets.empty(), "method '", m.name,
+               "': a value sweep and budgets in one method would mix two series; use two methods");
   ISPLAT_CHECK(!m.sweep_values.empty(), "method '", m.name, "': sweep_key '", m.sweep_key, "' has no sweep_values");
   std::vector<MethodOptions> out;
   const std::string last = m.sweep_key.substr(m.sweep_key.rfind('.') + 1);
@@ -72,7 +79,7 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
     const bool integral = node->is_number_integer();
     *node = integral ? nlohmann::json(std::llround(value)) : nlohmann::json(value);
     MethodOptions e = config_from_json<MethodOptions>(j, cat("method '", m.name, "' sweep"));
-    e.name = m.name + "~" + last + number_text(value);
+    e.name = m.name + "~" + last + number_text(integral ? static_cast<double>(std::llround(value)) : value);
     out.push_back(e);
   }
   return out;

@@ -142,19 +142,40 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
   return run();
 }
 
-// The pair's motion type (eval/pairs motion_type): the target centre in the source frame, the angle between
-// optical axes and the source's median valid depth (1 m where the source has none).
-static std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt) {
+// Results are found by method name, so a method whose options changed must not resume from them: the
+// options are stamped beside the results (<results>.method.json) and compared on every run. A log without
+// a stamp (older runs) adopts the current options.
+static void check_method_stamp(const std::string& results, const MethodOptions& mo) {
+  nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
+  now.erase("name");
+  const std::string stamp = results + ".method.json";
+  if (fs::exists(stamp)) {
+    const nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
+    ISPLAT_CHECK(before == now, "eval: ", results, " was scored with other options for method '", mo.name, "' (", stamp,
+                 " has ", before.dump(), ", the config now gives ", now.dump(),
+                 "); rename the method or delete both files to score it again");
+    return;
+  }
+  fs::create_directories(fs::path(stamp).parent_path());
+  write_file_atomic(stamp, now.dump(2) + "\n");
+}
+
+std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt, const torch::Tensor& prompts) {
   const auto Ts = src.camera.T_cw.to(torch::kFloat64), Tt = tgt.camera.T_cw.to(torch::kFloat64);
   const auto Rt = Tt.slice(0, 0, 3).slice(1, 0, 3), tt = Tt.slice(0, 0, 3).select(1, 3);
   const auto centre = -torch::matmul(Rt.t(), tt);
   const auto in_source = torch::matmul(Ts.slice(0, 0, 3).slice(1, 0, 3), centre) + Ts.slice(0, 0, 3).select(1, 3);
   const auto axis_s = Ts.select(0, 2).slice(0, 0, 3), axis_t = Tt.select(0, 2).slice(0, 0, 3);
   const double cosang = std::clamp(torch::dot(axis_s, axis_t).item<double>(), -1.0, 1.0);
-  const auto z = src.depth.defined() ? src.depth.masked_select(src.valid > 0) : torch::Tensor();
-  const double median = z.defined() && z.numel() > 0 ? z.median().item<double>() : 1.0;
+  torch::Tensor z =
+      src.depth.defined() && src.valid.defined() ? src.depth.masked_select(src.valid > 0) : torch::Tensor();
+  if ((!z.defined() || z.numel() == 0) && prompts.defined() && prompts.numel() > 0) z = prompts.select(1, 2);
+  if (!z.defined() || z.numel() == 0) return "";  // no depth at all: the motion type is unknown
+  const double median = z.median().item<double>();
+  if (!(median > 0)) return "";
+  const double half_edge = static_cast<double>(src.image.size(2)) / 4.0 / src.camera.K[0][0].item<double>();
   return motion_type({in_source[0].item<double>(), in_source[1].item<double>(), in_source[2].item<double>()},
-                     std::acos(cosang) * 180.0 / M_PI, median > 0 ? median : 1.0);
+                     std::acos(cosang) * 180.0 / M_PI, median, half_edge);
 }
 
 ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
@@ -187,7 +208,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   r.bin = p.bin;
   r.baseline = p.baseline;
   r.rotation_deg = p.rotation_deg;
-  r.motion = pair_motion(src, tgt);
+  r.motion = pair_motion(src, tgt, prompts);
   r.mask_fraction = mask.mean().item<double>();
   r.psnr = psnr(o.image, tgt.image, mask);
   r.ssim = ssim(o.image, tgt.image, mask);
@@ -218,6 +239,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
                                          const std::vector<ColmapModel>& points) {
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
+  check_method_stamp(results_path(d, mo.name), mo);
   ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
@@ -278,6 +300,15 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
       wanted.push_back({dir / cat(safe_name(mo.name), "_worst_holes", k + 1, "_pair", by_holes[k]->index, ".png"),
                         by_holes[k]->index});
   }
+  // Panels of pairs that are no longer among the worst (the results changed) go.
+  const std::string prefix = safe_name(mo.name) + "_worst_";
+  if (fs::exists(dir))
+    for (const auto& e : fs::directory_iterator(dir)) {
+      const std::string f = e.path().filename().string();
+      if (f.rfind(prefix, 0) == 0 &&
+          std::none_of(wanted.begin(), wanted.end(), [&](const auto& w) { return w.first == e.path(); }))
+        fs::remove(e.path());
+    }
   std::unique_ptr<Method> method;
   for (const auto& [path, i] : wanted) {
     if (fs::exists(path)) continue;
@@ -348,7 +379,8 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
       by_method[mo.name] = std::move(results);
     }
     if (!config_.scoring.reference.empty()) {
-      auto diffs = paired_differences(ds.name, config_.scoring.reference, by_method, nets.empty() ? "" : nets[0]);
+      auto diffs =
+          paired_differences(ds.name, config_.scoring.reference, by_method, nets.empty() ? "" : nets[0], 2000, labels);
       differences.insert(differences.end(), diffs.begin(), diffs.end());
     }
   }

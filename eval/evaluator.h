@@ -13,6 +13,10 @@
 
 namespace isplat {
 
+// The pair's motion type (eval/pairs motion_type) from the two cameras, the angle between their optical
+// axes and the source's median depth (its valid depth, else the prompts' depth; "" when there is none).
+std::string pair_motion(const ViewTensors& source, const ViewTensors& target, const torch::Tensor& prompts);
+
 // One scored pair with what produced it (for example panels and the failure gallery).
 struct ScoredPair {
   PairResult result;

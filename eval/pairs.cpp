@@ -342,10 +342,12 @@ Manifest read_manifest(const std::string& path) {
   return Manifest::from_json(read_json_file(path), path);
 }
 
-std::string motion_type(const std::array<double, 3>& t, double rotation_deg, double median_depth) {
+std::string motion_type(const std::array<double, 3>& t, double rotation_deg, double median_depth, double half_edge) {
   ISPLAT_CHECK(median_depth > 0 && std::isfinite(median_depth), "motion_type: median depth ", median_depth,
                " is not positive");
-  const double lateral = std::hypot(t[0], t[1]) / median_depth, forward = 0.5 * std::abs(t[2]) / median_depth;
+  ISPLAT_CHECK(half_edge > 0 && std::isfinite(half_edge), "motion_type: half_edge ", half_edge, " is not positive");
+  const double lateral = std::hypot(t[0], t[1]) / median_depth;
+  const double forward = half_edge * std::abs(t[2]) / median_depth;
   const double rotation = rotation_deg * M_PI / 180.0;
   if (rotation >= lateral && rotation >= forward) return "rotation";
   return lateral >= forward ? "lateral" : "forward";

@@ -85,11 +85,13 @@ class OverlapDepthSource {
 Manifest draw_manifest(const std::string& dataset, const std::vector<Sequence>& sequences,
                        const ProtocolOptions& options, const std::vector<ColmapModel>& models = {});
 
-// The kind of viewpoint change of a pair, by which moves the image most: "lateral" (translation across
-// the view, |t_xy| / z), "forward" (along the optical axis, 0.5 |t_z| / z: a point half-way to the
-// frame edge shifts by that much) or "rotation" (the angle between optical axes, radians). `t` is the
-// target camera's centre in the source camera frame (metres), `z` the source's median depth.
-std::string motion_type(const std::array<double, 3>& t, double rotation_deg, double median_depth);
+// The kind of viewpoint change of a pair, by which moves the image most (in normalized image units):
+// "lateral" (translation across the view, |t_xy| / z), "forward" (along the optical axis, x·|t_z| / z
+// for a point at normalized offset x = `half_edge`, half-way to the frame edge: (W/4)/fx) or "rotation"
+// (the angle between optical axes, radians). `t` is the target camera's centre in the source camera
+// frame, `z` the source's median depth (same units).
+std::string motion_type(const std::array<double, 3>& t, double rotation_deg, double median_depth,
+                        double half_edge = 0.5);
 
 void write_manifest(const std::string& path, const Manifest& m);  // atomic; byte-identical for equal input
 Manifest read_manifest(const std::string& path);

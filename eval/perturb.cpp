@@ -135,7 +135,11 @@ torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions
     const int64_t k = std::llround(o.depth_holes * static_cast<double>(idx.numel()));
     keep.index_fill_(0, idx.index({torch::randperm(idx.numel(), gen, torch::kLong).narrow(0, 0, k)}), false);
   }
-  return p.index({keep}).contiguous();
+  const auto out = p.index({keep}).contiguous();
+  ISPLAT_CHECK(out.size(0) >= 3, "perturb: only ", out.size(0), " of ", prompts.size(0),
+               " prompts are left after depth_side = ", o.depth_side, " and depth_holes = ", o.depth_holes,
+               " (the sparse prior needs at least 3)");
+  return out;
 }
 
 ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& o, uint64_t seed) {

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -153,26 +154,37 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
                               {"holes (% of masked pixels)", 100, &ReportRow::hole_rate},
                               {"cracks (% of neighbour pairs)", 100, &ReportRow::crack_rate},
                               {"normal incoherence (deg)", 1, &ReportRow::normal_deg}};
-  for (const auto& d : datasets)
-    for (const auto& m : measures) {
-      Chart c;
-      c.title = d + ": " + m.title;
-      c.x_label = "perturbation strength (the swept value)";
-      c.y_label = m.title;
-      std::vector<std::string> families;
-      for (const auto& r : rows)
-        if (r.dataset == d && r.bin == "all" && std::isfinite(sweep_value(r.method)) &&
-            r.method.find('~') != std::string::npos &&
-            std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
-          families.push_back(method_family(r.method));
-      for (size_t k = 0; k < families.size(); ++k) {
-        const auto pts = sweep_points(rows, d, families[k], m.field, m.scale);
-        ChartSeries s{families[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
-        for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
-        c.series.push_back(s);
+  // One row of charts per dataset and swept key (its own x axis), one chart per measure, one series per
+  // method swept over that key.
+  for (const auto& d : datasets) {
+    std::vector<std::string> families;
+    for (const auto& r : rows)
+      if (r.dataset == d && r.bin == "all" && std::isfinite(sweep_value(r.method)) &&
+          r.method.find('~') != std::string::npos &&
+          std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
+        families.push_back(method_family(r.method));
+    std::vector<std::string> keys;
+    for (const auto& f : families)
+      if (std::find(keys.begin(), keys.end(), f.substr(f.rfind(' ') + 1)) == keys.end())
+        keys.push_back(f.substr(f.rfind(' ') + 1));
+    for (const auto& key : keys)
+      for (const auto& m : measures) {
+        Chart c;
+        c.title = d + ": " + key;
+        c.x_label = key;
+        c.y_label = m.title;
+        int k = 0;
+        for (const auto& f : families) {
+          if (f.substr(f.rfind(' ') + 1) != key) continue;
+          const auto pts = sweep_points(rows, d, f, m.field, m.scale);
+          ChartSeries s{f.substr(0, f.rfind(' ')), {}, {}, true, k % 4, k};
+          for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
+          c.series.push_back(s);
+          ++k;
+        }
+        charts.push_back(c);
       }
-      charts.push_back(c);
-    }
+  }
   return charts;
 }
 
@@ -243,9 +255,10 @@ std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& 
   };
   double largest = 0;
   for (const auto& x : results) largest = std::max(largest, x.baseline);
-  const int groups = static_cast<int>(std::floor(largest / step_m)) + 1;
+  const int groups = static_cast<int>(std::floor(largest / step_m + 1e-9)) + 1;
   std::vector<PairResult> regrouped = results;
-  for (auto& x : regrouped) x.bin = static_cast<int>(std::floor(x.baseline / step_m));
+  // The epsilon keeps a baseline on an edge (0.3 with step 0.1) in the group it opens.
+  for (auto& x : regrouped) x.bin = static_cast<int>(std::floor(x.baseline / step_m + 1e-9));
   std::vector<std::string> labels;
   for (int k = 0; k < groups; ++k) {
     std::ostringstream l;
@@ -263,7 +276,8 @@ std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& 
 
 std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
                                         const std::map<std::string, std::vector<PairResult>>& results,
-                                        const std::string& lpips_net, int64_t resamples) {
+                                        const std::string& lpips_net, int64_t resamples,
+                                        const std::vector<std::string>& bin_labels) {
   std::vector<DiffRow> out;
   const auto ref = results.find(reference);
   if (ref == results.end()) return out;
@@ -276,19 +290,42 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
   };
   for (const auto& [method, res] : results) {
     if (method == reference) continue;
-    std::vector<double> a, b, la, lb;
-    double ga = 0, gb = 0;
-    for (const auto& r : res) {
-      const auto it = by_pair.find(r.index);
-      if (it == by_pair.end()) continue;
-      a.push_back(r.psnr), b.push_back(it->second->psnr), la.push_back(lp(r)), lb.push_back(lp(*it->second));
-      ga += static_cast<double>(r.gaussians), gb += static_cast<double>(it->second->gaussians);
+    for (int bin = -1; bin < static_cast<int>(bin_labels.size()); ++bin) {
+      std::vector<double> a, b, la, lb, ha, hb, ca, cb;
+      double ga = 0, gb = 0;
+      for (const auto& r : res) {
+        const auto it = by_pair.find(r.index);
+        if (it == by_pair.end() || (bin >= 0 && r.bin != bin)) continue;
+        const PairResult& q = *it->second;
+        a.push_back(r.psnr), b.push_back(q.psnr), la.push_back(lp(r)), lb.push_back(lp(q));
+        ha.push_back(100 * r.hole_rate), hb.push_back(100 * q.hole_rate);
+        ca.push_back(100 * r.crack_rate), cb.push_back(100 * q.crack_rate);
+        ga += static_cast<double>(r.gaussians), gb += static_cast<double>(q.gaussians);
+      }
+      if (a.empty()) continue;
+      DiffRow d{dataset,
+                method,
+                reference,
+                paired_bootstrap(a, b, resamples),
+                paired_bootstrap(la, lb, resamples),
+                gb > 0 ? ga / gb : nan};
+      d.bin = bin < 0 ? "all" : bin_labels[static_cast<size_t>(bin)];
+      d.holes = paired_bootstrap(ha, hb, resamples);
+      d.cracks = paired_bootstrap(ca, cb, resamples);
+      out.push_back(d);
     }
-    if (a.empty()) continue;
-    out.push_back({dataset, method, reference, paired_bootstrap(a, b, resamples), paired_bootstrap(la, lb, resamples),
-                   gb > 0 ? ga / gb : nan});
   }
   return out;
+}
+
+// How strong a perturbation of `key` is at a swept value (0 = none), and the unit of that strength.
+static std::pair<std::function<double(double)>, std::string> perturbation_strength(const std::string& key) {
+  if (key.find("noise") != std::string::npos || key == "depth_holes") return {[](double v) { return 100 * v; }, "%"};
+  if (key == "depth_scale" || key == "exposure")
+    return {[](double v) { return std::abs(std::log(v)); }, "unit |ln value|"};
+  if (key == "jpeg_quality") return {[](double v) { return 100 - v; }, "quality point lost"};
+  if (key == "prompts") return {[](double v) { return -std::log(v); }, "e-fold fewer"};
+  return {[](double v) { return v; }, key == "depth_blur_px" ? "pixel" : "unit"};
 }
 
 // Per swept family: PSNR against the swept value, its least-squares slope (per 1% for shares and noise
@@ -308,19 +345,25 @@ static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportR
     pts.erase(std::remove_if(pts.begin(), pts.end(), [](auto& p) { return !std::isfinite(p.second); }), pts.end());
     if (pts.size() < 2) continue;
     const std::string key = family.substr(family.rfind(' ') + 1);
-    const bool percent = key.find("noise") != std::string::npos || key == "depth_holes";
+    const auto [strength, unit] = perturbation_strength(key);
+    std::vector<std::pair<double, double>> by_strength;
+    for (const auto& [x, y] : pts) by_strength.push_back({strength(x), y});
+    std::sort(by_strength.begin(), by_strength.end());
     double mx = 0, my = 0;
-    for (const auto& [x, y] : pts) mx += x, my += y;
+    for (const auto& [x, y] : by_strength) mx += x, my += y;
     mx /= static_cast<double>(pts.size()), my /= static_cast<double>(pts.size());
     double sxy = 0, sxx = 0;
     bool falls = true, rises = true;
-    for (const auto& [x, y] : pts) sxy += (x - mx) * (y - my), sxx += (x - mx) * (x - mx);
-    for (size_t k = 1; k < pts.size(); ++k)
-      falls = falls && pts[k].second <= pts[k - 1].second, rises = rises && pts[k].second >= pts[k - 1].second;
+    for (const auto& [x, y] : by_strength) sxy += (x - mx) * (y - my), sxx += (x - mx) * (x - mx);
+    for (size_t k = 1; k < by_strength.size(); ++k)
+      falls = falls && by_strength[k].second <= by_strength[k - 1].second,
+      rises = rises && by_strength[k].second >= by_strength[k - 1].second;
     const double slope = sxx > 0 ? sxy / sxx : std::numeric_limits<double>::quiet_NaN();
     if (!header)
-      md << "\nSweeps: PSNR (all bins) against the swept value, its least-squares slope, and whether PSNR is "
-            "monotone in the value:\n\n| sweep | values | PSNR | slope | monotone |\n|---|---|---|---|---|\n",
+      md << "\nSweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and "
+            "exposure as |ln value| so both sides count, JPEG as quality lost, prompts as e-folds fewer), its "
+            "least-squares slope, and whether PSNR falls steadily as the strength grows (graceful):\n\n"
+            "| sweep | values | PSNR | slope | PSNR as strength grows |\n|---|---|---|---|---|\n",
           header = true;
     std::string xs, ys;
     for (const auto& [x, y] : pts) {
@@ -328,11 +371,10 @@ static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportR
       v << std::setprecision(4) << x;
       xs += (xs.empty() ? "" : ", ") + v.str(), ys += (ys.empty() ? "" : ", ") + fmt(y, 2);
     }
-    md << "| " << family << " | " << xs << " | " << ys << " | "
-       << (percent ? fmt(slope / 100, 3) + " dB per %" : fmt(slope, 3) + " dB per unit") << " | "
-       << (falls   ? "falling"
-           : rises ? "rising"
-                   : "no")
+    md << "| " << family << " | " << xs << " | " << ys << " | " << fmt(slope, 3) << " dB per " << unit << " | "
+       << (falls   ? "falls"
+           : rises ? "rises"
+                   : "not monotone")
        << " |\n";
   }
 }
@@ -443,22 +485,38 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   }
   if (!differences.empty()) {
     md << "## Differences to the reference, on the same pairs\n\nPaired bootstrap 95% intervals (2000 "
-          "resamples); an interval that contains 0 is no difference.\n\n| dataset | method | reference | PSNR "
-          "difference (dB) | LPIPS difference | Gaussians, ratio |\n|---|---|---|---|---|---|\n";
+          "resamples); an interval that contains 0 is no difference. Holes and cracks in percentage points "
+          "(n/a where a method does not render or the data has no depth).\n\n| dataset | method | reference | PSNR "
+          "difference (dB) | LPIPS difference | holes | cracks | Gaussians, ratio "
+          "|\n|---|---|---|---|---|---|---|---|\n";
     auto interval = [](const Interval& i, int digits) {
       return i.n == 0 ? std::string("n/a")
                       : cat(fmt(i.mean, digits), " [", fmt(i.lo, digits), ", ", fmt(i.hi, digits), "]",
                             i.excludes_zero() ? "" : " (no difference)");
     };
     CsvTable dcsv;
-    dcsv.header = {"dataset", "method",     "reference", "pairs",    "psnr_diff",      "psnr_lo",
-                   "psnr_hi", "lpips_diff", "lpips_lo",  "lpips_hi", "gaussians_ratio"};
+    dcsv.header = {"dataset",  "method",   "bin",        "reference", "pairs",     "psnr_diff",
+                   "psnr_lo",  "psnr_hi",  "lpips_diff", "lpips_lo",  "lpips_hi",  "holes_pp",
+                   "holes_lo", "holes_hi", "cracks_pp",  "cracks_lo", "cracks_hi", "gaussians_ratio"};
+    bool per_bin = false;
     for (const auto& d : differences) {
-      md << "| " << d.dataset << " | " << d.method << " | " << d.reference << " | " << interval(d.psnr, 2) << " | "
-         << interval(d.lpips, 3) << " | " << fmt(d.gaussians, 2) << " |\n";
-      dcsv.rows.push_back({d.dataset, d.method, d.reference, std::to_string(d.psnr.n), fmt(d.psnr.mean, 4),
+      per_bin = per_bin || d.bin != "all";
+      if (d.bin == "all")
+        md << "| " << d.dataset << " | " << d.method << " | " << d.reference << " | " << interval(d.psnr, 2) << " | "
+           << interval(d.lpips, 3) << " | " << interval(d.holes, 2) << " | " << interval(d.cracks, 2) << " | "
+           << fmt(d.gaussians, 2) << " |\n";
+      dcsv.rows.push_back({d.dataset, d.method, d.bin, d.reference, std::to_string(d.psnr.n), fmt(d.psnr.mean, 4),
                            fmt(d.psnr.lo, 4), fmt(d.psnr.hi, 4), fmt(d.lpips.mean, 5), fmt(d.lpips.lo, 5),
-                           fmt(d.lpips.hi, 5), fmt(d.gaussians, 4)});
+                           fmt(d.lpips.hi, 5), fmt(d.holes.mean, 4), fmt(d.holes.lo, 4), fmt(d.holes.hi, 4),
+                           fmt(d.cracks.mean, 4), fmt(d.cracks.lo, 4), fmt(d.cracks.hi, 4), fmt(d.gaussians, 4)});
+    }
+    if (per_bin) {
+      md << "\nPer baseline bin:\n\n| dataset | method | bin | pairs | PSNR difference (dB) | holes | cracks |\n"
+            "|---|---|---|---|---|---|---|\n";
+      for (const auto& d : differences)
+        if (d.bin != "all")
+          md << "| " << d.dataset << " | " << d.method << " | " << d.bin << " | " << d.psnr.n << " | "
+             << interval(d.psnr, 2) << " | " << interval(d.holes, 2) << " | " << interval(d.cracks, 2) << " |\n";
     }
     md << "\n";
     write_csv((fs::path(out) / "differences.csv").string(), dcsv);
@@ -517,7 +575,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
 
   write_charts((fs::path(out) / "speed_quality.png").string(), speed_quality_charts(rows), 2, 620, 420);
   const auto stability = stability_charts(rows);
-  if (!stability.empty()) write_charts((fs::path(out) / "stability.png").string(), stability, 4, 420, 320);
+  if (!stability.empty()) write_charts((fs::path(out) / "stability.png").string(), stability, 4, 360, 260);
   if (!breakdowns.empty()) {
     write_charts((fs::path(out) / "baseline.png").string(), baseline_charts(breakdowns), 2, 560, 380);
     CsvTable b;

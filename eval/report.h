@@ -58,12 +58,16 @@ struct DiffRow {
   std::string dataset, method, reference;
   Interval psnr, lpips;  // method − reference (lpips: the first variant scored)
   double gaussians = 0;  // mean Gaussians rendered, method / reference
+  std::string bin = "all";
+  Interval holes, cracks;  // hole and crack rates, method − reference, in percentage points
 };
 
-// Differences of every method to `reference` per dataset (empty when the reference was not scored there).
+// Differences of every method to `reference` per dataset (empty when the reference was not scored there):
+// over all pairs, then per bin for each of `bin_labels` (PairResult::bin indexes them).
 std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
                                         const std::map<std::string, std::vector<PairResult>>& results,
-                                        const std::string& lpips_net, int64_t resamples = 2000);
+                                        const std::string& lpips_net, int64_t resamples = 2000,
+                                        const std::vector<std::string>& bin_labels = {});
 
 // "full@px0.5" -> "full px", "full~depth_noise0.02" -> "full depth_noise" (a sweep's points form one
 // series); other names pass through.

@@ -17,6 +17,7 @@
 #include "eval/evaluator.h"
 #include "eval/pairs.h"
 #include "eval/perturb.h"
+#include "eval/results_log.h"
 #include "io/jsonl.h"
 #include "metrics/metrics.h"
 #include "support/test_util.h"
@@ -181,8 +182,9 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   for (int64_t i = 0; i < 20; ++i) {
     PairResult r;
     r.index = i, r.psnr = 20 + 0.1 * static_cast<double>(i), r.gaussians = 1000, r.lpips["squeeze"] = 0.2;
+    r.bin = static_cast<int>(i % 2), r.hole_rate = 0.01, r.crack_rate = 0.02;
     res["ref"].push_back(r);
-    r.psnr += 1.0, r.gaussians = 500;
+    r.psnr += 1.0, r.gaussians = 500, r.hole_rate = r.bin == 1 ? 0.03 : 0.01;
     if (i != 3) res["better"].push_back(r);  // one pair missing: only shared pairs count
   }
   const auto d = paired_differences("set", "ref", res, "squeeze");
@@ -193,7 +195,20 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   CHECK(d[0].psnr.excludes_zero());
   CHECK_FALSE(d[0].lpips.excludes_zero());
   CHECK(d[0].gaussians == Approx(0.5));
+  CHECK_FALSE(d[0].cracks.excludes_zero());  // equal crack rates
+  CHECK(d[0].cracks.mean == Approx(0.0));
   CHECK(paired_differences("set", "absent", res, "squeeze").empty());
+  // Per bin: the hole rate differs only in bin 1, by 2 percentage points.
+  const auto per_bin = paired_differences("set", "ref", res, "squeeze", 500, {"near", "far"});
+  REQUIRE(per_bin.size() == 3);
+  CHECK(per_bin[0].bin == "all");
+  CHECK(per_bin[1].bin == "near");
+  CHECK(per_bin[1].psnr.n == 10);  // even indices 0..18
+  CHECK(per_bin[2].psnr.n == 9);   // odd indices without the missing pair 3
+  CHECK(per_bin[1].holes.mean == Approx(0.0));
+  CHECK(per_bin[2].bin == "far");
+  CHECK(per_bin[2].holes.mean == Approx(2.0));
+  CHECK(per_bin[2].holes.excludes_zero());
 }
 
 TEST_CASE("eval: perturbations have the requested strength, are deterministic, and sweep by key", "[eval]") {
@@ -311,6 +326,19 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   o = PerturbOptions{};
   o.exposure = 1.5;
   CHECK_FALSE(o.any_depth());
+  m.sweep_key.clear();  // values without a key, a sweep beside budgets, depth perturbations of identity
+  m.sweep_values = {0.1};
+  CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("sweep_key is empty"));
+  m.sweep_key = "perturb.depth_noise";
+  m.budgets = {"px:1"};
+  CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("a value sweep and budgets"));
+  m.budgets.clear();
+  MethodOptions idm = named_method("id", "identity");
+  idm.perturb.depth_scale = 1.2;
+  CHECK_THROWS_WITH(expand_sweeps({idm}), Catch::Contains("identity uses no depth"));
+  m.sweep_key = "perturb.jpeg_quality";  // an integer option names the rounded value
+  m.sweep_values = {30.4};
+  CHECK(expand_sweeps({m})[0].name == "full~jpeg_quality30");
   m.sweep_key = "perturb.no_such_key";
   CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("sweep_key 'perturb.no_such_key'"));
   m.sweep_key = "perturb.depth_noise";
@@ -319,6 +347,31 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
 }
 
 TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
+  // From cameras (T_cw world-to-camera): the source at the origin looking down +z, fx = W/2 (90° FOV).
+  ViewTensors src, tgt;
+  src.image = torch::zeros({3, 8, 16});
+  src.depth = torch::full({8, 16}, 4.0f);
+  src.valid = torch::ones({8, 16});
+  src.camera.K = torch::tensor({{8.0f, 0.0f, 8.0f}, {0.0f, 8.0f, 4.0f}, {0.0f, 0.0f, 1.0f}});
+  src.camera.T_cw = torch::eye(4);
+  tgt = src;
+  auto moved_to = [&](float x, float y, float z) {  // target centre at (x, y, z), same orientation
+    tgt.camera.T_cw = torch::eye(4);
+    tgt.camera.T_cw.index_put_({torch::indexing::Slice(0, 3), 3}, torch::tensor({-x, -y, -z}));
+    return pair_motion(src, tgt, torch::Tensor());
+  };
+  CHECK(moved_to(0.5f, 0.0f, 0.1f) == "lateral");
+  CHECK(moved_to(0.0f, 0.1f, 1.0f) == "forward");       // 0.25 · 1 / 4 against 0.1 / 4
+  const float c = std::cos(0.3f), sn = std::sin(0.3f);  // a 0.3 rad yaw in place
+  tgt.camera.T_cw = torch::eye(4);
+  tgt.camera.T_cw.index_put_({torch::indexing::Slice(0, 3), torch::indexing::Slice(0, 3)},
+                             torch::tensor({{c, 0.0f, -sn}, {0.0f, 1.0f, 0.0f}, {sn, 0.0f, c}}));
+  CHECK(pair_motion(src, tgt, torch::Tensor()) == "rotation");
+  src.valid.zero_();  // no depth and no prompts: unknown; with prompts their depth is used
+  CHECK(pair_motion(src, tgt, torch::Tensor()).empty());
+  CHECK(moved_to(0.5f, 0.0f, 0.0f) == "");
+  CHECK(pair_motion(src, tgt, torch::tensor({{1.0f, 1.0f, 4.0f}, {2.0f, 2.0f, 4.0f}, {3.0f, 3.0f, 4.0f}})) ==
+        "lateral");
   CHECK(motion_type({0.8, 0.1, 0.2}, 2.0, 4.0) == "lateral");
   CHECK(motion_type({0.1, 0.0, 1.5}, 2.0, 4.0) == "forward");     // 0.5 * 1.5 / 4 > 0.1 / 4
   CHECK(motion_type({0.05, 0.0, 0.0}, 20.0, 2.0) == "rotation");  // 0.35 rad against 0.025
@@ -345,8 +398,12 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
 
   // A sweep without its neutral value takes the unperturbed run of the same method as that point.
   std::vector<ReportRow> rows;
-  for (const auto& [name, value] : std::vector<std::pair<std::string, double>>{
-           {"m", 30}, {"m~depth_holes0.2", 25}, {"m~depth_holes0.4", 20}, {"m~depth_noise0.01", 29}}) {
+  for (const auto& [name, value] : std::vector<std::pair<std::string, double>>{{"m", 30},
+                                                                               {"m~depth_holes0.2", 25},
+                                                                               {"m~depth_holes0.4", 20},
+                                                                               {"m~depth_noise0.01", 29},
+                                                                               {"m~depth_scale0.8", 26},
+                                                                               {"m~depth_scale1.25", 26}}) {
     ReportRow r;
     r.dataset = "set", r.method = name, r.bin = "all", r.pairs = 1, r.psnr = value;
     rows.push_back(r);
@@ -354,8 +411,12 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
   const std::string out = test::temp_dir("eval_slopes");
   write_reports(out, rows, {}, {});
   const std::string md = test::read_bytes(out + "/report.md");
-  CHECK_THAT(md, Catch::Contains("| m depth_holes | 0, 0.2, 0.4 | 30.00, 25.00, 20.00 | -0.250 dB per % | falling |"));
-  CHECK_THAT(md, Catch::Contains("| m depth_noise | 0, 0.01 | 30.00, 29.00 | -1.000 dB per % | falling |"));
+  CHECK_THAT(md, Catch::Contains("| m depth_holes | 0, 0.2, 0.4 | 30.00, 25.00, 20.00 | -0.250 dB per % | falls |"));
+  CHECK_THAT(md, Catch::Contains("| m depth_noise | 0, 0.01 | 30.00, 29.00 | -1.000 dB per % | falls |"));
+  // Two-sided: a scale off by x0.8 or x1.25 is equally strong (|ln value|).
+  CHECK_THAT(md,
+             Catch::Contains(
+                 "| m depth_scale | 0.8, 1, 1.25 | 26.00, 30.00, 26.00 | -17.926 dB per unit |ln value| | falls |"));
   CHECK(fs::exists(fs::path(out) / "stability.png"));
 }
 
@@ -408,14 +469,32 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   // Every method against the reference on the same pairs.
   CHECK_THAT(md, Catch::Contains("## Differences to the reference"));
   const std::string diffs = test::read_bytes(c.scoring.out + "/differences.csv");
-  CHECK_THAT(diffs, Catch::Contains("tiny+prune@n900,tiny@n900"));
-  CHECK_THAT(diffs, Catch::Contains("tiny@px0.25,tiny@n900"));
+  CHECK_THAT(diffs, Catch::Contains("tiny+prune@n900,all,tiny@n900"));
+  CHECK_THAT(diffs, Catch::Contains("tiny@px0.25,all,tiny@n900"));
   // Stability measures on every rendering method, and the perturbation sweep's chart.
   CHECK(n.hole_rate >= 0);
   CHECK(n.hole_rate <= 1);
   CHECK(std::isfinite(n.crack_rate));
   CHECK(std::isfinite(n.normal_deg));
   CHECK(all.at("lift~depth_scale0.8").psnr < all.at("lift~depth_scale1").psnr);  // a wrong scale costs quality
+  {  // ... on the same pairs and masks: a perturbation never changes what is scored
+    const std::string dir = c.scoring.out + "/courtyard/";
+    const ResultsLog scaled(dir + "results_lift_depth_scale0_8.jsonl"), plain(dir + "results_lift_depth_scale1.jsonl");
+    REQUIRE(scaled.done().size() == plain.done().size());
+    REQUIRE_FALSE(plain.done().empty());
+    for (const auto& [i, r] : plain.done()) {
+      CHECK(scaled.done().at(i).mask_fraction == r.mask_fraction);
+      CHECK(std::isfinite(r.hole_rate));  // the stability fields survive the log's round trip
+      CHECK_FALSE(r.motion.empty());
+    }
+  }
+  // Changing a method's options under the same name is refused instead of resuming stale results.
+  {
+    EvalConfig changed = c;
+    changed.methods.back().sweep_values = {0.8};
+    changed.methods.back().perturb.exposure = 1.5;
+    CHECK_THROWS_WITH(Evaluator(changed).run(), Catch::Contains("was scored with other options"));
+  }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));
   CHECK_THAT(md, Catch::Contains("| lift depth_scale | 0.8, 1 | "));  // the sweep's slope row
