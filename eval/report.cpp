@@ -322,7 +322,7 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
 static std::pair<std::function<double(double)>, std::string> perturbation_strength(const std::string& key) {
   if (key.find("noise") != std::string::npos || key == "depth_holes") return {[](double v) { return 100 * v; }, "%"};
   if (key == "depth_scale" || key == "exposure")
-    return {[](double v) { return std::abs(std::log(v)); }, "unit |ln value|"};
+    return {[](double v) { return std::abs(std::log(v)); }, "unit of abs(ln value)"};
   if (key == "jpeg_quality") return {[](double v) { return 100 - v; }, "quality point lost"};
   if (key == "prompts") return {[](double v) { return -std::log(v); }, "e-fold fewer"};
   return {[](double v) { return v; }, key == "depth_blur_px" ? "pixel" : "unit"};
@@ -361,7 +361,7 @@ static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportR
     const double slope = sxx > 0 ? sxy / sxx : std::numeric_limits<double>::quiet_NaN();
     if (!header)
       md << "\nSweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and "
-            "exposure as |ln value| so both sides count, JPEG as quality lost, prompts as e-folds fewer), its "
+            "exposure as abs(ln value) so both sides count, JPEG as quality lost, prompts as e-folds fewer), its "
             "least-squares slope, and whether PSNR falls steadily as the strength grows (graceful):\n\n"
             "| sweep | values | PSNR | slope | PSNR as strength grows |\n|---|---|---|---|---|\n",
           header = true;
