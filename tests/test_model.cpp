@@ -129,3 +129,18 @@ TEST_CASE("model: NaN depth holes are masked, all-invalid depth and tiny images 
       m->predict(torch::rand({3, 8, 10}), small.K, small.T_cw, torch::ones({8, 10}), torch::ones({8, 10})),
       Catch::Contains("smaller than one 16x16 ViT patch"));
 }
+
+TEST_CASE("model: the pipeline's after_prior hook changes the depth the model sees", "[model]") {
+  ModelOptions o = test::tiny_model_options();
+  o.prior.type = "dataset";
+  Pipeline pipe(o);
+  pipe.model()->eval();
+  const Camera cam = camera(0.0);
+  torch::NoGradGuard no_grad;
+  const PriorInput in{torch::rand({3, H, W}), cam.K, scene_depth(), torch::ones({H, W}), torch::Tensor(), 1};
+  const Prediction plain = pipe.run(in, cam.T_cw, false);
+  const Prediction scaled =
+      pipe.run(in, cam.T_cw, false, [](PriorOutput& p) { p.depth = p.depth * 2; });  // e.g. a scale error
+  REQUIRE(plain.supports.depth.numel() == scaled.supports.depth.numel());
+  CHECK(torch::allclose(scaled.supports.depth, plain.supports.depth * 2, 1e-4, 1e-5));
+}
