@@ -29,12 +29,6 @@ void MethodOptions::visit(ConfigVisitor& v) {
 }
 
 namespace {
-std::string number_text(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
 // The method once per sweep value, each with the key set through the config schema (so types and ranges
 // are checked as in a config file).
 std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
@@ -57,20 +51,19 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
     for (double value : m.sweep_values) {
       MethodOptions e = m;
       e.sweep_key.clear(), e.sweep_values.clear();
-      e.overrides.push_back(key + "=" + number_text(value));
-      e.name = m.name + "~" + last + number_text(value);
+      e.overrides.push_back(key + "=" + cat(value));
+      e.name = m.name + "~" + last + cat(value);
       out.push_back(e);
     }
     return out;
   }
+  std::stringstream path(m.sweep_key);
+  std::vector<std::string> parts;
+  for (std::string part; std::getline(path, part, '.');) parts.push_back(part);
   for (double value : m.sweep_values) {
     nlohmann::json j = config_to_json(m);
     j.erase("sweep_key"), j.erase("sweep_values");
     nlohmann::json* node = &j;
-    std::stringstream path(m.sweep_key);
-    std::string part;
-    std::vector<std::string> parts;
-    while (std::getline(path, part, '.')) parts.push_back(part);
     for (size_t k = 0; k < parts.size(); ++k) {
       ISPLAT_CHECK(node->is_object() && node->contains(parts[k]), "method '", m.name, "': sweep_key '", m.sweep_key,
                    "' is not an option of a method");
@@ -79,7 +72,7 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
     const bool integral = node->is_number_integer();
     *node = integral ? nlohmann::json(std::llround(value)) : nlohmann::json(value);
     MethodOptions e = config_from_json<MethodOptions>(j, cat("method '", m.name, "' sweep"));
-    e.name = m.name + "~" + last + number_text(integral ? static_cast<double>(std::llround(value)) : value);
+    e.name = m.name + "~" + last + cat(integral ? static_cast<double>(std::llround(value)) : value);
     out.push_back(e);
   }
   return out;

@@ -239,6 +239,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
                                          const std::vector<ColmapModel>& points) {
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
+  const bool has_depth = dataset_has_depth(sequences);
   check_method_stamp(results_path(d, mo.name), mo);
   ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
@@ -246,7 +247,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     if (!log.done().count(i)) todo.push_back(i);
   if (!todo.empty()) {
     auto method = make_method(mo, config_.scoring.render);
-    if (!dataset_has_depth(sequences) && method->needs_source_depth(!points.empty())) {
+    if (!has_depth && method->needs_source_depth(!points.empty())) {
       notes_.push_back(cat(ds.name, " / ", mo.name,
                            ": not scored; the method needs the source depth and the dataset "
                            "has none (",
@@ -257,7 +258,6 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
     log_info("eval: ", ds.name, " / ", mo.name, " (", method->describe(), "): ", todo.size(), " pairs to score",
              todo.size() == pairs.size() ? "" : cat(", ", pairs.size() - todo.size(), " resumed"));
     ProgressBar bar(cat("eval ", ds.name, "/", mo.name), static_cast<int64_t>(todo.size()), "pair");
-    const bool has_depth = dataset_has_depth(sequences);
     int64_t examples = 0;
     for (int64_t i : todo) {
       const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
@@ -275,8 +275,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   }
   std::vector<PairResult> results;
   for (int64_t i : pairs) results.push_back(log.done().at(i));
-  if (config_.scoring.gallery > 0 && shard_count_ == 1)
-    write_gallery(d, sequences, m, results, mo, points, dataset_has_depth(sequences));
+  if (config_.scoring.gallery > 0 && shard_count_ == 1) write_gallery(d, sequences, m, results, mo, points, has_depth);
   return results;
 }
 

@@ -114,6 +114,26 @@ double sweep_value(const std::string& method) {
   }
 }
 
+// A value sweep's point on dataset d over all bins ("full~depth_noise0.02"; budgets use '@').
+static bool is_sweep_point(const ReportRow& r, const std::string& d) {
+  return r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
+         std::isfinite(sweep_value(r.method));
+}
+
+// The value sweeps ("full depth_noise") on dataset d, in the order they first appear.
+static std::vector<std::string> sweep_families(const std::vector<ReportRow>& rows, const std::string& d) {
+  std::vector<std::string> families;
+  for (const auto& r : rows)
+    if (is_sweep_point(r, d) && std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
+      families.push_back(method_family(r.method));
+  return families;
+}
+
+// "full depth_noise" -> "depth_noise".
+static std::string family_key(const std::string& family) {
+  return family.substr(family.rfind(' ') + 1);
+}
+
 // A sweep's points (value, field) on dataset d, all bins. When the sweep leaves out the unperturbed value of
 // a perturbation (scale and exposure 1, the others 0) and the same method runs unperturbed (the family's
 // name before the key), that run is the point there.
@@ -125,8 +145,7 @@ static std::vector<std::pair<double, double>> sweep_points(const std::vector<Rep
       {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}};
   std::vector<std::pair<double, double>> pts;
   for (const auto& r : rows)
-    if (r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
-        method_family(r.method) == family && std::isfinite(sweep_value(r.method)))
+    if (is_sweep_point(r, d) && method_family(r.method) == family)
       pts.push_back({sweep_value(r.method), scale * (r.*field)});
   const auto space = family.rfind(' ');
   const auto it = space == std::string::npos ? neutral.end() : neutral.find(family.substr(space + 1));
@@ -157,16 +176,10 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
   // One row of charts per dataset and swept key (its own x axis), one chart per measure, one series per
   // method swept over that key.
   for (const auto& d : datasets) {
-    std::vector<std::string> families;
-    for (const auto& r : rows)
-      if (r.dataset == d && r.bin == "all" && std::isfinite(sweep_value(r.method)) &&
-          r.method.find('~') != std::string::npos &&
-          std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
-        families.push_back(method_family(r.method));
+    const std::vector<std::string> families = sweep_families(rows, d);
     std::vector<std::string> keys;
     for (const auto& f : families)
-      if (std::find(keys.begin(), keys.end(), f.substr(f.rfind(' ') + 1)) == keys.end())
-        keys.push_back(f.substr(f.rfind(' ') + 1));
+      if (std::find(keys.begin(), keys.end(), family_key(f)) == keys.end()) keys.push_back(family_key(f));
     for (const auto& key : keys)
       for (const auto& m : measures) {
         Chart c;
@@ -175,7 +188,7 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
         c.y_label = m.title;
         int k = 0;
         for (const auto& f : families) {
-          if (f.substr(f.rfind(' ') + 1) != key) continue;
+          if (family_key(f) != key) continue;
           const auto pts = sweep_points(rows, d, f, m.field, m.scale);
           ChartSeries s{f.substr(0, f.rfind(' ')), {}, {}, true, k % 4, k};
           for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
@@ -261,9 +274,7 @@ std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& 
   for (auto& x : regrouped) x.bin = static_cast<int>(std::floor(x.baseline / step_m + 1e-9));
   std::vector<std::string> labels;
   for (int k = 0; k < groups; ++k) {
-    std::ostringstream l;
-    l << "[" << k * step_m << "," << (k + 1) * step_m << ")";
-    labels.push_back(l.str());
+    labels.push_back(cat("[", k * step_m, ",", (k + 1) * step_m, ")"));
   }
   keep(summarize(dataset, method, labels, std::vector<int64_t>(labels.size(), 0), regrouped, lpips_nets), "baseline ");
   const std::vector<std::string> motions = {"lateral", "forward", "rotation"};
@@ -332,19 +343,14 @@ static std::pair<std::function<double(double)>, std::string> perturbation_streng
 // sigmas) and whether PSNR is monotone in the value (graceful degradation falls steadily with noise). The
 // unperturbed run counts as the neutral value (see sweep_points).
 static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportRow>& rows, const std::string& d) {
-  std::vector<std::string> families;
-  for (const auto& r : rows)
-    if (r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
-        std::isfinite(sweep_value(r.method)) &&
-        std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
-      families.push_back(method_family(r.method));
+  std::vector<std::string> families = sweep_families(rows, d);
   std::sort(families.begin(), families.end());
   bool header = false;
   for (const auto& family : families) {
     auto pts = sweep_points(rows, d, family, &ReportRow::psnr);
     pts.erase(std::remove_if(pts.begin(), pts.end(), [](auto& p) { return !std::isfinite(p.second); }), pts.end());
     if (pts.size() < 2) continue;
-    const std::string key = family.substr(family.rfind(' ') + 1);
+    const std::string key = family_key(family);
     const auto [strength, unit] = perturbation_strength(key);
     std::vector<std::pair<double, double>> by_strength;
     for (const auto& [x, y] : pts) by_strength.push_back({strength(x), y});
