@@ -27,10 +27,11 @@ struct MethodOptions {
   void visit(ConfigVisitor& v);
 };
 
-// A method with only a name and type set (the other options at their defaults).
-inline MethodOptions named_method(const std::string& name, const std::string& type) {
+// A method with its name, type and (models) checkpoint and overrides set, the other options at their defaults.
+inline MethodOptions named_method(const std::string& name, const std::string& type, const std::string& checkpoint = "",
+                                  const std::vector<std::string>& overrides = {}) {
   MethodOptions m;
-  m.name = name, m.type = type;
+  m.name = name, m.type = type, m.checkpoint = checkpoint, m.overrides = overrides;
   return m;
 }
 

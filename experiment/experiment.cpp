@@ -138,7 +138,7 @@ void Experiment::evaluate(const std::vector<std::string>& only) {
   ec.runtime.threads = config_.runtime.threads;
   ec.scoring.out = (fs::path(config_.out) / "eval").string();
   ec.methods.clear();
-  for (const auto& b : config_.baselines) ec.methods.push_back({b, b, "", {}});
+  for (const auto& b : config_.baselines) ec.methods.push_back(named_method(b, b));
   for (const auto& v : config_.variants)
     for (const auto& r : config_.rows) {
       if (!wanted(only, r.name) || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
@@ -148,7 +148,7 @@ void Experiment::evaluate(const std::vector<std::string>& only) {
           log_warn("experiment: ", r.name, " seed ", run.seed, " is not trained yet (", ck, "); not scored");
           continue;
         }
-        ec.methods.push_back({method_name(r, run.seed, v), "model", ck, v.overrides});
+        ec.methods.push_back(named_method(method_name(r, run.seed, v), "model", ck, v.overrides));
       }
     }
   Evaluator(ec).run();

@@ -118,7 +118,8 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   EvalConfig c;
   c.datasets = {colmap_set(g)};
   c.datasets[0].prompts = "points3d";
-  c.methods.push_back({"lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}});
+  c.methods.push_back(
+      named_method("lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}));
   c.protocol.pairs_per_bin = 3;
   c.scoring.out = test::temp_dir("eval_e2e_out");
   c.scoring.weights_dir = test::project_weights_dir();
@@ -155,9 +156,9 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
 }
 
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
-  MethodOptions m{"full", "model", "ck.safetensors", {"prior.type=dataset"}};
+  MethodOptions m = named_method("full", "model", "ck.safetensors", {"prior.type=dataset"});
   m.budgets = {"px:0.5", "n:50000", "detail:1"};
-  const auto out = expand_sweeps({MethodOptions{"lift", "lift", "", {}}, m});
+  const auto out = expand_sweeps({named_method("lift", "lift"), m});
   REQUIRE(out.size() == 4);
   CHECK(out[0].name == "lift");
   CHECK(out[1].name == "full@px0.5");
@@ -283,7 +284,7 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   const double q95 = psnr(perturb_source(smooth, o, 0).image, smooth.image);
   CHECK(q95 > q10 + 3);
 
-  MethodOptions m{"full", "model", "ck.safetensors", {}};
+  MethodOptions m = named_method("full", "model", "ck.safetensors");
   m.sweep_key = "perturb.depth_noise";
   m.sweep_values = {0, 0.02};
   const auto out = expand_sweeps({m});
@@ -427,10 +428,11 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   Trainer(test::tiny_train_config(g, test::temp_dir("eval_sweep_run"), 1)).save(ck);
   EvalConfig c;
   c.datasets = {colmap_set(g)};
-  c.methods = {{"tiny", "model", ck, {"prior.type=dataset"}}, {"tiny+prune", "model", ck, {"prior.type=dataset"}}};
+  c.methods = {named_method("tiny", "model", ck, {"prior.type=dataset"}),
+               named_method("tiny+prune", "model", ck, {"prior.type=dataset"})};
   c.methods[0].budgets = {"px:0.25", "n:900", "detail:1"};
   c.methods[1].budgets = {"n:900"};
-  c.methods.push_back({"lift", "lift", "", {}});
+  c.methods.push_back(named_method("lift", "lift"));
   c.methods.back().sweep_key = "perturb.depth_scale";
   c.methods.back().sweep_values = {0.8, 1.0};
   c.methods[1].prune.enabled = true;
@@ -543,7 +545,8 @@ TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D an
 
   EvalConfig c;
   c.datasets = {ds};
-  c.methods.push_back({"lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}});
+  c.methods.push_back(
+      named_method("lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}));
   c.protocol = o;
   c.scoring.out = test::temp_dir("eval_nodepth_out");
   c.scoring.lpips = {};
