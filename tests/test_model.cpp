@@ -9,6 +9,7 @@
 #include "geometry/color.h"
 #include "model/infinisplat.h"
 #include "render/render.h"
+#include "support/test_util.h"
 #include "support/tiny_model.h"
 
 using namespace isplat;
@@ -98,6 +99,11 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
        }},
       {"w/o DINO", [](ModelOptions& o) { o.encoder.dino = false; }},
       {"w/o CNN", [](ModelOptions& o) { o.encoder.cnn = false; }},
+      {"frozen SqueezeNet semantic branch",
+       [](ModelOptions& o) {
+         o.encoder.semantic = "squeeze";
+         o.encoder.semantic_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+       }},
       {"pixel-aligned supports", [](ModelOptions& o) { o.sampler.mode = "pixel"; }},
       {"vertex + face supports", [](ModelOptions& o) { o.sampler.mode = "vertex_face"; }},
   };

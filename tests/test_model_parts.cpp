@@ -12,6 +12,8 @@
 #include "geometry/camera_torch.h"
 #include "geometry/color.h"
 #include "io/safetensors.h"
+#include "nets/feature_net.h"
+#include "nets/imagenet.h"
 #include "support/test_util.h"
 
 using namespace isplat;
@@ -43,6 +45,37 @@ TEST_CASE("encoder: ViT and CNN give feature maps at 1/16 and 1/4", "[encoder]")
   CHECK_FALSE(cnn_only->forward(torch::rand({1, 3, 32, 32})).dino.defined());
   o.cnn = false;
   CHECK_THROWS_WITH(DualEncoder(o), Catch::Contains("cannot both be false"));
+}
+
+TEST_CASE("encoder: the frozen SqueezeNet semantic branch gives maps at 1/16 of the ViT's width", "[encoder]") {
+  EncoderOptions o;
+  o.vit = tiny_vit();
+  o.semantic = "squeeze";
+  o.semantic_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  o.cnn_options.width = 8;
+  DualEncoder enc(o);
+  CHECK_FALSE(enc->vit);
+  CHECK(enc->dino_dim() == 32);  // projected to encoder.vit's width: the decoder costs the same
+  auto image = torch::rand({1, 3, 192, 256}, torch::requires_grad());
+  auto f = enc->forward(image);
+  // Valid convolutions and ceil-mode pooling: 11 x 15 cells cover the 12 x 16 patch grid's extent.
+  CHECK(f.dino.sizes() == torch::IntArrayRef({1, 32, 11, 15}));
+  // Gradients reach the projection but not the frozen backbone or the image through it.
+  f.dino.sum().backward();
+  CHECK(enc->squeeze_proj->weight.grad().abs().sum().item<float>() > 0);
+  CHECK_FALSE(image.grad().defined());
+  // Only the projection and the CNN branch train: the backbone's weights are not module parameters.
+  for (const auto& p : enc->named_parameters())
+    CHECK((p.key().rfind("cnn.", 0) == 0 || p.key().rfind("squeeze_proj.", 0) == 0));
+  // The projection's input: the backbone's fire9 map scaled to unit length times sqrt(512) (unit RMS per cell).
+  const FeatureNet reference_net("squeezenet1_1", {12}, o.semantic_backbone);
+  const auto unit = normalize_channels(reference_net.forward(imagenet_normalize(image.detach()))[0]) * std::sqrt(512.0);
+  CHECK(unit.pow(2).mean(1).sqrt().sub(1).abs().max().item<float>() < 1e-4f);
+  const auto expected = torch::conv2d(unit, enc->squeeze_proj->weight, enc->squeeze_proj->bias);
+  CHECK(torch::allclose(f.dino.detach(), expected, 1e-4, 1e-5));
+  // A missing backbone file fails, naming it.
+  o.semantic_backbone = "no/such/squeeze.safetensors";
+  CHECK_THROWS_WITH(DualEncoder(o), Catch::Contains("no/such/squeeze.safetensors"));
 }
 
 TEST_CASE("encoder: inference attention in row blocks equals the one-shot softmax attention", "[encoder]") {

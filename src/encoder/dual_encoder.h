@@ -1,6 +1,10 @@
 // DualEncoder: the DINO-style ViT branch and the CNN branch, each switchable for the ablations.
 #pragma once
+#include <memory>
+#include <string>
+
 #include <torch/nn/module.h>
+#include <torch/nn/modules/conv.h>
 #include <torch/nn/pimpl.h>
 
 #include "encoder/features.h"
@@ -10,10 +14,16 @@
 namespace isplat {
 
 class ConfigVisitor;
+class FeatureNet;
 
 struct EncoderOptions {
   bool dino = true;  // ablation: encoder.dino = false
   bool cnn = true;   // ablation: encoder.cnn = false
+  // The semantic branch: vit (DINO-style, trained or from DINOv3 weights) | squeeze (frozen pretrained
+  // SqueezeNet-1.1 ImageNet features and a trained 1x1 projection to the ViT's width, for when no DINO
+  // checkpoint exists).
+  std::string semantic = "vit";
+  std::string semantic_backbone = "weights/squeezenet1_1_features.safetensors";
   ViTOptions vit;
   CNNOptions cnn_options;
   // Not a config key: false when the weights come from a trained checkpoint right after construction,
@@ -29,6 +39,8 @@ struct DualEncoderImpl : torch::nn::Module {
   EncoderFeatures forward(const torch::Tensor& image);
   int64_t dino_dim() const;
   DinoViT vit{nullptr};
+  std::shared_ptr<const FeatureNet> squeeze;  // semantic = squeeze: frozen, not a parameter of this module
+  torch::nn::Conv2d squeeze_proj{nullptr};    // semantic = squeeze: trained projection to encoder.vit's width
   CNNEncoder cnn{nullptr};
 };
 TORCH_MODULE(DualEncoder);

@@ -302,6 +302,10 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
   add_io(g->mutable_input(), "uv", {std::string("num_supports"), int64_t{2}});
   Graph G(g);
   std::string dino, cnn;
+  if (model->encoder->squeeze)
+    fail(
+        "onnx export: encoder.semantic = squeeze (frozen SqueezeNet branch) has no ONNX graph yet; export a "
+        "model trained with encoder.semantic = vit");
   if (model->encoder->vit) dino = export_vit(G, *model->encoder->vit, "image", o.height, o.width);
   if (model->encoder->cnn) cnn = export_cnn(G, *model->encoder->cnn, "image", o.height, o.width);
   // grid = clamp(uv * (2/W, 2/H) - 1, +-(1 - 1e-6)) as [1,1,N,2]

@@ -30,7 +30,7 @@ namespace {
 // A stored config that does not describe the stored weights would otherwise build a model of any size
 // (4.8 GB, 93 s) before the shape check names the mismatch: compare the ViT, the largest part, first.
 void check_model_size(const Checkpoint& ck, const ModelOptions& options, const std::string& path) {
-  if (!options.encoder.dino) return;
+  if (!options.encoder.dino || options.encoder.semantic != "vit") return;
   double stored = 0;
   for (const auto& [name, t] : ck.tensors)
     if (name.rfind("model/", 0) == 0) stored += static_cast<double>(t.numel());
