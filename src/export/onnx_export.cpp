@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "decoder/composer.h"
 #include "io/atomic_file.h"
+#include "nets/feature_net.h"
 #include "nets/imagenet.h"
 
 namespace isplat {
@@ -212,6 +213,48 @@ std::string export_cnn(Graph& G, CNNEncoderImpl& cnn, const std::string& image, 
   return G.conv(fused, cnn.project);
 }
 
+// ---- frozen SqueezeNet semantic branch (encoder.semantic = squeeze): the backbone up to its tap, unit
+// length over channels times sqrt(C), then the trained 1x1 projection.
+std::string export_squeeze(Graph& G, const FeatureNet& net, const torch::nn::Conv2d& proj, const std::string& image) {
+  auto x = G.op("Div", {G.op("Sub", {image, G.init("mean", imagenet_mean())}), G.init("std", imagenet_std())});
+  const auto& layers = net.layers();
+  ISPLAT_CHECK(net.taps().size() == 1, "onnx export: the semantic backbone must have one tap");
+  const int64_t last = net.taps()[0], channels = net.tap_channels()[0];
+  ISPLAT_CHECK(channels == proj->weight.size(1), "onnx export: the backbone's tap gives ", channels,
+               " channels, the projection takes ", proj->weight.size(1));
+  auto conv = [&](const std::string& in, const std::string& n, int64_t stride, int64_t pad) {
+    return G.conv(in, net.param(n + ".weight"), net.param(n + ".bias"), stride, pad);
+  };
+  for (int64_t i = 0; i <= last; ++i) {
+    const auto& l = layers[i];
+    const std::string n = std::to_string(i);
+    switch (l.kind) {
+      case FeatureNet::Layer::Conv:
+        x = conv(x, n, l.stride, l.pad);
+        break;
+      case FeatureNet::Layer::Relu:
+        x = G.op("Relu", {x});
+        break;
+      case FeatureNet::Layer::MaxPool:
+        x = G.op("MaxPool", {x},
+                 {Graph::a_ints("kernel_shape", {l.kernel, l.kernel}), Graph::a_ints("strides", {l.stride, l.stride}),
+                  Graph::a_int("ceil_mode", l.ceil ? 1 : 0)});
+        break;
+      case FeatureNet::Layer::Fire: {
+        auto sq = G.op("Relu", {conv(x, n + ".squeeze", 1, 0)});
+        x = G.op("Concat",
+                 {G.op("Relu", {conv(sq, n + ".expand1x1", 1, 0)}), G.op("Relu", {conv(sq, n + ".expand3x3", 1, 1)})},
+                 {Graph::a_int("axis", 1)});
+        break;
+      }
+    }
+  }
+  auto norm =
+      G.op("Add", {G.op("Sqrt", {G.op("ReduceSumSquare", {x}, {Graph::a_ints("axes", {1})})}), G.scalar(1e-10)});
+  x = G.op("Mul", {G.op("Div", {x, norm}), G.scalar(std::sqrt(static_cast<double>(channels)))});
+  return G.conv(x, proj);
+}
+
 // ---- decoder
 std::string sample(Graph& G, const std::string& map, int64_t channels, const std::string& grid) {
   auto s = G.op(
@@ -303,9 +346,7 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
   Graph G(g);
   std::string dino, cnn;
   if (model->encoder->squeeze)
-    fail(
-        "onnx export: encoder.semantic = squeeze (frozen SqueezeNet branch) has no ONNX graph yet; export a "
-        "model trained with encoder.semantic = vit");
+    dino = export_squeeze(G, *model->encoder->squeeze, model->encoder->squeeze_proj, "image");
   if (model->encoder->vit) dino = export_vit(G, *model->encoder->vit, "image", o.height, o.width);
   if (model->encoder->cnn) cnn = export_cnn(G, *model->encoder->cnn, "image", o.height, o.width);
   // grid = clamp(uv * (2/W, 2/H) - 1, +-(1 - 1e-6)) as [1,1,N,2]

@@ -26,13 +26,18 @@ class FeatureNet {
   static std::vector<int> lpips_taps(const std::string& arch);
   static std::vector<int> perceptual_taps(const std::string& arch);
 
- private:
+  // The layer list and weights, for graph export.
   struct Layer {
     enum Kind { Conv, Relu, MaxPool, Fire } kind;
     int64_t in = 0, out = 0, kernel = 0, stride = 1, pad = 0;
     bool ceil = false;
     int64_t squeeze = 0, e1 = 0, e3 = 0;  // Fire
   };
+  const std::vector<Layer>& layers() const { return layers_; }
+  const std::vector<int>& taps() const { return taps_; }
+  const torch::Tensor& param(const std::string& name) const { return params_.at(name); }  // "<index>.weight", ...
+
+ private:
   std::string arch_;
   std::vector<Layer> layers_;
   std::vector<int> taps_;
