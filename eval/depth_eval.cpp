@@ -30,9 +30,25 @@ void DepthEvalConfig::visit(ConfigVisitor& v) {
   v.field("out", out, "report folder");
 }
 
+namespace {
+torch::Tensor scored_pixels(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid,
+                            double lo, double hi) {
+  return (valid > 0) & (depth > 0) & (pred > 0) & torch::isfinite(pred) & (depth >= lo) & (depth < hi);
+}
+}  // namespace
+
+DepthScale depth_scale(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid) {
+  const auto m = scored_pixels(pred, depth, valid, 0, std::numeric_limits<double>::infinity());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (m.sum().item<int64_t>() == 0) return {nan, nan};
+  const auto p = pred.masked_select(m).to(torch::kFloat64), d = depth.masked_select(m).to(torch::kFloat64);
+  const double ratio = (p / d).median().item<double>();
+  return {ratio, ((p / ratio - d).abs() / d).mean().item<double>()};
+}
+
 DepthErrors depth_errors(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid, double lo,
                          double hi) {
-  auto m = (valid > 0) & (depth > 0) & (pred > 0) & torch::isfinite(pred) & (depth >= lo) & (depth < hi);
+  auto m = scored_pixels(pred, depth, valid, lo, hi);
   DepthErrors e;
   e.pixels = m.sum().item<int64_t>();
   if (e.pixels == 0) return e;
@@ -62,7 +78,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       ISPLAT_CHECK(!frames.empty(), "depth evaluation: dataset '", ds.name, "' has no frame with depth");
       const size_t n = std::min<size_t>(frames.size(), static_cast<size_t>(c.frames));
       std::vector<DepthErrors> ranges(edges.size());
-      double abs_rel = 0, delta1 = 0;
+      double abs_rel = 0, delta1 = 0, log_scale = 0, abs_rel_aligned = 0;
       int64_t counted = 0, pixels = 0;
       ProgressBar bar(cat("depth ", np.name, "/", ds.name), static_cast<int64_t>(n), "frame");
       for (size_t k = 0; k < n; ++k, bar.tick()) {
@@ -81,6 +97,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         if (all.pixels > 0) {
           abs_rel += all.abs_rel_sum / all.pixels, delta1 += all.delta1_count / all.pixels, ++counted;
           pixels += all.pixels;
+          const DepthScale sc = depth_scale(out.depth, v.depth, v.valid * out.valid);
+          log_scale += std::log(sc.median_ratio), abs_rel_aligned += sc.abs_rel_aligned;
         }
         for (size_t r = 0; r < edges.size(); ++r) {
           const double hi = r + 1 < edges.size() ? edges[r + 1] : std::numeric_limits<double>::infinity();
@@ -92,11 +110,12 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       bar.finish();
       const double nan = std::numeric_limits<double>::quiet_NaN();
       scores.push_back({ds.name, np.name, "all", counted, pixels, counted ? abs_rel / counted : nan,
-                        counted ? delta1 / counted : nan});
+                        counted ? delta1 / counted : nan, counted ? std::exp(log_scale / counted) : nan,
+                        counted ? abs_rel_aligned / counted : nan});
       for (size_t r = 0; r < edges.size(); ++r) {
         const auto& e = ranges[r];
         scores.push_back({ds.name, np.name, label(r), counted, e.pixels, e.pixels ? e.abs_rel_sum / e.pixels : nan,
-                          e.pixels ? e.delta1_count / e.pixels : nan});
+                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan});
       }
     }
   }
@@ -110,14 +129,17 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   };
   std::ostringstream md;
   md << "# Depth prior evaluation\n\nAbsRel (lower is better) and δ<1.25 (higher is better) against the datasets' "
-        "depth at evaluation size. \"all\": means over frames; depth ranges: pooled over the pixels in the range.\n\n";
+        "depth at evaluation size. \"all\": means over frames; depth ranges: pooled over the pixels in the range. "
+        "Scale apart from shape: \"scale\" is the geometric mean over frames of each frame's median "
+        "prediction / reference (1 = right metric scale), \"AbsRel aligned\" the AbsRel after dividing each frame "
+        "by that median (shape error only).\n\n";
   CsvTable csv;
-  csv.header = {"dataset", "prior", "range", "frames", "pixels", "abs_rel", "delta1"};
+  csv.header = {"dataset", "prior", "range", "frames", "pixels", "abs_rel", "delta1", "scale", "abs_rel_aligned"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& ds : c.datasets) {
-    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 |";
+    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned |";
     for (size_t r = 0; r < edges.size(); ++r) md << " " << label(r) << " AbsRel / δ1 (px) |";
-    md << "\n|---|---|---|";
+    md << "\n|---|---|---|---|---|";
     for (size_t r = 0; r < edges.size(); ++r) md << "---|";
     md << "\n";
     for (const auto& np : c.priors) {
@@ -125,7 +147,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       for (const auto& s : scores) {
         if (s.dataset != ds.name || s.prior != np.name) continue;
         if (s.range == "all")
-          md << " | " << fmt(s.abs_rel, 3) << " | " << fmt(s.delta1, 3);
+          md << " | " << fmt(s.abs_rel, 3) << " | " << fmt(s.delta1, 3) << " | " << fmt(s.scale, 3) << " | "
+             << fmt(s.abs_rel_aligned, 3);
         else
           md << " | " << fmt(s.abs_rel, 3) << " / " << fmt(s.delta1, 3) << " (" << s.pixels << ")";
       }
@@ -135,7 +158,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   }
   for (const auto& s : scores) {
     csv.rows.push_back({s.dataset, s.prior, s.range, std::to_string(s.frames), std::to_string(s.pixels),
-                        fmt(s.abs_rel, 5), fmt(s.delta1, 5)});
+                        fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.abs_rel_aligned, 5)});
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
     js.push_back({{"dataset", s.dataset},
                   {"prior", s.prior},
@@ -143,7 +166,9 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
                   {"frames", s.frames},
                   {"pixels", s.pixels},
                   {"abs_rel", num(s.abs_rel)},
-                  {"delta1", num(s.delta1)}});
+                  {"delta1", num(s.delta1)},
+                  {"scale", num(s.scale)},
+                  {"abs_rel_aligned", num(s.abs_rel_aligned)}});
   }
   write_file_atomic((fs::path(c.out) / "report.md").string(), md.str());
   write_csv((fs::path(c.out) / "report.csv").string(), csv);

@@ -32,6 +32,9 @@ struct DepthScore {
   std::string dataset, prior, range;  // range "all" = every valid pixel
   int64_t frames = 0, pixels = 0;
   double abs_rel = 0, delta1 = 0;  // "all": means over frames; ranges: pooled over their pixels
+  // "all" only (NaN for ranges): scale apart from shape. `scale` is the geometric mean over frames of each
+  // frame's median pred/ref; `abs_rel_aligned` the mean AbsRel after dividing each frame by its median.
+  double scale = 0, abs_rel_aligned = 0;
 };
 
 // Scores every prior on every dataset and writes report.md, report.csv and report.json into config.out.
@@ -42,6 +45,12 @@ struct DepthErrors {
   double abs_rel_sum = 0, delta1_count = 0;
   int64_t pixels = 0;
 };
+// One frame's scale against the reference (median of pred / ref over the valid pixels) and its AbsRel after
+// dividing the prediction by that scale. NaN when no pixel is valid.
+struct DepthScale {
+  double median_ratio = 0, abs_rel_aligned = 0;
+};
+DepthScale depth_scale(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid);
 DepthErrors depth_errors(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid,
                          double lo = 0, double hi = std::numeric_limits<double>::infinity());
 

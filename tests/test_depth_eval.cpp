@@ -24,6 +24,15 @@ TEST_CASE("depth eval: AbsRel and delta1 on hand-built maps", "[eval][depth]") {
   const DepthErrors near = depth_errors(pred, depth, valid, 0.0, 3.0);  // only depths in [0, 3) m
   CHECK(near.pixels == 2);
   CHECK(near.abs_rel_sum == Approx(0.1));
+  // Scale apart from shape: twice the reference is scale 2 with no shape error; a bent map keeps some.
+  const auto ref = torch::tensor({{1.0f, 2.0f}, {4.0f, 8.0f}});
+  const DepthScale twice = depth_scale(2 * ref, ref, torch::ones({2, 2}));
+  CHECK(twice.median_ratio == Approx(2.0));
+  CHECK(twice.abs_rel_aligned == Approx(0.0).margin(1e-12));
+  const DepthScale bent = depth_scale(ref * torch::tensor({{2.0f, 2.0f}, {2.0f, 3.0f}}), ref, torch::ones({2, 2}));
+  CHECK(bent.median_ratio == Approx(2.0));  // lower median of {2, 2, 2, 3}
+  CHECK(bent.abs_rel_aligned == Approx(0.5 / 4));
+  CHECK(std::isnan(depth_scale(ref, ref, torch::zeros({2, 2})).median_ratio));
 }
 
 TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, per range", "[eval][depth]") {
@@ -56,6 +65,8 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
     if (s.prior == "oracle") {
       CHECK(s.abs_rel == Approx(0.0).margin(1e-6));
       CHECK(s.delta1 == Approx(1.0));
+      CHECK(s.scale == Approx(1.0));
+      CHECK(s.abs_rel_aligned == Approx(0.0).margin(1e-6));
     } else {
       CHECK(s.abs_rel > 0.05);
     }
@@ -65,5 +76,5 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
     if (s.prior == "oracle") (s.range == "all" ? all_pixels : range_pixels) += s.pixels;
   CHECK(range_pixels == all_pixels);  // the ranges partition the valid pixels
   for (const char* f : {"report.md", "report.csv", "report.json"}) CHECK(fs::exists(fs::path(c.out) / f));
-  CHECK_THAT(test::read_bytes(c.out + "/report.md"), Catch::Contains("| oracle | 0.000 | 1.000 |"));
+  CHECK_THAT(test::read_bytes(c.out + "/report.md"), Catch::Contains("| oracle | 0.000 | 1.000 | 1.000 | 0.000 |"));
 }
