@@ -2,28 +2,37 @@
 # The generalizing RGB depth prior (issue "An RGB depth prior that generalizes"), resumable: set up and
 # build, generate mixed-style depth data (rooms, desks, streets; 40-95 degree fields of view), train the
 # prior from scratch (U-Net) and on the frozen pretrained SqueezeNet features, each focal-normalized with a
-# scale-invariant + metric loss, then score both against the old rooms-only prior on the held-out rooms and
-# the two other-style sets (AbsRel, delta < 1.25 per depth range). About an hour per prior on 2 cores.
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|eval ...]   (default: all three stages)
+# scale-invariant + metric loss, and the SqueezeNet prior again on data with a fourth style (halls: large
+# interiors), then score them against the old rooms-only prior on the held-out rooms and the two other-style
+# sets (AbsRel, delta < 1.25 per depth range, scale and shape apart). 15-25 minutes per prior on 2 cores.
+# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|eval ...]   (default: all four stages)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 bin="${BUILD_DIR:-$root/build}"
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze eval)
+[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall eval)
 scripts/setup.sh
 scripts/build.sh
-if [ ! -f out/depth_prior/data/hypersim/metadata_images_split_scene_v1.csv ]; then
-  "$bin/infinisplat" generate --config configs/depth_prior/data.json
-fi
+data() {  # $1: data config name under configs/depth_prior, $2: its output folder
+  [ -f "$2/hypersim/metadata_images_split_scene_v1.csv" ] ||
+    "$bin/infinisplat" generate --config "configs/depth_prior/$1.json"
+}
 for stage in "${stages[@]}"; do
   case "$stage" in
-    unet|squeeze) "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
+    unet|squeeze)
+      data data out/depth_prior/data
+      "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
+    squeeze_hall)
+      data data_hall out/depth_prior/data_hall
+      "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
+      # the "before" prior: the rooms-only net of the experiments (scripts/experiments.sh trains it too)
+      "$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | eval)" >&2; exit 2 ;;
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | eval)" >&2; exit 2 ;;
   esac
 done
 echo "report: out/depth_prior/eval/report.md"

@@ -27,7 +27,7 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     } else if (name.rfind("eval", 0) == 0) {
       const auto c = load_config<EvalConfig>(path);
       CHECK_FALSE(c.datasets.empty());
-    } else if (name == "data.json") {
+    } else if (name.rfind("data", 0) == 0) {  // data.json, data_hall.json: generator configs
       const auto c = load_config<GenerateConfig>(path);
       CHECK(c.generate.train_scenes > 0);
     } else if (experiments && name.rfind("ablation", 0) == 0) {

@@ -113,23 +113,23 @@ TEST_CASE("hypersim: missing files are skipped and malformed metadata names the 
   CHECK_THROWS_WITH(read_hypersim(nowhere), Catch::Contains("data.hypersim.root"));
 }
 
-TEST_CASE("hypersim: desk and street scenes with varied fields of view read back through the reader",
+TEST_CASE("hypersim: desk, street and hall scenes with varied fields of view read back through the reader",
           "[data][hypersim]") {
   test::QuietLogs quiet;
   auto g = test::tiny_dataset_options(test::temp_dir("hs_styles"), 8);
-  g.train_scenes = 2;
+  g.train_scenes = 3;
   g.val_scenes = 0;
   g.test_scenes = 0;
   g.tilt_shift_every = 0;
-  g.train_styles = {"desk", "street"};
+  g.train_styles = {"desk", "street", "hall"};
   g.hfov_deg = {40, 90};
   g.eval_datasets = {};
   generate_datasets(g);
   const auto index = read_hypersim(reader_options(g, "train"));
-  REQUIRE(index.sequences.size() == 2);
-  double desk_max = 0, street_max = 0;
+  REQUIRE(index.sequences.size() == 3);
+  double max_depth[3] = {0, 0, 0};
   std::vector<double> fx;
-  for (size_t s = 0; s < 2; ++s) {
+  for (size_t s = 0; s < 3; ++s) {
     const Sequence& seq = index.sequences[s];
     fx.push_back(seq.frames.at(0).view.intr.fx);
     for (size_t f = 0; f < seq.frames.size(); f += 2) {
@@ -137,11 +137,13 @@ TEST_CASE("hypersim: desk and street scenes with varied fields of view read back
       REQUIRE(fr.has_depth());
       double lo = 0, hi = 0;
       cv::minMaxLoc(fr.depth.depth, &lo, &hi, nullptr, nullptr, fr.depth.valid);
-      (s == 0 ? desk_max : street_max) = std::max(s == 0 ? desk_max : street_max, hi);
+      max_depth[s] = std::max(max_depth[s], hi);
     }
   }
-  CHECK(desk_max < 4.0);                        // a tabletop close-up
-  CHECK(street_max > 25.0);                     // a street runs far
+  CHECK(max_depth[0] < 4.0);                    // a tabletop close-up
+  CHECK(max_depth[1] > 25.0);                   // a street runs far
+  CHECK(max_depth[2] > 10.0);                   // a hall is larger than any room (at most 11 m deep) ...
+  CHECK(max_depth[2] < 50.0);                   // ... and closed
   CHECK(fx[0] != Approx(fx[1]).epsilon(0.01));  // fields of view differ per scene
   // Depth agrees across views for the new styles too.
   const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);

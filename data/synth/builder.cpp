@@ -476,13 +476,88 @@ Scene build_street(uint64_t seed) {
   return s;
 }
 
+Scene build_hall(uint64_t seed) {
+  // A warehouse or sports hall: one large interior, 20-45 m long and 6-14 m high, a column grid, rows of
+  // pallet racks and stacked crates, high strip windows onto the sky and hanging lamps: indoor light and
+  // texture at depths between a room's and a street's.
+  Rng rng(seed);
+  Scene s;
+  s.style = "hall";
+  s.step_scale = 1.6;
+  const double W = rng.uniform(14.0, 30.0), D = rng.uniform(20.0, 45.0), H = rng.uniform(6.0, 14.0);
+  const int floor_m =
+      s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Noise, Pattern::Tiles, Pattern::Stripes}),
+                         rng.uniform(1.0, 3.0), 0.3, 0.7, 0.15));
+  const int roof = s.add_material(mat(rng, Pattern::Stripes, rng.uniform(0.6, 1.2), 0.5, 0.85));
+  const int wall =
+      s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Stripes, Pattern::Bricks, Pattern::Noise}),
+                         rng.uniform(0.5, 1.5), 0.35, 0.85));
+  s.add(quad(Vec3(0, 0, 0), Vec3(W, 0, 0), Vec3(0, D, 0), floor_m));
+  s.add(quad(Vec3(0, 0, H), Vec3(W, 0, 0), Vec3(0, D, 0), roof));
+  // Long walls with a strip of high windows (sky behind: invalid depth); solid end walls.
+  const double w0 = H * rng.uniform(0.6, 0.7), w1 = std::min(H - 0.4, w0 + rng.uniform(1.0, 2.0));
+  for (double x : {0.0, W}) {
+    s.add(quad(Vec3(x, 0, 0), Vec3(0, D, 0), Vec3(0, 0, w0), wall));
+    s.add(quad(Vec3(x, 0, w1), Vec3(0, D, 0), Vec3(0, 0, H - w1), wall));
+    for (double y = 0; y < D; y += 6.0)  // mullions across the window strip
+      s.add(box(Vec3(x, y, (w0 + w1) / 2), Vec3(0.08, 0.08, (w1 - w0) / 2), 0.0, wall));
+  }
+  for (double y : {0.0, D}) s.add(quad(Vec3(0, y, 0), Vec3(W, 0, 0), Vec3(0, 0, H), wall));
+  // Steel columns on a grid, and roof beams across.
+  const int steel = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.2, 0.6, 0.4));
+  const double bay = rng.uniform(6.0, 9.0);
+  for (double y = bay; y < D - 1.0; y += bay) {
+    for (double x : {W / 3, 2 * W / 3}) s.add(box(Vec3(x, y, H / 2), Vec3(0.18, 0.18, H / 2), 0.0, steel));
+    s.add(box(Vec3(W / 2, y, H - 0.4), Vec3(W / 2, 0.12, 0.3), 0.0, steel));
+  }
+  // Pallet racks along the long walls and crates on the floor (the clutter the camera walks past).
+  const int rack = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.3, 0.8, 0.2));
+  const int crate = s.add_material(mat(rng, Pattern::Wood, rng.uniform(0.2, 0.5), 0.35, 0.7));
+  const double rack_h = std::min(H - 1.5, rng.uniform(3.5, 6.0));
+  for (double x : {1.2, W - 1.2}) {
+    if (!rng.chance(0.8)) continue;
+    for (double y = 2.0; y < D - 3.0; y += 2.8) {
+      for (int level = 0; level <= 3; ++level)
+        s.add(box(Vec3(x, y + 1.4, level * rack_h / 3 + 0.05), Vec3(0.6, 1.35, 0.05), 0.0, rack));
+      s.add(box(Vec3(x, y, rack_h / 2), Vec3(0.6, 0.05, rack_h / 2), 0.0, rack));
+      for (int level = 0; level < 3; ++level)
+        if (rng.chance(0.6))
+          s.add(box(Vec3(x, y + 1.4, level * rack_h / 3 + 0.45), Vec3(0.5, rng.uniform(0.5, 1.2), 0.38), 0.0, crate));
+    }
+  }
+  for (int k = 0; k < rng.integer(4, 9); ++k) {
+    const Vec3 c(rng.uniform(3.0, W - 3.0), rng.uniform(3.0, D - 3.0), 0);
+    const int stack = rng.integer(1, 3);
+    for (int l = 0; l < stack; ++l)
+      s.add(box(c + Vec3(0, 0, 0.45 + 0.9 * l), Vec3(0.6, 0.6, 0.44), rng.uniform(0, kPi), crate));
+  }
+  // Hanging lamps.
+  const int shade = s.add_material(mat(rng, Pattern::Solid, 1.0, 0.7, 0.95, 0.5));
+  for (double y = bay / 2; y < D; y += bay) {
+    const Vec3 c(W / 2 + rng.uniform(-1.0, 1.0), y, H - 1.5);
+    s.add(cylinder(c, Vec3::UnitZ(), 0.01, 1.1, steel));
+    s.add(sphere(c, 0.3, shade));
+    s.lights.push_back({c - Vec3(0, 0, 0.5), rng.color(80.0, 160.0)});
+  }
+  s.ambient = Vec3::Constant(rng.uniform(0.08, 0.16));
+  s.sun_dir = Vec3(rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(0.4, 0.9)).normalized();
+  s.sun_radiance = Vec3(2.6, 2.5, 2.3) * rng.uniform(0.6, 1.1);
+  s.walk_min = Vec3(W * 0.3, 2.0, 1.4);
+  s.walk_max = Vec3(W * 0.7, D - 2.0, 1.9);
+  s.focus_a = Vec3(W / 2, D - 0.2, rng.uniform(2.0, 4.0));
+  s.focus_b = Vec3(W / 2, 0.2, rng.uniform(2.0, 4.0));
+  s.build();
+  return s;
+}
+
 Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "room") return build_room(seed);
   if (style == "courtyard") return build_courtyard(seed);
   if (style == "atrium") return build_atrium(seed);
   if (style == "desk") return build_desk(seed);
   if (style == "street") return build_street(seed);
-  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street)");
+  if (style == "hall") return build_hall(seed);
+  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street | hall)");
 }
 
 Mat3 look_rotation(const Vec3& center, const Vec3& target) {
