@@ -78,7 +78,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       ISPLAT_CHECK(!frames.empty(), "depth evaluation: dataset '", ds.name, "' has no frame with depth");
       const size_t n = std::min<size_t>(frames.size(), static_cast<size_t>(c.frames));
       std::vector<DepthErrors> ranges(edges.size());
-      double abs_rel = 0, delta1 = 0, log_scale = 0, abs_rel_aligned = 0;
+      double abs_rel = 0, delta1 = 0, log_scale = 0, abs_rel_aligned = 0, coverage = 0;
       int64_t counted = 0, pixels = 0;
       ProgressBar bar(cat("depth ", np.name, "/", ds.name), static_cast<int64_t>(n), "frame");
       for (size_t k = 0; k < n; ++k, bar.tick()) {
@@ -99,6 +99,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
           pixels += all.pixels;
           const DepthScale sc = depth_scale(out.depth, v.depth, v.valid * out.valid);
           log_scale += std::log(sc.median_ratio), abs_rel_aligned += sc.abs_rel_aligned;
+          coverage += static_cast<double>(all.pixels) / std::max<int64_t>(1, (v.valid > 0).sum().item<int64_t>());
         }
         for (size_t r = 0; r < edges.size(); ++r) {
           const double hi = r + 1 < edges.size() ? edges[r + 1] : std::numeric_limits<double>::infinity();
@@ -111,11 +112,11 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       const double nan = std::numeric_limits<double>::quiet_NaN();
       scores.push_back({ds.name, np.name, "all", counted, pixels, counted ? abs_rel / counted : nan,
                         counted ? delta1 / counted : nan, counted ? std::exp(log_scale / counted) : nan,
-                        counted ? abs_rel_aligned / counted : nan});
+                        counted ? abs_rel_aligned / counted : nan, counted ? coverage / counted : nan});
       for (size_t r = 0; r < edges.size(); ++r) {
         const auto& e = ranges[r];
         scores.push_back({ds.name, np.name, label(r), counted, e.pixels, e.pixels ? e.abs_rel_sum / e.pixels : nan,
-                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan});
+                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan, nan});
       }
     }
   }
@@ -132,14 +133,16 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         "depth at evaluation size. \"all\": means over frames; depth ranges: pooled over the pixels in the range. "
         "Scale apart from shape: \"scale\" is the geometric mean over frames of each frame's median "
         "prediction / reference (1 = right metric scale), \"AbsRel aligned\" the AbsRel after dividing each frame "
-        "by that median (shape error only).\n\n";
+        "by that median (shape error only). \"coverage\": the share of the reference's valid pixels the prior also "
+        "marks valid (a prior that cuts far depth as sky is scored only where it keeps depth).\n\n";
   CsvTable csv;
-  csv.header = {"dataset", "prior", "range", "frames", "pixels", "abs_rel", "delta1", "scale", "abs_rel_aligned"};
+  csv.header = {"dataset", "prior",  "range", "frames",          "pixels",
+                "abs_rel", "delta1", "scale", "abs_rel_aligned", "coverage"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& ds : c.datasets) {
-    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned |";
+    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned | coverage |";
     for (size_t r = 0; r < edges.size(); ++r) md << " " << label(r) << " AbsRel / δ1 (px) |";
-    md << "\n|---|---|---|---|---|";
+    md << "\n|---|---|---|---|---|---|";
     for (size_t r = 0; r < edges.size(); ++r) md << "---|";
     md << "\n";
     for (const auto& np : c.priors) {
@@ -148,7 +151,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         if (s.dataset != ds.name || s.prior != np.name) continue;
         if (s.range == "all")
           md << " | " << fmt(s.abs_rel, 3) << " | " << fmt(s.delta1, 3) << " | " << fmt(s.scale, 3) << " | "
-             << fmt(s.abs_rel_aligned, 3);
+             << fmt(s.abs_rel_aligned, 3) << " | " << fmt(s.coverage, 3);
         else
           md << " | " << fmt(s.abs_rel, 3) << " / " << fmt(s.delta1, 3) << " (" << s.pixels << ")";
       }
@@ -158,7 +161,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   }
   for (const auto& s : scores) {
     csv.rows.push_back({s.dataset, s.prior, s.range, std::to_string(s.frames), std::to_string(s.pixels),
-                        fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.abs_rel_aligned, 5)});
+                        fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.abs_rel_aligned, 5),
+                        fmt(s.coverage, 5)});
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
     js.push_back({{"dataset", s.dataset},
                   {"prior", s.prior},
@@ -168,7 +172,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
                   {"abs_rel", num(s.abs_rel)},
                   {"delta1", num(s.delta1)},
                   {"scale", num(s.scale)},
-                  {"abs_rel_aligned", num(s.abs_rel_aligned)}});
+                  {"abs_rel_aligned", num(s.abs_rel_aligned)},
+                  {"coverage", num(s.coverage)}});
   }
   write_file_atomic((fs::path(c.out) / "report.md").string(), md.str());
   write_csv((fs::path(c.out) / "report.csv").string(), csv);

@@ -35,6 +35,7 @@ struct DepthScore {
   // "all" only (NaN for ranges): scale apart from shape. `scale` is the geometric mean over frames of each
   // frame's median pred/ref; `abs_rel_aligned` the mean AbsRel after dividing each frame by its median.
   double scale = 0, abs_rel_aligned = 0;
+  double coverage = 0;  // "all" only: share of the reference's valid pixels the prior also marks valid
 };
 
 // Scores every prior on every dataset and writes report.md, report.csv and report.json into config.out.

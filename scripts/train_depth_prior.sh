@@ -2,16 +2,17 @@
 # The generalizing RGB depth prior (issue "An RGB depth prior that generalizes"), resumable: set up and
 # build, generate mixed-style depth data (rooms, desks, streets; 40-95 degree fields of view), train the
 # prior from scratch (U-Net) and on the frozen pretrained SqueezeNet features, each focal-normalized with a
-# scale-invariant + metric loss, and the SqueezeNet prior again on data with a fourth style (halls: large
-# interiors), then score them against the old rooms-only prior on the held-out rooms and the two other-style
-# sets (AbsRel, delta < 1.25 per depth range, scale and shape apart). 15-25 minutes per prior on 2 cores.
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|eval ...]   (default: all four stages)
+# scale-invariant + metric loss; then the SqueezeNet prior on data with a fourth style (halls: large
+# interiors), and again with a sky term (pixels without depth pushed far, then cut as sky); then score them
+# against the old rooms-only prior on the held-out rooms and the two other-style sets (AbsRel, delta < 1.25
+# per depth range, scale and shape apart). 15-25 minutes per prior on 2 cores.
+# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|eval ...]   (default: all five)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 bin="${BUILD_DIR:-$root/build}"
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall eval)
+[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky eval)
 scripts/setup.sh
 scripts/build.sh
 data() {  # $1: data config name under configs/depth_prior, $2: its output folder
@@ -23,7 +24,7 @@ for stage in "${stages[@]}"; do
     unet|squeeze)
       data data out/depth_prior/data
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
-    squeeze_hall)
+    squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
     eval)
@@ -32,7 +33,7 @@ for stage in "${stages[@]}"; do
       # the "before" prior: the rooms-only net of the experiments (scripts/experiments.sh trains it too)
       "$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | eval)" >&2; exit 2 ;;
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | eval)" >&2; exit 2 ;;
   esac
 done
 echo "report: out/depth_prior/eval/report.md"

@@ -67,6 +67,7 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
       CHECK(s.delta1 == Approx(1.0));
       CHECK(s.scale == Approx(1.0));
       CHECK(s.abs_rel_aligned == Approx(0.0).margin(1e-6));
+      CHECK(s.coverage == Approx(1.0));
     } else {
       CHECK(s.abs_rel > 0.05);
     }
@@ -76,5 +77,6 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
     if (s.prior == "oracle") (s.range == "all" ? all_pixels : range_pixels) += s.pixels;
   CHECK(range_pixels == all_pixels);  // the ranges partition the valid pixels
   for (const char* f : {"report.md", "report.csv", "report.json"}) CHECK(fs::exists(fs::path(c.out) / f));
-  CHECK_THAT(test::read_bytes(c.out + "/report.md"), Catch::Contains("| oracle | 0.000 | 1.000 | 1.000 | 0.000 |"));
+  CHECK_THAT(test::read_bytes(c.out + "/report.md"),
+             Catch::Contains("| oracle | 0.000 | 1.000 | 1.000 | 0.000 | 1.000 |"));
 }

@@ -109,4 +109,27 @@ TEST_CASE("losses: the depth loss separates shape (scale-invariant) from the glo
         Approx(std::log(3.0) + (shape - torch::log(depth)).mean().item<double>()).epsilon(1e-4));
   CHECK(b.at("total").item<double>() > a.at("total").item<double>());
   CHECK_THROWS_WITH(depth_log_losses(shape, depth, torch::zeros({2, 8, 8}), o), Catch::Contains("without valid depth"));
+  CHECK(a.count("sky") == 0);  // off by default: pixels without depth are not supervised
+}
+
+TEST_CASE("losses: the sky term pushes pixels without depth beyond depth_sky_m, and only those", "[loss]") {
+  const auto depth = torch::full({1, 4, 4}, 2.0);
+  auto valid = torch::ones({1, 4, 4});
+  valid[0][0] = 0;  // the top row is sky
+  LossOptions o;
+  o.depth_sky = 1.0;
+  o.depth_sky_m = 100.0;
+  auto pred = torch::full({1, 4, 4}, std::log(2.0));  // exact where valid; the sky at 2 m
+  pred.requires_grad_(true);
+  const auto t = depth_log_losses(pred, depth, valid, o);
+  CHECK(t.at("sky").item<double>() == Approx(std::log(50.0)));
+  CHECK(t.at("total").item<double>() == Approx(std::log(50.0)).margin(1e-5));
+  t.at("total").backward();
+  const auto g = pred.grad()[0];
+  CHECK((g[0] < 0).all().item<bool>());                        // descent raises the sky's depth ...
+  CHECK(g.narrow(0, 1, 3).abs().max().item<double>() < 1e-6);  // ... and leaves exact valid pixels alone
+  // A sky already beyond depth_sky_m costs nothing; neither does a batch without sky.
+  const auto far = torch::where(valid > 0, torch::full({1, 4, 4}, std::log(2.0)), torch::full({1, 4, 4}, 5.0));
+  CHECK(depth_log_losses(far, depth, valid, o).at("sky").item<double>() == 0.0);
+  CHECK(depth_log_losses(pred.detach(), depth, torch::ones({1, 4, 4}), o).at("sky").item<double>() == 0.0);
 }

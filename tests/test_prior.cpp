@@ -127,6 +127,26 @@ TEST_CASE("prior: every learned-net option keeps the contract (shape, metric dep
     }
 }
 
+TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)", "[prior]") {
+  test::QuietLogs quiet;
+  PriorOptions o;
+  o.type = "learned";
+  o.learned_width = 8;
+  PriorInput in;
+  in.image = torch::rand({3, 32, 48});
+  in.K = make_K(40.0, 40.0, 24.0, 16.0, torch::kFloat32);
+  torch::manual_seed(5);
+  const PriorOutput all = make_depth_prior(o)->predict(in);  // untrained: about 3 m everywhere
+  CHECK(all.valid.min().item<float>() == 1.0f);
+  o.learned_sky_m = all.depth.median().item<double>();  // half the pixels now count as sky
+  torch::manual_seed(5);                                // the same untrained weights
+  const PriorOutput cut = make_depth_prior(o)->predict(in);
+  const auto sky = all.depth >= o.learned_sky_m;
+  CHECK(sky.any().item<bool>());
+  CHECK(torch::equal(cut.valid > 0, ~sky));
+  CHECK(torch::equal(cut.depth, torch::where(sky, torch::zeros_like(all.depth), all.depth)));
+}
+
 TEST_CASE("prior: focal normalization scales depth with the focal length, exactly", "[prior]") {
   LearnedDepthNet net(LearnedDepthOptions{"unet", 8, true});
   torch::NoGradGuard g;

@@ -124,7 +124,7 @@ class DepthTask final : public TrainTask {
   std::string describe() const override {
     return cat("learned depth prior (", net_->options.arch, net_->options.focal_normalized ? ", focal-normalized" : "",
                "; l1_log x ", loss_.depth_l1, " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
-               ")");
+               loss_.depth_sky > 0 ? cat(" + sky x ", loss_.depth_sky, " beyond ", loss_.depth_sky_m, " m") : "", ")");
   }
 
   LossTerms losses(const Batch& batch, int64_t, bool, StepStats&, std::vector<RenderedViews>*) override {

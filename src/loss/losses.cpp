@@ -35,6 +35,11 @@ void LossOptions::visit(ConfigVisitor& v) {
           Range::unit());
   v.field("depth_scale", depth_scale, "depth task: weight of |mean log error|, the global metric-scale term",
           Range::at_least(0));
+  v.field("depth_sky", depth_sky,
+          "depth task: weight of the sky term, a hinge on log depth that pushes pixels without depth (Hypersim: no "
+          "geometry, i.e. sky and what windows show) beyond depth_sky_m; 0 = such pixels are not supervised",
+          Range::at_least(0));
+  v.field("depth_sky_m", depth_sky_m, "depth task: the sky term's depth in metres", Range::above(0));
   v.field("allow_random_perceptual", allow_random_perceptual,
           "run the perceptual term on a random network "
           "(only for experiments; never the default)");

@@ -30,6 +30,7 @@ struct LossOptions {
   // Depth task: l1_log weight, silog variance weight lambda (1 = scale-invariant shape term), and the
   // weight of |mean log error| (the global metric-scale term).
   double depth_l1 = 1.0, depth_lambda = 0.85, depth_scale = 0.0;
+  double depth_sky = 0.0, depth_sky_m = 150.0;  // pixels without depth (sky) pushed beyond depth_sky_m
   void visit(ConfigVisitor& v);
 };
 

@@ -53,8 +53,17 @@ LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& d
   auto l1 = d.abs().mean();
   auto silog = torch::sqrt(torch::clamp_min((d * d).mean() - o.depth_lambda * d.mean().pow(2), 1e-12));
   auto scale = d.mean().abs();
-  return {
+  LossTerms t = {
       {"l1_log", l1}, {"silog", silog}, {"scale", scale}, {"total", o.depth_l1 * l1 + silog + o.depth_scale * scale}};
+  if (o.depth_sky > 0) {
+    // Pixels without depth are sky (or beyond a window): a hinge keeps their prediction beyond depth_sky_m,
+    // so the prior can mark them as background instead of placing them at a wall's depth.
+    const auto sky = ~v;
+    t["sky"] = sky.any().item<bool>() ? torch::relu(std::log(o.depth_sky_m) - pred_log.masked_select(sky)).mean()
+                                      : torch::zeros({}, pred_log.options());
+    t["total"] = t["total"] + o.depth_sky * t["sky"];
+  }
+  return t;
 }
 
 }  // namespace isplat

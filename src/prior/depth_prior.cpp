@@ -46,6 +46,10 @@ void PriorOptions::visit(ConfigVisitor& v) {
   v.field("learned_focal", learned_focal,
           "focal-normalized learned depth: predict for a canonical 60-degree camera, scale by the image's fx/W");
   v.field("learned_backbone", learned_backbone, "squeeze arch: SqueezeNet-1.1 features (torchvision names)");
+  v.field("learned_sky_m", learned_sky_m,
+          "learned depth at or beyond this many metres is sky and marked invalid (no supports); 0 = never. For nets "
+          "trained with loss.depth_sky, set it below loss.depth_sky_m",
+          Range::at_least(0));
   v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
 }
 
@@ -118,6 +122,7 @@ class LearnedPrior final : public DepthPrior {
     torch::NoGradGuard g;
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
     auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32), K.to(torch::kFloat32).unsqueeze(0))[0][0];
+    if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
     return finish(d, K);
   }
   std::string describe() const override {

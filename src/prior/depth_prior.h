@@ -31,6 +31,7 @@ struct PriorOptions {
   int64_t learned_width = 32;         // channel width of the learned depth net
   std::string learned_arch = "unet";  // unet (from scratch) | squeeze (frozen pretrained SqueezeNet encoder)
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
+  double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
   std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
