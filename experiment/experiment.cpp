@@ -133,13 +133,28 @@ std::string Experiment::method_name(const ExperimentRow& r, int64_t seed, const 
   return cat(r.name, seeds > 1 ? cat("-s", seed) : std::string(), "@", v.name);
 }
 
+namespace {
+// The first weights file a variant's overrides name that does not exist ("" if none): such a variant is
+// skipped with a warning, so one missing prior does not stop the other variants' scoring.
+std::string missing_weights(const std::vector<std::string>& overrides) {
+  for (const auto& o : overrides)
+    for (const std::string key : {"prior.learned_weights=", "prior.torchscript="})
+      if (o.rfind(key, 0) == 0 && !fs::exists(o.substr(key.size()))) return o.substr(key.size());
+  return "";
+}
+}  // namespace
+
 void Experiment::evaluate(const std::vector<std::string>& only) {
   EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
   ec.runtime.threads = config_.runtime.threads;
   ec.scoring.out = (fs::path(config_.out) / "eval").string();
   ec.methods.clear();
   for (const auto& b : config_.baselines) ec.methods.push_back(named_method(b, b));
-  for (const auto& v : config_.variants)
+  for (const auto& v : config_.variants) {
+    if (const std::string missing = missing_weights(v.overrides); !missing.empty()) {
+      log_warn("experiment: variant '", v.name, "' needs ", missing, ", which does not exist yet; not scored");
+      continue;
+    }
     for (const auto& r : config_.rows) {
       if (!wanted(only, r.name) || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
       for (const auto& run : runs(r)) {
@@ -151,6 +166,7 @@ void Experiment::evaluate(const std::vector<std::string>& only) {
         ec.methods.push_back(named_method(method_name(r, run.seed, v), "model", ck, v.overrides));
       }
     }
+  }
   Evaluator(ec).run();
 }
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The ablation table (issue "Evidence") in one resumable command: set up and build, generate the experiment
-# data, train the learned depth prior, then train, score and report every row of
+# data, train the learned depth priors (rooms-only, and the mixed-style ones of the RGB variants), then
+# train, score and report every row of
 # configs/experiments/ablation.json. Re-running skips what is finished; Ctrl-C is safe at any point.
 # Usage: scripts/experiments.sh [infinisplat-experiment options, e.g. --rows full,pixel_supports --seeds 0]
 set -euo pipefail
@@ -24,6 +25,9 @@ fi
 
 stamp "3. the learned depth prior for the RGB variant (configs/experiments/depth.json)"
 "$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
+
+stamp "3b. the mixed-style depth priors of the rgb_mixed and rgb_sky variants (scripts/train_depth_prior.sh)"
+scripts/train_depth_prior.sh squeeze squeeze_sky
 
 stamp "4. rows: train, score, report ($config)"
 "$bin/infinisplat-experiment" --config "$config" "$@"

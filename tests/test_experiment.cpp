@@ -81,7 +81,9 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   base.from = "full";
   base.checkpoint = "init";
   c.rows = {full, pixel, base};
-  c.variants = {{"depth", {}, {}}};
+  // A variant whose prior weights do not exist yet is skipped, not fatal.
+  c.variants = {{"depth", {}, {}},
+                {"rgb_later", {"prior.type=learned", "prior.learned_weights=" + dir + "/none.st"}, {}}};
   c.baselines = {"lift"};
   Experiment e(c);
   REQUIRE(e.train());
@@ -95,6 +97,7 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   CHECK_THAT(md, Catch::Contains("| pixel_supports@depth (w/o geometry-guided sampling) |"));
   CHECK_THAT(md, Catch::Contains("| base_gaussians@depth"));
   CHECK_THAT(md, Catch::Contains("full seed spread"));
+  CHECK_THAT(md, !Catch::Contains("@rgb_later"));
   CHECK_THAT(md, Catch::Contains("| full_s1 | 3 |"));
   const auto js = nlohmann::json::parse(test::read_bytes(c.out + "/report.json"));
   bool has_delta = false;
