@@ -15,7 +15,6 @@ namespace isplat {
 namespace {
 // SqueezeNet-1.1 `features` after fire9 (layer 12): 512 channels at stride 16, the ViT's patch grid.
 constexpr int kSqueezeTap = 12;
-constexpr int64_t kSqueezeChannels = 512;
 }  // namespace
 
 void EncoderOptions::visit(ConfigVisitor& v) {
@@ -38,8 +37,8 @@ DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
     ISPLAT_CHECK(!o.semantic_backbone.empty(), "encoder: encoder.semantic = squeeze needs encoder.semantic_backbone");
     squeeze = std::make_shared<const FeatureNet>("squeezenet1_1", std::vector<int>{kSqueezeTap},
                                                  resolve_shipped_path(o.semantic_backbone));
-    squeeze_proj =
-        register_module("squeeze_proj", torch::nn::Conv2d(torch::nn::Conv2dOptions(kSqueezeChannels, o.vit.dim(), 1)));
+    squeeze_proj = register_module(
+        "squeeze_proj", torch::nn::Conv2d(torch::nn::Conv2dOptions(squeeze->tap_channels()[0], o.vit.dim(), 1)));
     log_info("encoder: semantic branch = frozen pretrained SqueezeNet-1.1 features from ", o.semantic_backbone,
              ", projected to ", o.vit.dim(), " channels (no ViT)");
   } else if (o.dino) {
@@ -78,7 +77,7 @@ EncoderFeatures DualEncoderImpl::forward(const torch::Tensor& image) {
       torch::NoGradGuard frozen;  // pretrained and not trained; gradients stop at its output
       // Unit length over channels, times sqrt(C): entries of unit RMS, like the ViT's layer-normed tokens.
       frozen_features = normalize_channels(squeeze->forward(imagenet_normalize(x))[0]) *
-                        std::sqrt(static_cast<double>(kSqueezeChannels));
+                        std::sqrt(static_cast<double>(squeeze_proj->weight.size(1)));
     }
     f.dino = squeeze_proj->forward(frozen_features);
   }
