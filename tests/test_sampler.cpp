@@ -88,6 +88,33 @@ TEST_CASE("sampler: a slanted plane gets density proportional to its 3D area", "
   CHECK(h[3] > 1.5 * h[0]);  // really non-uniform in the image
 }
 
+TEST_CASE("sampler: image_share moves supports toward an even spread per pixel and keeps the total area", "[sampler]") {
+  // The slanted plane of the test above: far columns cover more area.
+  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto z_row = 1.0 / (1.0 - 0.9 * (u - cx) / fx);
+  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  SamplerOptions area_only = fixed(20000), half = fixed(20000), even = fixed(20000);
+  half.image_share = 0.5;
+  even.image_share = 1.0;
+  const Supports a = sample_supports(depth, ones(), K(), image(), area_only, 3);
+  const Supports m = sample_supports(depth, ones(), K(), image(), half, 3);
+  const Supports e = sample_supports(depth, ones(), K(), image(), even, 3);
+  REQUIRE(m.count() == 20000);
+  REQUIRE(e.count() == 20000);
+  const auto ha = column_histogram(a, 4), hm = column_histogram(m, 4), he = column_histogram(e, 4);
+  // Fully even: every strip gets its share of the image (16 of the 64 quad columns each).
+  for (int b = 0; b < 4; ++b) CHECK(he[b] / 20000.0 == Approx(0.25).margin(0.005));
+  // Half and half: the mean of the two allocations.
+  for (int b = 0; b < 4; ++b) CHECK(hm[b] == Approx(0.5 * (ha[b] + he[b])).margin(0.005 * 20000));
+  // Each support's share of area follows its density, so the areas still add up to the surface.
+  const double total = a.area.sum().item<double>();
+  CHECK(m.area.sum().item<double>() == Approx(total).epsilon(1e-3));
+  CHECK(e.area.sum().item<double>() == Approx(total).epsilon(1e-3));
+  // Near supports stand for less area than far ones once spread evenly per pixel.
+  auto near = e.uv.select(1, 0)<16, far = e.uv.select(1, 0)> 48;
+  CHECK(e.area.masked_select(near).mean().item<double>() < 0.5 * e.area.masked_select(far).mean().item<double>());
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

@@ -41,6 +41,10 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           Range::above(0.0));
   v.field("detail_block", detail_block, "detail budget: block size in pixels over which detail is averaged",
           Range::between(1, 256));
+  v.field("image_share", image_share,
+          "area mode: share of supports spread evenly per image pixel instead of by 3D area (0 = the paper's "
+          "area sampling; near surfaces get more supports as it grows)",
+          Range::unit());
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -165,8 +169,9 @@ std::vector<T> row_offsets(const std::vector<T>& per_row, T start) {
 // Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
 // `weight` (per pixel, or null): triangles are drawn in proportion to area × the weight of their quad's
 // first vertex, and each support then stands for a share of area inversely proportional to that weight.
+// `image_share`: that share of the measure is spread evenly over the accepted triangles instead.
 double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr) {
+                    const float* weight = nullptr, double image_share = 0.0) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
   std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
@@ -188,6 +193,9 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
   if (n == 0) return total;
   // Weighted areas (the allocation's measure) and their total.
   double total_w = total;
+  // The allocation's measure differs from the area: keep the area, each support's share is computed from both.
+  std::vector<float> raw;
+  if (weight != nullptr || image_share > 0) raw = area;
   if (weight != nullptr) {
     for_each_row(Hq, [&](int64_t i) {
       double s = 0;
@@ -197,6 +205,22 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
           if (a > 0) a *= weight[i * g.W + j + t];  // the triangle's first vertex: valid, so weight >= floor > 0
           s += a;
         }
+      row_sum[i] = s;
+    });
+    total_w = row_offsets(row_sum, 0.0)[Hq];
+  }
+  if (image_share > 0) {
+    // measure = (1 - share) * measure + share * (total / accepted triangles): the total is unchanged.
+    int64_t accepted = 0;
+    for (float a : area) accepted += a > 0;
+    const double even = total_w / static_cast<double>(accepted);
+    for_each_row(Hq, [&](int64_t i) {
+      double s = 0;
+      for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) {
+        float& a = area[q];
+        if (a > 0) a = static_cast<float>((1.0 - image_share) * a + image_share * even);
+        s += a;
+      }
       row_sum[i] = s;
     });
     total_w = row_offsets(row_sum, 0.0)[Hq];
@@ -250,8 +274,8 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
         // Allocation is proportional to area, so every support stands for the same area, total / n
         // (= A_t / n_t in expectation). Unlike A_t / n_t it stays right when n is below the triangle
         // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
-        const float rep =
-            static_cast<float>(weight == nullptr ? total / n : total_w / (n * double(weight[i * g.W + j + t])));
+        // With a measure m other than the area A: each support stands for A_q · total_m / (n · m_q).
+        const float rep = static_cast<float>(raw.empty() ? total / n : raw[q] * total_w / (n * double(area[q])));
         const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
                      s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
         for (int32_t m = 0; m < cnt; ++m, ++k) {
@@ -429,7 +453,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const int64_t n = weight.empty() ? resolve_budget(options, dk, vk, K) : detail_budget(options, weight);
   if (options.mode == "area") {
     Supports s = allocate(n);
-    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data());
+    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data(), options.image_share);
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

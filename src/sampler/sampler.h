@@ -25,6 +25,9 @@ struct SamplerOptions {
   // in proportion to area × that weight, so flat, plain regions get few and cluttered ones many.
   double detail_floor = 0.15, detail_ref = 0.05;
   int64_t detail_block = 8;
+  // area mode: share of the budget spread evenly over the image's accepted triangles (each pixel alike)
+  // instead of by 3D area, so near surfaces, whose pixels cover little area, are not starved. 0 = paper.
+  double image_share = 0.0;
   void visit(ConfigVisitor& v);
 };
 
