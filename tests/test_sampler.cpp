@@ -115,6 +115,22 @@ TEST_CASE("sampler: image_share moves supports toward an even spread per pixel a
   CHECK(e.area.masked_select(near).mean().item<double>() < 0.5 * e.area.masked_select(far).mean().item<double>());
 }
 
+TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear blends", "[sampler]") {
+  // A checkerboard of 0 and 1: bilinear reads between centres give values strictly inside (0, 1).
+  auto img = ((torch::arange(H).view({H, 1}) + torch::arange(W).view({1, W})) % 2).to(torch::kFloat32);
+  auto rgb = img.unsqueeze(0).expand({3, H, W}).contiguous();
+  SamplerOptions o = fixed(3000);
+  const Supports blend = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), rgb, o, 5);
+  o.color = "nearest";
+  const Supports sharp = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), rgb, o, 5);
+  REQUIRE(torch::equal(blend.uv, sharp.uv));
+  auto uv = sharp.uv.floor().to(torch::kLong);
+  auto expect = img.index({uv.select(1, 1), uv.select(1, 0)});
+  CHECK(torch::equal(sharp.color.select(1, 0), expect));
+  auto mid = (blend.color.select(1, 0) > 0.05) & (blend.color.select(1, 0) < 0.95);
+  CHECK(mid.to(torch::kFloat32).mean().item<float>() > 0.5f);
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

@@ -45,6 +45,10 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area mode: share of supports spread evenly per image pixel instead of by 3D area (0 = the paper's "
           "area sampling; near surfaces get more supports as it grows)",
           Range::unit());
+  v.field("color", color,
+          "how a support reads its colour: bilinear between the 4 nearest pixels (smooths texture when supports "
+          "fall between pixel centres) or the pixel it falls in",
+          {"bilinear", "nearest"});
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -60,6 +64,7 @@ struct Grid {
   const float* image;  // [3,H,W]
   int64_t H, W;
   double fx, fy, cx, cy, skew;
+  bool nearest_color = false;
 };
 
 Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
@@ -143,7 +148,13 @@ void write_support(const Grid& g, const Output& o, int64_t k, double u, double v
   o.uv[2 * k] = static_cast<float>(u);
   o.uv[2 * k + 1] = static_cast<float>(v);
   o.depth[k] = z;
-  for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear_at(g.image + c * g.H * g.W, g.H, g.W, u, v);
+  if (g.nearest_color) {
+    const int64_t px = std::clamp<int64_t>(static_cast<int64_t>(u), 0, g.W - 1),
+                  py = std::clamp<int64_t>(static_cast<int64_t>(v), 0, g.H - 1);
+    for (int c = 0; c < 3; ++c) o.color[3 * k + c] = g.image[c * g.H * g.W + py * g.W + px];
+  } else {
+    for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear_at(g.image + c * g.H * g.W, g.H, g.W, u, v);
+  }
   o.area[k] = area;
 }
 
@@ -438,7 +449,8 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
                          const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
   torch::NoGradGuard no_grad;
   torch::Tensor dk, vk, ik;
-  const Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
+  Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
+  g.nearest_color = options.color == "nearest";
   if (options.mode == "pixel") {
     std::vector<int64_t> idx;
     for (int64_t p = 0; p < g.H * g.W; ++p)
