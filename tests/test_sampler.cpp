@@ -131,6 +131,23 @@ TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear
   CHECK(mid.to(torch::kFloat32).mean().item<float>() > 0.5f);
 }
 
+TEST_CASE("sampler: placement = centroid puts a triangle's single support at its centroid", "[sampler]") {
+  // One support per triangle on a fronto-parallel plane: triangle 0 of a quad has its centroid at (1/3, 1/3)
+  // of the quad from its top-left pixel centre, triangle 1 at (2/3, 2/3).
+  SamplerOptions o = fixed(2 * (H - 1) * (W - 1));
+  o.placement = "centroid";
+  const Supports s = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), image(), o, 9);
+  REQUIRE(s.count() == 2 * (H - 1) * (W - 1));
+  auto f = s.uv - 0.5 - (s.uv - 0.5).floor();  // position inside the quad
+  auto third = (f - 1.0 / 3).abs().lt(1e-3).all(1), two_thirds = (f - 2.0 / 3).abs().lt(1e-3).all(1);
+  CHECK((third | two_thirds).all().item<bool>());
+  CHECK(third.sum().item<int64_t>() == (H - 1) * (W - 1));
+  // The default placement starts each triangle's sequence at random, so it is not on that lattice.
+  const Supports r = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), image(), fixed(s.count()), 9);
+  auto fr = r.uv - 0.5 - (r.uv - 0.5).floor();
+  CHECK(((fr - 1.0 / 3).abs().lt(1e-3).all(1)).sum().item<int64_t>() < s.count() / 10);
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

@@ -49,6 +49,10 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "how a support reads its colour: bilinear between the 4 nearest pixels (smooths texture when supports "
           "fall between pixel centres) or the pixel it falls in",
           {"bilinear", "nearest"});
+  v.field("placement", placement,
+          "area mode: a triangle's supports follow a low-discrepancy sequence from a random start (random) or from "
+          "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular)",
+          {"random", "centroid"});
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -182,7 +186,7 @@ std::vector<T> row_offsets(const std::vector<T>& per_row, T start) {
 // first vertex, and each support then stands for a share of area inversely proportional to that weight.
 // `image_share`: that share of the measure is spread evenly over the accepted triangles instead.
 double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr, double image_share = 0.0) {
+                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
   std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
@@ -287,8 +291,10 @@ double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, in
         // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
         // With a measure m other than the area A: each support stands for A_q · total_m / (n · m_q).
         const float rep = static_cast<float>(raw.empty() ? total / n : raw[q] * total_w / (n * double(area[q])));
-        const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
-                     s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
+        // centroid: the sequence starts so that its first point is (1/3, 1/3), the centroid.
+        const double s1 = centroid ? 1.0 / 3.0 - a1 : unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
+                     s2 = centroid ? 1.0 / 3.0 - a2
+                                   : unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
         for (int32_t m = 0; m < cnt; ++m, ++k) {
           double b1 = s1 + (m + 1) * a1, b2 = s2 + (m + 1) * a2;
           b1 -= std::floor(b1);
@@ -465,7 +471,8 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const int64_t n = weight.empty() ? resolve_budget(options, dk, vk, K) : detail_budget(options, weight);
   if (options.mode == "area") {
     Supports s = allocate(n);
-    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data(), options.image_share);
+    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data(), options.image_share,
+                 options.placement == "centroid");
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

@@ -28,7 +28,8 @@ struct SamplerOptions {
   // area mode: share of the budget spread evenly over the image's accepted triangles (each pixel alike)
   // instead of by 3D area, so near surfaces, whose pixels cover little area, are not starved. 0 = paper.
   double image_share = 0.0;
-  std::string color = "bilinear";  // bilinear | nearest: how a support off a pixel centre reads its colour
+  std::string color = "bilinear";    // bilinear | nearest: how a support off a pixel centre reads its colour
+  std::string placement = "random";  // random | centroid: where a triangle's supports sit inside it
   void visit(ConfigVisitor& v);
 };
 
