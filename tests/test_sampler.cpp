@@ -148,6 +148,31 @@ TEST_CASE("sampler: placement = centroid puts a triangle's single support at its
   CHECK(((fr - 1.0 / 3).abs().lt(1e-3).all(1)).sum().item<int64_t>() < s.count() / 10);
 }
 
+TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth step and the border", "[sampler]") {
+  // Columns 0..31 at 2 m, 32..64 at 6 m: the quads between columns 31 and 32 are rejected.
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);
+  SamplerOptions o = fixed(4000);
+  const Supports faces = sample_supports(depth, ones(), K(), image(), o, 2);
+  o.edge_supports = true;
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(s.count() == 4000);
+  // Every row has a support at the centres of columns 31 and 32, and at both ends of the image.
+  auto centre = [&](double u, double v) {
+    return ((s.uv.select(1, 0) - u).abs().lt(1e-4) & (s.uv.select(1, 1) - v).abs().lt(1e-4)).any().item<bool>();
+  };
+  int64_t missing = 0;
+  for (int64_t i = 0; i < H; ++i)
+    for (double u : {0.5, 31.5, 32.5, W - 0.5}) missing += !centre(u, i + 0.5);
+  CHECK(missing == 0);
+  // Edge pixels: 4 per row, plus the rest of the top and bottom rows.
+  const int64_t edges = 4 * H + 2 * (W - 4);
+  CHECK(((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6).all(1)).sum().item<int64_t>() >= edges);
+  // Faces alone never reach the step's columns; the represented area is the surface's, once.
+  CHECK(((faces.uv.select(1, 0) - 32).abs() < 0.5).sum().item<int64_t>() == 0);
+  CHECK(s.area.sum().item<double>() == Approx(faces.area.sum().item<double>()).epsilon(1e-4));
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

@@ -53,6 +53,9 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area mode: a triangle's supports follow a low-discrepancy sequence from a random start (random) or from "
           "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular)",
           {"random", "centroid"});
+  v.field("edge_supports", edge_supports,
+          "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
+          "triangle surrounds it and faces leave a half-pixel gap), taken from the budget");
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -350,6 +353,28 @@ void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int6
   });
 }
 
+// Valid pixels not surrounded by accepted triangles: one of the four quads around the pixel centre is outside
+// the image or has a rejected (discontinuous or invalid) triangle. Faces leave a half-pixel gap around them.
+std::vector<int64_t> edge_pixels(const Grid& g) {
+  const int64_t H = g.H, W = g.W, Wq = W - 1;
+  std::vector<uint8_t> quad_ok(static_cast<size_t>((H - 1) * Wq), 0);
+  at::parallel_for(0, H - 1, 8, [&](int64_t b, int64_t e) {
+    for (int64_t i = b; i < e; ++i)
+      for (int64_t j = 0; j < Wq; ++j)
+        quad_ok[i * Wq + j] = triangle_area(g, i, j, 0) > 0 && triangle_area(g, i, j, 1) > 0;
+  });
+  std::vector<int64_t> out;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      if (g.valid[i * W + j] == 0.0f) continue;
+      bool inner = i > 0 && j > 0 && i + 1 < H && j + 1 < W;
+      for (int64_t di = -1; inner && di <= 0; ++di)
+        for (int64_t dj = -1; inner && dj <= 0; ++dj) inner = quad_ok[(i + di) * Wq + (j + dj)] != 0;
+      if (!inner) out.push_back(i * W + j);
+    }
+  return out;
+}
+
 }  // namespace
 
 namespace {
@@ -471,8 +496,20 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const int64_t n = weight.empty() ? resolve_budget(options, dk, vk, K) : detail_budget(options, weight);
   if (options.mode == "area") {
     Supports s = allocate(n);
-    sample_faces(g, n, seed, pointers(s), 0, weight.empty() ? nullptr : weight.data(), options.image_share,
-                 options.placement == "centroid");
+    const Output o = pointers(s);
+    int64_t ne = 0;
+    if (options.edge_supports) {
+      const std::vector<int64_t> edges = edge_pixels(g);
+      ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
+      write_pixel_supports(g, o, edges, ne);
+    }
+    const double total = sample_faces(g, n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
+                                      options.image_share, options.placement == "centroid");
+    if (ne > 0) {
+      // Edge pixels and faces both stand for the surface: the areas sum to it once (as in vertex_face).
+      const double sum = s.area.sum().item<double>();
+      if (sum > 0) s.area.mul_(total / sum);
+    }
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

@@ -30,6 +30,9 @@ struct SamplerOptions {
   double image_share = 0.0;
   std::string color = "bilinear";    // bilinear | nearest: how a support off a pixel centre reads its colour
   std::string placement = "random";  // random | centroid: where a triangle's supports sit inside it
+  // area mode: one support at the centre of every valid pixel that no accepted triangle surrounds (depth
+  // edges, holes, the image border), taken from the budget; faces get the rest.
+  bool edge_supports = false;
   void visit(ConfigVisitor& v);
 };
 
