@@ -121,14 +121,9 @@ torch::Tensor normal_coherence_loss(const torch::Tensor& scales, const torch::Te
   auto c1 = torch::stack({2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)}, -1);
   auto c2 = torch::stack({2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}, -1);
   auto axes = torch::stack({c0, c1, c2}, 1);  // [N,3 axes,3]
-  torch::Tensor flat;
-  torch::Tensor normal;
-  {
-    auto sorted = std::get<0>(torch::sort(scales.detach(), -1));
-    flat = 1 - sorted.select(1, 0) / torch::clamp_min(sorted.select(1, 1), 1e-12);
-    auto shortest = std::get<1>(scales.detach().min(-1));  // [N]
-    normal = axes.gather(1, shortest.view({N, 1, 1}).expand({N, 1, 3})).squeeze(1);
-  }
+  const auto [sorted, order] = torch::sort(scales.detach(), -1);
+  auto flat = 1 - sorted.select(1, 0) / torch::clamp_min(sorted.select(1, 1), 1e-12);
+  auto normal = axes.gather(1, order.narrow(1, 0, 1).unsqueeze(2).expand({N, 1, 3})).squeeze(1);  // shortest axis
   auto flat_idx = nb.reshape({-1});
   auto dot = (normal.unsqueeze(1) * normal.index_select(0, flat_idx).view({N, k, 3})).sum(-1);
   auto pair_w = flat.unsqueeze(1) * flat.index_select(0, flat_idx).view({N, k});

@@ -184,24 +184,30 @@ std::vector<T> row_offsets(const std::vector<T>& per_row, T start) {
   return out;
 }
 
-// Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
-// `weight` (per pixel, or null): triangles are drawn in proportion to area × the weight of their quad's
-// first vertex, and each support then stands for a share of area inversely proportional to that weight.
-// `image_share`: that share of the measure is spread evenly over the accepted triangles instead.
-double sample_faces(const Grid& g, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false) {
+// The area of every triangle, (i * (W - 1) + j) * 2 + t for triangle t of quad (i, j); 0 when rejected.
+std::vector<float> triangle_areas(const Grid& g) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   ISPLAT_CHECK(Hq > 0 && Wq > 0, "sampler: depth map ", g.H, "x", g.W, " is too small to form triangles");
   std::vector<float> area(static_cast<size_t>(Hq * Wq * 2));
+  for_each_row(Hq, [&](int64_t i) {
+    for (int64_t j = 0; j < Wq; ++j)
+      for (int t = 0; t < 2; ++t) area[(i * Wq + j) * 2 + t] = static_cast<float>(triangle_area(g, i, j, t));
+  });
+  return area;
+}
+
+// Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
+// `area`: triangle_areas(g). `weight` (per pixel, or null): triangles are drawn in proportion to area × the
+// weight of their quad's first vertex, and each support then stands for a share of area inversely
+// proportional to that weight. `image_share`: that share of the measure is spread evenly over the accepted
+// triangles instead.
+double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t seed, const Output& o, int64_t first,
+                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false) {
+  const int64_t Hq = g.H - 1, Wq = g.W - 1;
   std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
   for_each_row(Hq, [&](int64_t i) {
     double s = 0;
-    for (int64_t j = 0; j < Wq; ++j)
-      for (int t = 0; t < 2; ++t) {
-        const double a = triangle_area(g, i, j, t);
-        area[(i * Wq + j) * 2 + t] = static_cast<float>(a);
-        s += static_cast<float>(a);
-      }
+    for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) s += area[q];
     row_sum[i] = s;
   });
   const double total = row_offsets(row_sum, 0.0)[Hq];
@@ -343,6 +349,12 @@ Output pointers(Supports& s) {
   return {s.uv.data_ptr<float>(), s.depth.data_ptr<float>(), s.color.data_ptr<float>(), s.area.data_ptr<float>()};
 }
 
+// Supports placed at pixels and on faces both stand for the surface: rescale so the areas sum to `total` once.
+void rescale_areas(Supports& s, double total) {
+  const double sum = s.area.sum().item<double>();
+  if (sum > 0) s.area.mul_(total / sum);
+}
+
 // Supports 0..count-1 at the centres of the given pixels (flat indices).
 void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, int64_t count) {
   at::parallel_for(0, count, 4096, [&](int64_t b, int64_t e) {
@@ -355,21 +367,17 @@ void write_pixel_supports(const Grid& g, const Output& o, const std::vector<int6
 
 // Valid pixels not surrounded by accepted triangles: one of the four quads around the pixel centre is outside
 // the image or has a rejected (discontinuous or invalid) triangle. Faces leave a half-pixel gap around them.
-std::vector<int64_t> edge_pixels(const Grid& g) {
+// `area`: triangle_areas(g).
+std::vector<int64_t> edge_pixels(const Grid& g, const std::vector<float>& area) {
   const int64_t H = g.H, W = g.W, Wq = W - 1;
-  std::vector<uint8_t> quad_ok(static_cast<size_t>((H - 1) * Wq), 0);
-  at::parallel_for(0, H - 1, 8, [&](int64_t b, int64_t e) {
-    for (int64_t i = b; i < e; ++i)
-      for (int64_t j = 0; j < Wq; ++j)
-        quad_ok[i * Wq + j] = triangle_area(g, i, j, 0) > 0 && triangle_area(g, i, j, 1) > 0;
-  });
+  auto quad_ok = [&](int64_t i, int64_t j) { return area[(i * Wq + j) * 2] > 0 && area[(i * Wq + j) * 2 + 1] > 0; };
   std::vector<int64_t> out;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
       if (g.valid[i * W + j] == 0.0f) continue;
       bool inner = i > 0 && j > 0 && i + 1 < H && j + 1 < W;
       for (int64_t di = -1; inner && di <= 0; ++di)
-        for (int64_t dj = -1; inner && dj <= 0; ++dj) inner = quad_ok[(i + di) * Wq + (j + dj)] != 0;
+        for (int64_t dj = -1; inner && dj <= 0; ++dj) inner = quad_ok(i + di, j + dj);
       if (!inner) out.push_back(i * W + j);
     }
   return out;
@@ -497,19 +505,16 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   if (options.mode == "area") {
     Supports s = allocate(n);
     const Output o = pointers(s);
+    std::vector<float> area = triangle_areas(g);
     int64_t ne = 0;
     if (options.edge_supports) {
-      const std::vector<int64_t> edges = edge_pixels(g);
+      const std::vector<int64_t> edges = edge_pixels(g, area);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       write_pixel_supports(g, o, edges, ne);
     }
-    const double total = sample_faces(g, n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
+    const double total = sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
                                       options.image_share, options.placement == "centroid");
-    if (ne > 0) {
-      // Edge pixels and faces both stand for the surface: the areas sum to it once (as in vertex_face).
-      const double sum = s.area.sum().item<double>();
-      if (sum > 0) s.area.mul_(total / sum);
-    }
+    if (ne > 0) rescale_areas(s, total);
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,
@@ -543,10 +548,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   Supports s = allocate(n);
   const Output o = pointers(s);
   write_pixel_supports(g, o, priority, nv);
-  const double total = sample_faces(g, n - nv, seed, o, nv);
-  // Vertices and faces both stand for the surface: rescale so the areas sum to the surface area once.
-  const double sum = s.area.sum().item<double>();
-  if (sum > 0) s.area.mul_(total / sum);
+  rescale_areas(s, sample_faces(g, triangle_areas(g), n - nv, seed, o, nv));
   return s;
 }
 
