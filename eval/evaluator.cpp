@@ -142,19 +142,32 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
   return run();
 }
 
-// Results are found by method name, so a method whose options changed must not resume from them: the
-// options are stamped beside the results (<results>.method.json) and compared on every run. A log without
-// a stamp (older runs) adopts the current options.
+// Results are found by method name, so a method whose options or weights changed must not resume from them:
+// the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
+// and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
+// a fingerprint (older runs) adopts the current checkpoint's.
 static void check_method_stamp(const std::string& results, const MethodOptions& mo) {
   nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
   now.erase("name");
+  if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
+    now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
   const std::string stamp = results + ".method.json";
   if (fs::exists(stamp)) {
-    const nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
+    nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
+    const bool adopt =
+        before.is_object() && !before.contains("checkpoint_fingerprint") && now.contains("checkpoint_fingerprint");
+    if (adopt) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
+    if (before.is_object() && now.contains("checkpoint_fingerprint") &&
+        before.value("checkpoint_fingerprint", "") != now["checkpoint_fingerprint"].get<std::string>() &&
+        before.value("checkpoint", "") == mo.checkpoint)
+      fail("eval: ", results, " was scored with other weights for method '", mo.name, "': ", mo.checkpoint,
+           " changed since (", stamp, " has fingerprint ", before.value("checkpoint_fingerprint", ""),
+           ", the file now ", now["checkpoint_fingerprint"].get<std::string>(),
+           "); rename the method or delete both files to score it again");
     ISPLAT_CHECK(before == now, "eval: ", results, " was scored with other options for method '", mo.name, "' (", stamp,
                  " has ", before.dump(), ", the config now gives ", now.dump(),
                  "); rename the method or delete both files to score it again");
-    return;
+    if (!adopt) return;
   }
   fs::create_directories(fs::path(stamp).parent_path());
   write_file_atomic(stamp, now.dump(2) + "\n");

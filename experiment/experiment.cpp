@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "core/config.h"
@@ -98,12 +99,60 @@ std::vector<ExperimentRun> Experiment::runs(const ExperimentRow& r) const {
   return out;
 }
 
+TrainConfig Experiment::run_config(const ExperimentRun& run) const {
+  const ExperimentRow& r = row(run.row);
+  const auto sets = concat(
+      concat(config_.train_set, r.train_set),
+      {cat("train.out=", run.dir), cat("runtime.seed=", run.seed), cat("runtime.threads=", config_.runtime.threads)});
+  return load_config<TrainConfig>(config_.train_config, sets);
+}
+
+namespace {
+void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::string, std::string>& out) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+      flatten(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key(), out);
+  } else {
+    out[prefix] = j.dump();
+  }
+}
+}  // namespace
+
+std::string Experiment::config_drift(const ExperimentRun& run) const {
+  const fs::path stored = fs::path(run.dir) / "config.json";
+  if (!fs::exists(stored)) return "";
+  // Loaded through the schema, so keys added since the run was trained read as their defaults.
+  std::map<std::string, std::string> had, want;
+  flatten(config_to_json(load_config<TrainConfig>(stored.string())), "", had);
+  flatten(config_to_json(run_config(run)), "", want);
+  // Where the run lives, how many threads and workers train it, how long it runs (a longer recipe resumes
+  // it) and how many checkpoints are kept do not change what it learns.
+  for (const char* k : {"train.out", "runtime.threads", "data.workers", "train.steps", "train.keep_last"})
+    had.erase(k), want.erase(k);
+  std::string diff;
+  for (const auto& [k, v] : want) {
+    auto it = had.find(k);
+    const std::string before = it == had.end() ? "(absent)" : it->second;
+    if (before != v) diff += cat(diff.empty() ? "" : ", ", k, " = ", before, " there, ", v, " now");
+  }
+  for (const auto& [k, v] : had)
+    if (!want.count(k)) diff += cat(diff.empty() ? "" : ", ", k, " = ", v, " there, absent now");
+  return diff;
+}
+
+void Experiment::check_config(const ExperimentRun& run) const {
+  const std::string diff = config_drift(run);
+  ISPLAT_CHECK(diff.empty(), "experiment: ", run.dir, " (row ", run.row, ", seed ", run.seed,
+               ") was trained with another configuration than the experiment now gives it: ", diff,
+               ". Nothing was changed; move that folder away (or point `out` elsewhere) to train the row anew");
+}
+
 bool Experiment::finished(const ExperimentRun& run) const {
   const fs::path summary = fs::path(run.dir) / "summary.json";
   if (!fs::exists(summary)) return false;
-  const TrainConfig tc = load_config<TrainConfig>((fs::path(run.dir) / "config.json").string());
+  const int64_t steps = run_config(run).train.steps;
   const nlohmann::json s = read_json_file(summary.string());
-  return guard_json(summary.string(), [&] { return s.value("steps", int64_t{-1}) >= tc.train.steps; });
+  return guard_json(summary.string(), [&] { return s.value("steps", int64_t{-1}) >= steps; });
 }
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
@@ -111,11 +160,9 @@ bool Experiment::train(const std::vector<std::string>& only, const std::vector<i
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     for (const auto& run : runs(r)) {
       if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), run.seed) == seeds.end()) continue;
-      const auto sets =
-          concat(concat(config_.train_set, r.train_set), {cat("train.out=", run.dir), cat("runtime.seed=", run.seed),
-                                                          cat("runtime.threads=", config_.runtime.threads)});
-      TrainConfig tc = load_config<TrainConfig>(config_.train_config, sets);
-      if (fs::exists(fs::path(run.dir) / "summary.json") && finished(run)) {
+      check_config(run);
+      TrainConfig tc = run_config(run);
+      if (finished(run)) {
         log_info("experiment: ", r.name, " seed ", run.seed, " is trained (", run.dir, "); skipped");
         continue;
       }
@@ -144,13 +191,19 @@ std::string missing_weights(const std::vector<std::string>& overrides) {
 }
 }  // namespace
 
-void Experiment::evaluate(const std::vector<std::string>& only) {
+void Experiment::evaluate(const std::vector<std::string>& only, const std::vector<std::string>& variants) {
+  for (const auto& name : variants) {
+    bool known = false;
+    for (const auto& v : config_.variants) known = known || v.name == name;
+    ISPLAT_CHECK(known, "experiment: no variant '", name, "' (--variants; the config's variants[].name)");
+  }
   EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
   ec.runtime.threads = config_.runtime.threads;
   ec.scoring.out = (fs::path(config_.out) / "eval").string();
   ec.methods.clear();
   for (const auto& b : config_.baselines) ec.methods.push_back(named_method(b, b));
   for (const auto& v : config_.variants) {
+    if (!wanted(variants, v.name)) continue;
     if (const std::string missing = missing_weights(v.overrides); !missing.empty()) {
       log_warn("experiment: variant '", v.name, "' needs ", missing, ", which does not exist yet; not scored");
       continue;
@@ -163,6 +216,7 @@ void Experiment::evaluate(const std::vector<std::string>& only) {
           log_warn("experiment: ", r.name, " seed ", run.seed, " is not trained yet (", ck, "); not scored");
           continue;
         }
+        check_config(run);
         ec.methods.push_back(named_method(method_name(r, run.seed, v), "model", ck, v.overrides));
       }
     }

@@ -9,6 +9,8 @@
 
 namespace isplat {
 
+struct TrainConfig;
+
 struct ExperimentRun {
   std::string row, dir;  // dir: <out>/runs/<row>_s<seed>
   int64_t seed = 0;
@@ -21,16 +23,22 @@ class Experiment {
   // Trains the runs of the rows in `only` (empty = all) with a seed in `seeds` (empty = all) that are not
   // finished. Returns false when interrupted (Ctrl-C); the interrupted run resumes next time.
   bool train(const std::vector<std::string>& only = {}, const std::vector<int64_t>& seeds = {});
-  // Scores every finished run in every variant, plus the baselines, on the evaluation's manifests.
-  void evaluate(const std::vector<std::string>& only = {});
+  // Scores every finished run of the rows in `only` in the variants in `variants` (empty = all), plus the
+  // baselines, on the evaluation's manifests.
+  void evaluate(const std::vector<std::string>& only = {}, const std::vector<std::string>& variants = {});
   // Writes report.md, report.csv, report.json, curves.png and deltas.png into the experiment folder.
   void report();
 
   std::vector<ExperimentRun> runs(const ExperimentRow& row) const;  // the runs a row trains or reuses
-  bool finished(const ExperimentRun& run) const;
+  bool finished(const ExperimentRun& run) const;                    // trained for the steps the recipe asks
+  TrainConfig run_config(const ExperimentRun& run) const;           // the recipe with the row's and the run's keys
+  // What a run's stored config.json differs in from what the experiment now gives it ("" when nothing that
+  // changes learning differs, or when the run has not started): "key = old there, new now, ...".
+  std::string config_drift(const ExperimentRun& run) const;
 
  private:
   const ExperimentRow& row(const std::string& name) const;
+  void check_config(const ExperimentRun& run) const;  // fails, naming the keys, on drift
   std::string method_name(const ExperimentRow& row, int64_t seed, const ExperimentVariant& variant) const;
 
   ExperimentConfig config_;

@@ -1,4 +1,5 @@
-// `infinisplat-experiment --config configs/experiments/ablation.json [--stage all|train|eval|report] [--rows a,b]`.
+// `infinisplat-experiment --config configs/experiments/ablation.json [--stage all|train|eval|report] [--rows a,b]
+// [--variants a,b]`.
 #include <sstream>
 
 #include "core/app.h"
@@ -11,7 +12,7 @@ int main(int argc, char** argv) {
   return run_main("infinisplat-experiment", [&] {
     ExperimentConfig config;
     CommonArgs common;
-    std::string stage = "all", rows, seeds;
+    std::string stage = "all", rows, seeds, variants;
     ArgParser args("infinisplat-experiment",
                    "Train every row of an ablation table from one recipe, score them all on the same pairs (RGB "
                    "prior, dataset depth and LiDAR variants) and write one report with paired bootstrap "
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
     common.add_to(args);
     args.option("--stage", stage, "all | train | eval | report", "STAGE");
     args.option("--rows", rows, "comma-separated rows to train and score now (default: all)", "A,B");
+    args.option("--variants", variants, "comma-separated variants to score now (default: all)", "A,B");
     args.option("--seeds", seeds, "comma-separated seeds to train now (default: every seed of a row)", "0,1");
     args.epilog(
         "examples:\n  infinisplat-experiment --config configs/experiments/ablation.json\n"
@@ -26,10 +28,14 @@ int main(int argc, char** argv) {
     if (!start_app(args, common, config, argc, argv)) return 0;
     ISPLAT_CHECK(stage == "all" || stage == "train" || stage == "eval" || stage == "report", "--stage '", stage,
                  "' is not one of all, train, eval, report");
-    std::vector<std::string> only;
-    std::stringstream ss(rows);
-    for (std::string r; std::getline(ss, r, ',');)
-      if (!r.empty()) only.push_back(r);
+    const auto list = [](const std::string& csv) {
+      std::vector<std::string> out;
+      std::stringstream ss(csv);
+      for (std::string r; std::getline(ss, r, ',');)
+        if (!r.empty()) out.push_back(r);
+      return out;
+    };
+    const std::vector<std::string> only = list(rows), only_variants = list(variants);
     std::vector<int64_t> seed_list;
     std::stringstream sd(seeds);
     for (std::string x; std::getline(sd, x, ',');)
@@ -40,7 +46,7 @@ int main(int argc, char** argv) {
       }
     Experiment experiment(config);
     if ((stage == "all" || stage == "train") && !experiment.train(only, seed_list)) return 130;
-    if (stage == "all" || stage == "eval") experiment.evaluate(only);
+    if (stage == "all" || stage == "eval") experiment.evaluate(only, only_variants);
     if (stage == "all" || stage == "eval" || stage == "report") experiment.report();
     return 0;
   });

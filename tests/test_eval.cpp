@@ -18,6 +18,7 @@
 #include "eval/pairs.h"
 #include "eval/perturb.h"
 #include "eval/results_log.h"
+#include "io/atomic_file.h"
 #include "io/jsonl.h"
 #include "metrics/metrics.h"
 #include "support/test_util.h"
@@ -153,6 +154,19 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   const auto again = Evaluator(c).run();
   CHECK(test::read_bytes(c.scoring.out + "/courtyard/results_lift.jsonl") == before);
   CHECK(again[4].psnr == rows[4].psnr);
+  // The stamp holds the checkpoint's fingerprint; an older stamp without one adopts it.
+  const std::string stamp = c.scoring.out + "/courtyard/results_lidar.jsonl.method.json";
+  auto js = nlohmann::json::parse(test::read_bytes(stamp));
+  CHECK(js.value("checkpoint_fingerprint", "") == file_fingerprint(ck));
+  js.erase("checkpoint_fingerprint");
+  write_file_atomic(stamp, js.dump());
+  Evaluator(c).run();
+  CHECK(nlohmann::json::parse(test::read_bytes(stamp)).value("checkpoint_fingerprint", "") == file_fingerprint(ck));
+  // Other weights at the same path (a retrained model) never resume the old scores.
+  TrainConfig other = test::tiny_train_config(g, test::temp_dir("eval_e2e_run2"), 1);
+  other.runtime.seed = 7;
+  Trainer(other).save(ck);
+  CHECK_THROWS_WITH(Evaluator(c).run(), Catch::Contains("was scored with other weights for method 'lidar'"));
 }
 
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {

@@ -109,6 +109,24 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   Experiment again(c);
   REQUIRE(again.train());
   CHECK(test::read_bytes(c.out + "/runs/full_s0/train_log.jsonl") == log);
+  // A run trained under another recipe is never reused silently: training and scoring name the key.
+  ExperimentConfig changed = c;
+  changed.train_set = {"loss.smooth_normal=1"};
+  const ExperimentRun pixel_run = again.runs(c.rows[1]).at(0);
+  CHECK(again.config_drift(pixel_run).empty());
+  CHECK_THAT(Experiment(changed).config_drift(pixel_run), Catch::Contains("loss.smooth_normal = 0"));
+  CHECK_THROWS_WITH(Experiment(changed).train({"pixel_supports"}),
+                    Catch::Contains("was trained with another configuration") && Catch::Contains("loss.smooth_normal"));
+  CHECK_THROWS_WITH(Experiment(changed).evaluate({"pixel_supports"}), Catch::Contains("loss.smooth_normal"));
+  // A longer recipe is no drift: the run resumes to the new step count instead of being skipped.
+  ExperimentConfig longer = c;
+  longer.train_set = {"train.steps=4"};
+  Experiment more(longer);
+  CHECK(more.config_drift(pixel_run).empty());
+  CHECK_FALSE(more.finished(pixel_run));
+  REQUIRE(more.train({"pixel_supports"}));
+  CHECK(more.finished(pixel_run));
+  CHECK_THROWS_WITH(again.evaluate({}, {"nope"}), Catch::Contains("no variant 'nope'"));
   // A row reusing an unknown row is a clear error.
   ExperimentConfig bad = c;
   bad.rows[2].from = "nope";

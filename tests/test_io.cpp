@@ -39,6 +39,20 @@ cv::Mat gradient_image(int h, int w) {
 
 }  // namespace
 
+TEST_CASE("io: file fingerprints are size and FNV-1a 64, and tell content apart", "[io]") {
+  const std::string dir = test::temp_dir("fingerprint");
+  test::write_bytes(dir + "/empty", "");
+  test::write_bytes(dir + "/a", "a");
+  test::write_bytes(dir + "/b", "b");
+  CHECK(file_fingerprint(dir + "/empty") == "0:cbf29ce484222325");  // the FNV-1a 64 offset basis
+  CHECK(file_fingerprint(dir + "/a") == "1:af63dc4c8601ec8c");      // published FNV-1a 64 of "a"
+  CHECK(file_fingerprint(dir + "/b") != file_fingerprint(dir + "/a"));
+  const std::string big(3 << 20, 'x');  // spans several read blocks
+  test::write_bytes(dir + "/big", big);
+  CHECK(file_fingerprint(dir + "/big").rfind(std::to_string(big.size()) + ":", 0) == 0);
+  CHECK_THAT(error_of([&] { file_fingerprint(dir + "/missing"); }), Catch::Contains(dir + "/missing: no such file"));
+}
+
 TEST_CASE("io: PNG round trip is exact at 8 bits, JPG is close", "[io][image]") {
   const auto dir = test::temp_dir("io_image");
   cv::Mat img = gradient_image(40, 60);

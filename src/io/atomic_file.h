@@ -29,6 +29,10 @@ class AtomicPath {
 
 std::string read_file_bytes(const std::string& path);  // throws Error naming the path
 
+// The identity of a file's content: its size and 64-bit FNV-1a hash as "<bytes>:<16 hex digits>". Tells a
+// retrained checkpoint from the one scores were computed with when both sit at the same path.
+std::string file_fingerprint(const std::string& path);
+
 // Copies `from` to `to` atomically: a reflink (shared blocks, copy-on-write) where the file system has
 // them, else a byte copy. Either way the two are separate files: writing one never changes the other.
 void copy_file_atomic(const std::string& from, const std::string& to);
