@@ -34,6 +34,14 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
       const auto c = load_config<ExperimentConfig>(path);
       CHECK_FALSE(c.rows.empty());
       CHECK_NOTHROW(Experiment(c));  // rows, reuse and the reference are consistent
+      auto local = c;                // every row's keys are valid for the recipe (paths are relative to the project)
+      local.train_config = (fs::path(ISPLAT_SOURCE_DIR) / c.train_config).string();
+      const Experiment e(local);
+      for (const auto& r : local.rows)
+        for (const auto& run : e.runs(r)) {
+          INFO(r.name);
+          CHECK_NOTHROW(e.run_config(run));
+        }
     } else {
       const auto c = load_config<TrainConfig>(path);
       CHECK(c.train.steps > 0);
