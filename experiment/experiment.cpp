@@ -57,6 +57,7 @@ double mean_finite(const std::vector<double>& v) {
 // One scored method's values on the experiment's pair list (NaN where not scored).
 struct Scores {
   std::vector<double> psnr, ssim, lpips;
+  std::vector<double> holes, cracks, normals;  // stability measures in % and degrees (NaN where not measured)
   bool any = false;
 };
 
@@ -239,9 +240,29 @@ void Experiment::report() {
      << "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval (" << config_.bootstrap
      << " resamples); an interval that contains 0 is no difference.\n\n";
   CsvTable csv;
-  csv.header = {"dataset",        "variant",       "row",        "bin",           "pairs",         "psnr",
-                "ssim",           "lpips_" + lp,   "delta_psnr", "delta_psnr_lo", "delta_psnr_hi", "delta_lpips",
-                "delta_lpips_lo", "delta_lpips_hi"};
+  csv.header = {"dataset",
+                "variant",
+                "row",
+                "bin",
+                "pairs",
+                "psnr",
+                "ssim",
+                "lpips_" + lp,
+                "delta_psnr",
+                "delta_psnr_lo",
+                "delta_psnr_hi",
+                "delta_lpips",
+                "delta_lpips_lo",
+                "delta_lpips_hi",
+                "holes_pct",
+                "cracks_pct",
+                "normals_deg",
+                "delta_holes",
+                "delta_holes_lo",
+                "delta_holes_hi",
+                "delta_cracks",
+                "delta_cracks_lo",
+                "delta_cracks_hi"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   std::vector<Chart> delta_charts;
 
@@ -271,6 +292,9 @@ void Experiment::report() {
         s.ssim.push_back(ok ? it->second.ssim : NAN);
         const double l = ok && it->second.lpips.count(lp) ? it->second.lpips.at(lp) : NAN;
         s.lpips.push_back(l);
+        s.holes.push_back(ok ? 100 * it->second.hole_rate : NAN);
+        s.cracks.push_back(ok ? 100 * it->second.crack_rate : NAN);
+        s.normals.push_back(ok ? it->second.normal_deg : NAN);
       }
       return s;
     };
@@ -310,6 +334,9 @@ void Experiment::report() {
         ref.psnr.push_back(avg(&Scores::psnr));
         ref.ssim.push_back(avg(&Scores::ssim));
         ref.lpips.push_back(avg(&Scores::lpips));
+        ref.holes.push_back(avg(&Scores::holes));
+        ref.cracks.push_back(avg(&Scores::cracks));
+        ref.normals.push_back(avg(&Scores::normals));
       }
       md << "### " << v.name << (v.overrides.empty() ? "" : " (model overrides: ");
       for (size_t k = 0; k < v.overrides.size(); ++k) md << (k ? ", " : "") << "`" << v.overrides[k] << "`";
@@ -319,6 +346,18 @@ void Experiment::report() {
       md << "\n|---|---|---|---|---|---|";
       for (size_t b = 0; b < bins.size(); ++b) md << "---|";
       md << "\n";
+
+      // Where single-image methods fail: holes and cracks, overall and at the largest baselines.
+      const int last_bin = static_cast<int>(bins.size()) - 1;
+      std::ostringstream stab;
+      stab << "Stability (holes: masked pixels with rendered alpha < 0.5; cracks: neighbours whose rendered depth "
+              "jumps where the reference is smooth; normals: mean angle between neighbouring rendered normals on "
+              "reference-planar surfaces). Δ to `"
+           << config_.reference << "` with a paired 95% interval:\n\n| row | holes % | cracks % | normals deg | "
+           << bins[static_cast<size_t>(last_bin)] << " holes % (Δ [CI]) | " << bins[static_cast<size_t>(last_bin)]
+           << " cracks % (Δ [CI]) |\n|---|---|---|---|---|---|\n";
+      bool any_stability = false;
+      std::vector<std::string> unmeasured;  // rows scored before the stability measures existed
 
       Chart chart;
       chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
@@ -367,13 +406,59 @@ void Experiment::report() {
         ChartSeries series;
         series.name = e.name;
         series.marker = static_cast<int>(k % 4);
+        auto ci = [](const Interval& i, int digits) {
+          return cat(signed_fmt(i.mean, digits), " [", signed_fmt(i.lo, digits), ", ", signed_fmt(i.hi, digits), "]");
+        };
+        // Stability of one bin (-1 = all pairs): the row's means and its paired differences to the reference.
+        struct Stability {
+          double holes, cracks, normals;
+          Interval dh, dc;
+        };
+        auto stability = [&](int bin) {
+          return Stability{mean_finite(subset(e.s.holes, bin)), mean_finite(subset(e.s.cracks, bin)),
+                           mean_finite(subset(e.s.normals, bin)),
+                           paired_bootstrap(subset(e.s.holes, bin), subset(base.holes, bin), config_.bootstrap),
+                           paired_bootstrap(subset(e.s.cracks, bin), subset(base.cracks, bin), config_.bootstrap)};
+        };
+        {
+          const Stability all = stability(-1), far = stability(last_bin);
+          if (!std::isfinite(all.holes)) unmeasured.push_back(e.name);
+          if (std::isfinite(all.holes)) {
+            any_stability = true;
+            stab << "| " << e.name << " | " << fmt(all.holes, 2) << " | " << fmt(all.cracks, 2) << " | "
+                 << fmt(all.normals, 1) << " | " << fmt(far.holes, 2)
+                 << (self || far.dh.n == 0 ? std::string() : " (" + ci(far.dh, 2) + ")") << " | " << fmt(far.cracks, 2)
+                 << (self || far.dc.n == 0 ? std::string() : " (" + ci(far.dc, 2) + ")") << " |\n";
+          }
+        }
         auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
-                           const std::vector<double>& l, const Interval& ip, const Interval& il) {
+                           const std::vector<double>& l, const Interval& ip, const Interval& il, int bin_index) {
           int64_t n = 0;
           for (double x : p) n += std::isfinite(x);
-          csv.rows.push_back({ds.name, v.name, e.name, bin, std::to_string(n), fmt(mean_finite(p), 4),
-                              fmt(mean_finite(s), 5), fmt(mean_finite(l), 5), fmt(ip.mean, 4), fmt(ip.lo, 4),
-                              fmt(ip.hi, 4), fmt(il.mean, 5), fmt(il.lo, 5), fmt(il.hi, 5)});
+          const Stability st = stability(bin_index);
+          csv.rows.push_back({ds.name,
+                              v.name,
+                              e.name,
+                              bin,
+                              std::to_string(n),
+                              fmt(mean_finite(p), 4),
+                              fmt(mean_finite(s), 5),
+                              fmt(mean_finite(l), 5),
+                              fmt(ip.mean, 4),
+                              fmt(ip.lo, 4),
+                              fmt(ip.hi, 4),
+                              fmt(il.mean, 5),
+                              fmt(il.lo, 5),
+                              fmt(il.hi, 5),
+                              fmt(st.holes, 4),
+                              fmt(st.cracks, 4),
+                              fmt(st.normals, 3),
+                              fmt(st.dh.mean, 4),
+                              fmt(st.dh.lo, 4),
+                              fmt(st.dh.hi, 4),
+                              fmt(st.dc.mean, 4),
+                              fmt(st.dc.lo, 4),
+                              fmt(st.dc.hi, 4)});
           auto num = [](double x) {
             return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
           };
@@ -390,9 +475,16 @@ void Experiment::report() {
                         {"delta_psnr_ci", {num(ip.lo), num(ip.hi)}},
                         {"delta_lpips", num(il.mean)},
                         {"delta_lpips_ci", {num(il.lo), num(il.hi)}},
+                        {"holes_pct", num(st.holes)},
+                        {"cracks_pct", num(st.cracks)},
+                        {"normals_deg", num(st.normals)},
+                        {"delta_holes", num(st.dh.mean)},
+                        {"delta_holes_ci", {num(st.dh.lo), num(st.dh.hi)}},
+                        {"delta_cracks", num(st.dc.mean)},
+                        {"delta_cracks_ci", {num(st.dc.lo), num(st.dc.hi)}},
                         {"reference", config_.reference}});
         };
-        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl);
+        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl, -1);
         for (size_t b = 0; b < bins.size(); ++b) {
           const int bi = static_cast<int>(b);
           const auto p = subset(e.s.psnr, bi);
@@ -403,7 +495,7 @@ void Experiment::report() {
             md << " (" << signed_fmt(bp.mean, 2) << " [" << signed_fmt(bp.lo, 2) << ", " << signed_fmt(bp.hi, 2)
                << "])";
           md << " |";
-          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl);
+          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl, bi);
           series.x.push_back(static_cast<double>(b));
           series.y.push_back(self ? 0.0 : bp.mean);
         }
@@ -411,6 +503,13 @@ void Experiment::report() {
         if (!self && !spread) chart.series.push_back(series);
       }
       md << "\n";
+      if (any_stability) md << stab.str() << "\n";
+      if (any_stability && !unmeasured.empty()) {
+        md << "Without holes and cracks (scored before they were measured; delete their results_*.jsonl and its "
+              "stamp to score them again):";
+        for (const auto& n : unmeasured) md << " " << n;
+        md << ".\n\n";
+      }
       delta_charts.push_back(chart);
     }
   }

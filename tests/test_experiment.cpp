@@ -104,6 +104,13 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   for (const auto& r : js)
     if (r["row"] == "pixel_supports@depth" && r["bin"] == "all") has_delta = r["delta_psnr"].is_number();
   CHECK(has_delta);
+  // Holes and cracks beside PSNR, with paired differences, overall and per bin.
+  CHECK_THAT(md, Catch::Contains("Stability (holes"));
+  bool has_holes = false;
+  for (const auto& r : js)
+    if (r["row"] == "pixel_supports@depth" && r["bin"] == "all")
+      has_holes = r["holes_pct"].is_number() && r["delta_holes"].is_number();
+  CHECK(has_holes);
   // Resume: nothing is retrained (the run's log does not grow).
   const std::string log = test::read_bytes(c.out + "/runs/full_s0/train_log.jsonl");
   Experiment again(c);
