@@ -127,8 +127,9 @@ std::string Experiment::config_drift(const ExperimentRun& run) const {
   flatten(config_to_json(load_config<TrainConfig>(stored.string())), "", had);
   flatten(config_to_json(run_config(run)), "", want);
   // Where the run lives, how many threads and workers train it, how long it runs (a longer recipe resumes
-  // it) and how many checkpoints are kept do not change what it learns.
-  for (const char* k : {"train.out", "runtime.threads", "data.workers", "train.steps", "train.keep_last"})
+  // it), how often it validates and saves, and how many checkpoints it keeps do not change what it learns.
+  for (const char* k : {"train.out", "runtime.threads", "data.workers", "train.steps", "train.keep_last",
+                        "train.val_every", "train.checkpoint_every", "train.val_images", "data.val_tuples"})
     had.erase(k), want.erase(k);
   std::string diff;
   for (const auto& [k, v] : want) {
