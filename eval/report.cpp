@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/build_info.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/chart.h"
@@ -443,7 +444,8 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   // Markdown: one table per dataset.
   std::ostringstream md;
   md << "# Evaluation report\n\nMasked metrics on the protocol's pairs (DESIGN §5). PSNR and SSIM higher is better, "
-        "LPIPS lower is better. Times are per pair on this machine.\n\n";
+        "LPIPS lower is better. Times are per pair on this machine. Report written by commit "
+     << build_commit() << " (scores resumed from earlier runs keep the commit that computed them).\n\n";
   std::vector<std::string> datasets;
   for (const auto& r : rows)
     if (std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end()) datasets.push_back(r.dataset);

@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -52,6 +53,14 @@ double mean_finite(const std::vector<double>& v) {
   for (double x : v)
     if (std::isfinite(x)) s += x, ++n;
   return n ? s / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The commit a finished run's summary names ("not recorded" for runs finished before commits were recorded).
+std::string trained_by(const std::string& run_dir) {
+  const fs::path summary = fs::path(run_dir) / "summary.json";
+  if (!fs::exists(summary)) return "not finished";
+  const nlohmann::json s = read_json_file(summary.string());
+  return s.contains("commit") && s["commit"].is_string() ? s["commit"].get<std::string>() : "not recorded";
 }
 
 // One scored method's values on the experiment's pair list (NaN where not scored).
@@ -520,8 +529,9 @@ void Experiment::report() {
   Chart val_step{"validation masked PSNR vs step", "step", "PSNR (dB)", false, {}};
   Chart loss_cpu{"training loss (total) vs CPU time", "CPU time (s)", "loss", false, {}};
   Chart val_cpu{"validation masked PSNR vs CPU time", "CPU time (s)", "PSNR (dB)", false, {}};
-  md << "## Training runs\n\n| run | steps | mean step (ms) | CPU time (s) | final val PSNR (dB) "
-        "|\n|---|---|---|---|---|\n";
+  md << "Report written by commit " << build_commit()
+     << ".\n\n## Training runs\n\n| run | steps | mean step (ms) | CPU "
+        "time (s) | final val PSNR (dB) | trained by commit |\n|---|---|---|---|---|---|\n";
   int color = 0;
   for (const auto& r : config_.rows) {
     if (!r.from.empty()) continue;
@@ -558,7 +568,7 @@ void Experiment::report() {
       loss_step.series.push_back(ls), val_step.series.push_back(vs);
       loss_cpu.series.push_back(lc), val_cpu.series.push_back(vc);
       md << "| " << r.name << "_s" << run.seed << " | " << steps << " | " << fmt(timed ? step_ms / timed : NAN, 0)
-         << " | " << fmt(cpu, 1) << " | " << fmt(last_val, 2) << " |\n";
+         << " | " << fmt(cpu, 1) << " | " << fmt(last_val, 2) << " | " << trained_by(run.dir) << " |\n";
       ++color;
     }
   }

@@ -4,6 +4,7 @@
 #include <ATen/Parallel.h>
 
 #include "core/args.h"
+#include "core/build_info.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/runtime.h"
@@ -65,5 +66,10 @@ TEST_CASE("runtime: threads default to all cores, report names LibTorch and BLAS
   const auto report = runtime_report(false);
   CHECK_THAT(report, Catch::Contains("LibTorch        1.13"));
   CHECK_THAT(report, Catch::Contains("OpenMP          yes"));
+  // The build's commit: 12 hex digits (with -dirty for uncommitted changes), or unknown outside a git checkout.
+  const std::string commit = build_commit();
+  CHECK_THAT(report, Catch::Contains("(commit " + commit + ")"));
+  const bool hex12 = commit.size() >= 12 && commit.find_first_not_of("0123456789abcdef") >= 12;
+  CHECK((commit == "unknown" || (hex12 && (commit.size() == 12 || commit.substr(12) == "-dirty"))));
   CHECK_THAT(loaded_blas(), Catch::Contains("blas"));
 }

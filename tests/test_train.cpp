@@ -8,6 +8,8 @@
 
 #include <filesystem>
 
+#include "core/build_info.h"
+#include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "io/checkpoint.h"
@@ -125,6 +127,7 @@ TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoin
   CHECK(load_checkpoint((ck / "init.safetensors").string()).tensors.count("optim/state") == 0);
   CHECK(fs::exists(fs::path(out) / "train_log.jsonl"));
   CHECK(fs::exists(fs::path(out) / "summary.json"));
+  CHECK(read_json_file((fs::path(out) / "summary.json").string()).value("commit", "") == build_commit());
   bool panel = false;
   for (const auto& e : fs::directory_iterator(fs::path(out) / "val")) panel |= e.path().extension() == ".png";
   CHECK(panel);

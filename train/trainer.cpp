@@ -10,6 +10,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -401,7 +402,7 @@ int Trainer::run() {
   bar.finish();
   if (!writer()) return 0;
   task_->finish(run_dir_);
-  nlohmann::json summary = {{"steps", step_}, {"best_val_loss", best_val_}};
+  nlohmann::json summary = {{"steps", step_}, {"best_val_loss", best_val_}, {"commit", build_commit()}};
   for (auto& [k, v] : time_sum) summary["mean_step_time_ms"][k] = v / std::max<int64_t>(1, timed);
   write_file_atomic((fs::path(run_dir_) / "summary.json").string(), summary.dump(2) + "\n");
   std::string breakdown;

@@ -16,6 +16,7 @@
 #include <set>
 #include <thread>
 
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -124,7 +125,7 @@ double matmul_gflops(int n) {
 
 std::string runtime_report(bool measure) {
   std::ostringstream os;
-  os << "InfiniSplat-C++ " << ISPLAT_VERSION << "\n";
+  os << "InfiniSplat-C++ " << ISPLAT_VERSION << " (commit " << build_commit() << ")\n";
   os << "LibTorch        " << TORCH_VERSION << " (CPU)\n";
   os << "threads         " << at::get_num_threads() << " intra-op of " << std::thread::hardware_concurrency()
      << " hardware threads\n";
