@@ -370,14 +370,14 @@ void Experiment::report() {
       std::vector<std::string> unmeasured;  // rows scored before the stability measures existed
 
       Chart chart;
-      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
+      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin (rows only)");
       chart.x_label = "baseline bin (0 = smallest)";
       chart.y_label = "delta PSNR (dB), mean over the bin's pairs";
       // Rows: every trained row and seed, then the baselines.
       struct Entry {
         std::string name, label;
         Scores s;
-        bool is_ref_seed = false;
+        bool is_ref_seed = false, is_baseline = false;
       };
       std::vector<Entry> entries;
       for (const auto& r : config_.rows) {
@@ -391,7 +391,7 @@ void Experiment::report() {
       }
       for (const auto& b : config_.baselines) {
         Scores s = load(b);
-        if (s.any) entries.push_back({b, b, s, false});
+        if (s.any) entries.push_back({b, b, s, false, true});
       }
       if (ref_seeds.size() > 1) {  // training noise: the reference's seeds against each other
         entries.push_back(
@@ -510,7 +510,8 @@ void Experiment::report() {
           series.y.push_back(self ? 0.0 : bp.mean);
         }
         md << "\n";
-        if (!self && !spread) chart.series.push_back(series);
+        // Baselines sit many dB away and would squash the rows' differences: they stay in the tables.
+        if (!self && !spread && !e.is_baseline) chart.series.push_back(series);
       }
       md << "\n";
       if (any_stability) md << stab.str() << "\n";
