@@ -370,7 +370,7 @@ void Experiment::report() {
       std::vector<std::string> unmeasured;  // rows scored before the stability measures existed
 
       Chart chart;
-      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin (rows only)");
+      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
       chart.x_label = "baseline bin (0 = smallest)";
       chart.y_label = "delta PSNR (dB), mean over the bin's pairs";
       // Rows: every trained row and seed, then the baselines.
