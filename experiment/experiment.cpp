@@ -540,8 +540,9 @@ void Experiment::report() {
       const std::string log_path = (fs::path(run.dir) / "train_log.jsonl").string();
       const auto records = read_jsonl(log_path);
       if (records.empty()) continue;
+      const int marker = (color / 10) % 4;  // tab10 repeats after 10 runs: the marker tells them apart
       ChartSeries ls{cat(r.name, "_s", run.seed), {}, {}, true, -1, color},
-          vs{cat(r.name, "_s", run.seed), {}, {}, true, 0, color};
+          vs{cat(r.name, "_s", run.seed), {}, {}, true, marker, color};
       ChartSeries lc = ls, vc = vs;
       double last_val = NAN, cpu = 0, step_ms = 0;
       int64_t steps = 0, timed = 0;
