@@ -516,8 +516,8 @@ void Experiment::report() {
       md << "\n";
       if (any_stability) md << stab.str() << "\n";
       if (any_stability && !unmeasured.empty()) {
-        md << "Without holes and cracks (scored before they were measured; delete their results_*.jsonl and its "
-              "stamp to score them again):";
+        md << "Without holes and cracks (the method renders no alpha, like identity, or was scored before they were "
+              "measured: delete its results_*.jsonl and stamp to score it again):";
         for (const auto& n : unmeasured) md << " " << n;
         md << ".\n\n";
       }
