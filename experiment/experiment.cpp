@@ -47,6 +47,10 @@ std::string signed_fmt(double v, int digits) {
   return (v >= 0 ? "+" : "") + fmt(v, digits);
 }
 
+std::string interval_fmt(const Interval& i, int digits) {  // "+0.12 [+0.05, +0.20]"
+  return cat(signed_fmt(i.mean, digits), " [", signed_fmt(i.lo, digits), ", ", signed_fmt(i.hi, digits), "]");
+}
+
 double mean_finite(const std::vector<double>& v) {
   double s = 0;
   int64_t n = 0;
@@ -129,12 +133,16 @@ void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::s
 }  // namespace
 
 std::string Experiment::config_drift(const ExperimentRun& run) const {
+  return config_drift(run, run_config(run));
+}
+
+std::string Experiment::config_drift(const ExperimentRun& run, const TrainConfig& want_config) const {
   const fs::path stored = fs::path(run.dir) / "config.json";
   if (!fs::exists(stored)) return "";
   // Loaded through the schema, so keys added since the run was trained read as their defaults.
   std::map<std::string, std::string> had, want;
   flatten(config_to_json(load_config<TrainConfig>(stored.string())), "", had);
-  flatten(config_to_json(run_config(run)), "", want);
+  flatten(config_to_json(want_config), "", want);
   // Where the run lives, how many threads and workers train it, how long it runs (a longer recipe resumes
   // it), how often it validates and saves, and how many checkpoints it keeps do not change what it learns.
   for (const char* k : {"train.out", "runtime.threads", "data.workers", "train.steps", "train.keep_last",
@@ -151,17 +159,20 @@ std::string Experiment::config_drift(const ExperimentRun& run) const {
   return diff;
 }
 
-void Experiment::check_config(const ExperimentRun& run) const {
-  const std::string diff = config_drift(run);
+void Experiment::check_config(const ExperimentRun& run, const TrainConfig& want) const {
+  const std::string diff = config_drift(run, want);
   ISPLAT_CHECK(diff.empty(), "experiment: ", run.dir, " (row ", run.row, ", seed ", run.seed,
                ") was trained with another configuration than the experiment now gives it: ", diff,
                ". Nothing was changed; move that folder away (or point `out` elsewhere) to train the row anew");
 }
 
 bool Experiment::finished(const ExperimentRun& run) const {
+  return finished(run, run_config(run).train.steps);
+}
+
+bool Experiment::finished(const ExperimentRun& run, int64_t steps) const {
   const fs::path summary = fs::path(run.dir) / "summary.json";
   if (!fs::exists(summary)) return false;
-  const int64_t steps = run_config(run).train.steps;
   const nlohmann::json s = read_json_file(summary.string());
   return guard_json(summary.string(), [&] { return s.value("steps", int64_t{-1}) >= steps; });
 }
@@ -171,9 +182,9 @@ bool Experiment::train(const std::vector<std::string>& only, const std::vector<i
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     for (const auto& run : runs(r)) {
       if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), run.seed) == seeds.end()) continue;
-      check_config(run);
-      TrainConfig tc = run_config(run);
-      if (finished(run)) {
+      const TrainConfig tc = run_config(run);
+      check_config(run, tc);
+      if (finished(run, tc.train.steps)) {
         log_info("experiment: ", r.name, " seed ", run.seed, " is trained (", run.dir, "); skipped");
         continue;
       }
@@ -223,11 +234,12 @@ void Experiment::evaluate(const std::vector<std::string>& only, const std::vecto
       if (!wanted(only, r.name) || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
       for (const auto& run : runs(r)) {
         const std::string ck = (fs::path(run.dir) / "checkpoints" / (r.checkpoint + ".safetensors")).string();
-        if (!fs::exists(ck) || (r.checkpoint != "init" && !finished(run))) {
+        const TrainConfig want = run_config(run);
+        if (!fs::exists(ck) || (r.checkpoint != "init" && !finished(run, want.train.steps))) {
           log_warn("experiment: ", r.name, " seed ", run.seed, " is not trained yet (", ck, "); not scored");
           continue;
         }
-        check_config(run);
+        check_config(run, want);
         ec.methods.push_back(named_method(method_name(r, run.seed, v), "model", ck, v.overrides));
       }
     }
@@ -406,19 +418,11 @@ void Experiment::report() {
         const bool self = e.is_ref_seed && ref_seeds.size() == 1;
         md << "| " << e.name << (e.label != e.name ? " (" + e.label + ")" : "") << " | "
            << fmt(mean_finite(e.s.psnr), 2) << " | " << fmt(mean_finite(e.s.ssim), 3) << " | "
-           << fmt(mean_finite(e.s.lpips), 3) << " | "
-           << (self ? "reference"
-                    : cat(signed_fmt(dp.mean, 2), " [", signed_fmt(dp.lo, 2), ", ", signed_fmt(dp.hi, 2), "]"))
-           << " | "
-           << (self ? "reference"
-                    : cat(signed_fmt(dl.mean, 3), " [", signed_fmt(dl.lo, 3), ", ", signed_fmt(dl.hi, 3), "]"))
-           << " |";
+           << fmt(mean_finite(e.s.lpips), 3) << " | " << (self ? "reference" : interval_fmt(dp, 2)) << " | "
+           << (self ? "reference" : interval_fmt(dl, 3)) << " |";
         ChartSeries series;
         series.name = e.name;
         series.marker = static_cast<int>(k % 4);
-        auto ci = [](const Interval& i, int digits) {
-          return cat(signed_fmt(i.mean, digits), " [", signed_fmt(i.lo, digits), ", ", signed_fmt(i.hi, digits), "]");
-        };
         // Stability of one bin (-1 = all pairs): the row's means and its paired differences to the reference.
         struct Stability {
           double holes, cracks, normals;
@@ -430,22 +434,23 @@ void Experiment::report() {
                            paired_bootstrap(subset(e.s.holes, bin), subset(base.holes, bin), config_.bootstrap),
                            paired_bootstrap(subset(e.s.cracks, bin), subset(base.cracks, bin), config_.bootstrap)};
         };
-        {
-          const Stability all = stability(-1), far = stability(last_bin);
-          if (!std::isfinite(all.holes)) unmeasured.push_back(e.name);
-          if (std::isfinite(all.holes)) {
-            any_stability = true;
-            stab << "| " << e.name << " | " << fmt(all.holes, 2) << " | " << fmt(all.cracks, 2) << " | "
-                 << fmt(all.normals, 1) << " | " << fmt(far.holes, 2)
-                 << (self || far.dh.n == 0 ? std::string() : " (" + ci(far.dh, 2) + ")") << " | " << fmt(far.cracks, 2)
-                 << (self || far.dc.n == 0 ? std::string() : " (" + ci(far.dc, 2) + ")") << " |\n";
-          }
+        std::vector<Stability> stability_of;  // [0]: all pairs, [b + 1]: bin b
+        for (int b = -1; b <= last_bin; ++b) stability_of.push_back(stability(b));
+        const Stability &all = stability_of.front(), &far = stability_of.back();
+        if (!std::isfinite(all.holes)) {
+          unmeasured.push_back(e.name);
+        } else {
+          any_stability = true;
+          stab << "| " << e.name << " | " << fmt(all.holes, 2) << " | " << fmt(all.cracks, 2) << " | "
+               << fmt(all.normals, 1) << " | " << fmt(far.holes, 2)
+               << (self || far.dh.n == 0 ? std::string() : " (" + interval_fmt(far.dh, 2) + ")") << " | "
+               << fmt(far.cracks, 2) << (self || far.dc.n == 0 ? std::string() : " (" + interval_fmt(far.dc, 2) + ")")
+               << " |\n";
         }
         auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
-                           const std::vector<double>& l, const Interval& ip, const Interval& il, int bin_index) {
+                           const std::vector<double>& l, const Interval& ip, const Interval& il, const Stability& st) {
           int64_t n = 0;
           for (double x : p) n += std::isfinite(x);
-          const Stability st = stability(bin_index);
           csv.rows.push_back({ds.name,
                               v.name,
                               e.name,
@@ -494,18 +499,16 @@ void Experiment::report() {
                         {"delta_cracks_ci", {num(st.dc.lo), num(st.dc.hi)}},
                         {"reference", config_.reference}});
         };
-        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl, -1);
+        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl, all);
         for (size_t b = 0; b < bins.size(); ++b) {
           const int bi = static_cast<int>(b);
           const auto p = subset(e.s.psnr, bi);
           const Interval bp = paired_bootstrap(p, subset(base.psnr, bi), config_.bootstrap);
           const Interval bl = paired_bootstrap(subset(e.s.lpips, bi), subset(base.lpips, bi), config_.bootstrap);
           md << " " << fmt(mean_finite(p), 2);
-          if (!self && bp.n > 0)
-            md << " (" << signed_fmt(bp.mean, 2) << " [" << signed_fmt(bp.lo, 2) << ", " << signed_fmt(bp.hi, 2)
-               << "])";
+          if (!self && bp.n > 0) md << " (" << interval_fmt(bp, 2) << ")";
           md << " |";
-          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl, bi);
+          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl, stability_of[b + 1]);
           series.x.push_back(static_cast<double>(b));
           series.y.push_back(self ? 0.0 : bp.mean);
         }

@@ -38,7 +38,10 @@ class Experiment {
 
  private:
   const ExperimentRow& row(const std::string& name) const;
-  void check_config(const ExperimentRun& run) const;  // fails, naming the keys, on drift
+  // The same three with the run's config already resolved (each resolution reads and validates the recipe).
+  bool finished(const ExperimentRun& run, int64_t steps) const;
+  std::string config_drift(const ExperimentRun& run, const TrainConfig& want) const;
+  void check_config(const ExperimentRun& run, const TrainConfig& want) const;  // fails, naming the keys, on drift
   std::string method_name(const ExperimentRow& row, int64_t seed, const ExperimentVariant& variant) const;
 
   ExperimentConfig config_;

@@ -37,13 +37,11 @@ int main(int argc, char** argv) {
     };
     const std::vector<std::string> only = list(rows), only_variants = list(variants);
     std::vector<int64_t> seed_list;
-    std::stringstream sd(seeds);
-    for (std::string x; std::getline(sd, x, ',');)
-      if (!x.empty()) {
-        const auto v = parse_int(x);
-        ISPLAT_CHECK(v && *v >= 0, "--seeds: '", x, "' is not a non-negative integer");
-        seed_list.push_back(*v);
-      }
+    for (const std::string& x : list(seeds)) {
+      const auto v = parse_int(x);
+      ISPLAT_CHECK(v && *v >= 0, "--seeds: '", x, "' is not a non-negative integer");
+      seed_list.push_back(*v);
+    }
     Experiment experiment(config);
     if ((stage == "all" || stage == "train") && !experiment.train(only, seed_list)) return 130;
     if (stage == "all" || stage == "eval") experiment.evaluate(only, only_variants);
