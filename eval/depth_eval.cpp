@@ -79,7 +79,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       const size_t n = std::min<size_t>(frames.size(), static_cast<size_t>(c.frames));
       std::vector<DepthErrors> ranges(edges.size());
       double abs_rel = 0, delta1 = 0, log_scale = 0, abs_rel_aligned = 0, coverage = 0;
-      int64_t counted = 0, pixels = 0;
+      int64_t counted = 0, pixels = 0, floor_scaled = 0;
       ProgressBar bar(cat("depth ", np.name, "/", ds.name), static_cast<int64_t>(n), "frame");
       for (size_t k = 0; k < n; ++k, bar.tick()) {
         const auto [s, f] = frames[k * frames.size() / n];
@@ -93,6 +93,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         in.valid = v.valid;
         in.seed = k;
         const PriorOutput out = prior->predict(in);
+        floor_scaled += out.floor_scaled;
         const DepthErrors all = depth_errors(out.depth, v.depth, v.valid * out.valid);
         if (all.pixels > 0) {
           abs_rel += all.abs_rel_sum / all.pixels, delta1 += all.delta1_count / all.pixels, ++counted;
@@ -110,13 +111,15 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       }
       bar.finish();
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      scores.push_back({ds.name, np.name, "all", counted, pixels, counted ? abs_rel / counted : nan,
-                        counted ? delta1 / counted : nan, counted ? std::exp(log_scale / counted) : nan,
-                        counted ? abs_rel_aligned / counted : nan, counted ? coverage / counted : nan});
+      scores.push_back(
+          {ds.name, np.name, "all", counted, pixels, counted ? abs_rel / counted : nan,
+           counted ? delta1 / counted : nan, counted ? std::exp(log_scale / counted) : nan,
+           counted ? abs_rel_aligned / counted : nan, counted ? coverage / counted : nan,
+           np.prior.camera_height_m > 0 ? static_cast<double>(floor_scaled) / static_cast<double>(n) : nan});
       for (size_t r = 0; r < edges.size(); ++r) {
         const auto& e = ranges[r];
         scores.push_back({ds.name, np.name, label(r), counted, e.pixels, e.pixels ? e.abs_rel_sum / e.pixels : nan,
-                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan, nan});
+                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan, nan, nan});
       }
     }
   }
@@ -134,15 +137,16 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         "Scale apart from shape: \"scale\" is the geometric mean over frames of each frame's median "
         "prediction / reference (1 = right metric scale), \"AbsRel aligned\" the AbsRel after dividing each frame "
         "by that median (shape error only). \"coverage\": the share of the reference's valid pixels the prior also "
-        "marks valid (a prior that cuts far depth as sky is scored only where it keeps depth).\n\n";
+        "marks valid (a prior that cuts far depth as sky is scored only where it keeps depth). \"floor\": the share of "
+        "frames whose metric scale came from the camera height (prior.camera_height_m; n/a when off).\n\n";
   CsvTable csv;
-  csv.header = {"dataset", "prior",  "range", "frames",          "pixels",
-                "abs_rel", "delta1", "scale", "abs_rel_aligned", "coverage"};
+  csv.header = {"dataset", "prior", "range",           "frames",   "pixels", "abs_rel",
+                "delta1",  "scale", "abs_rel_aligned", "coverage", "floor"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& ds : c.datasets) {
-    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned | coverage |";
+    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned | coverage | floor |";
     for (size_t r = 0; r < edges.size(); ++r) md << " " << label(r) << " AbsRel / δ1 (px) |";
-    md << "\n|---|---|---|---|---|---|";
+    md << "\n|---|---|---|---|---|---|---|";
     for (size_t r = 0; r < edges.size(); ++r) md << "---|";
     md << "\n";
     for (const auto& np : c.priors) {
@@ -151,7 +155,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         if (s.dataset != ds.name || s.prior != np.name) continue;
         if (s.range == "all")
           md << " | " << fmt(s.abs_rel, 3) << " | " << fmt(s.delta1, 3) << " | " << fmt(s.scale, 3) << " | "
-             << fmt(s.abs_rel_aligned, 3) << " | " << fmt(s.coverage, 3);
+             << fmt(s.abs_rel_aligned, 3) << " | " << fmt(s.coverage, 3) << " | " << fmt(s.floor, 2);
         else
           md << " | " << fmt(s.abs_rel, 3) << " / " << fmt(s.delta1, 3) << " (" << s.pixels << ")";
       }
@@ -162,7 +166,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   for (const auto& s : scores) {
     csv.rows.push_back({s.dataset, s.prior, s.range, std::to_string(s.frames), std::to_string(s.pixels),
                         fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.abs_rel_aligned, 5),
-                        fmt(s.coverage, 5)});
+                        fmt(s.coverage, 5), fmt(s.floor, 5)});
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
     js.push_back({{"dataset", s.dataset},
                   {"prior", s.prior},
@@ -173,7 +177,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
                   {"delta1", num(s.delta1)},
                   {"scale", num(s.scale)},
                   {"abs_rel_aligned", num(s.abs_rel_aligned)},
-                  {"coverage", num(s.coverage)}});
+                  {"coverage", num(s.coverage)},
+                  {"floor", num(s.floor)}});
   }
   write_file_atomic((fs::path(c.out) / "report.md").string(), md.str());
   write_csv((fs::path(c.out) / "report.csv").string(), csv);

@@ -36,6 +36,7 @@ struct DepthScore {
   // frame's median pred/ref; `abs_rel_aligned` the mean AbsRel after dividing each frame by its median.
   double scale = 0, abs_rel_aligned = 0;
   double coverage = 0;  // "all" only: share of the reference's valid pixels the prior also marks valid
+  double floor = 0;     // "all" only: share of frames scaled from the camera height (NaN when the prior does not)
 };
 
 // Scores every prior on every dataset and writes report.md, report.csv and report.json into config.out.

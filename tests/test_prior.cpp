@@ -19,6 +19,18 @@ torch::Tensor scene_depth(int64_t H, int64_t W) {
   auto y = torch::linspace(0, 1, H).view({H, 1}), x = torch::linspace(0, 1, W).view({1, W});
   return 2.0 + 1.5 * x + 0.5 * torch::sin(3.0 * y) * x;
 }
+// Planar depth of a camera `height` m above a flat floor, pitched down by `pitch` radians; pixels above the
+// horizon see a fronto-parallel wall at 8 m (no floor there).
+torch::Tensor floor_depth(int64_t H, int64_t W, const torch::Tensor& K, double height, double pitch) {
+  auto d = torch::empty({H, W});
+  const double fy = K[1][1].item<double>(), cy = K[1][2].item<double>();
+  const double up_y = -std::cos(pitch), up_z = -std::sin(pitch);  // world up in the OpenCV camera frame
+  for (int64_t i = 0; i < H; ++i) {
+    const double along_up = up_y * (i + 0.5 - cy) / fy + up_z;  // ray (x, y, 1) against up: x plays no part
+    d[i].fill_(along_up < -1e-3 ? std::min(8.0, height / -along_up) : 8.0);
+  }
+  return d;
+}
 std::string save_module(const std::string& dir, const std::string& name, const std::string& body) {
   torch::jit::Module m(name);
   m.define(body);
@@ -169,4 +181,69 @@ TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained enc
   const auto loss = net->forward_log(x).mean();
   loss.backward();
   CHECK(net->head->weight.grad().abs().sum().item<double>() > 0);
+}
+
+TEST_CASE("prior: floor_height_scale recovers the metric scale from the camera height", "[prior]") {
+  const int64_t H = 96, W = 128;
+  const auto K = estimate_K(W, H, 60.0);
+  const auto truth = floor_depth(H, W, K, 1.6, 0.15);
+  const auto ones = torch::ones({H, W});
+  // A prior that sees the right shape at a third of the scale is put back at metric scale.
+  CHECK(floor_height_scale(truth * 0.3, ones, K, 1.6) == Approx(1.0 / 0.3).epsilon(0.01));
+  CHECK(floor_height_scale(truth, ones, K, 1.6) == Approx(1.0).epsilon(0.01));
+  CHECK(floor_height_scale(truth, ones, K, 0.8) == Approx(0.5).epsilon(0.01));
+  // Furniture in front of part of the floor (a fronto-parallel box at 2 m) does not move it.
+  auto cluttered = truth.clone();
+  cluttered.narrow(0, 60, 30).narrow(1, 10, 40).fill_(2.0);
+  CHECK(floor_height_scale(cluttered * 2.0, ones, K, 1.6) == Approx(0.5).epsilon(0.01));
+  // Invalid pixels are ignored whatever they hold (NaN, absurd depth).
+  auto broken = truth.clone() * 0.5;
+  auto valid = ones.clone();
+  broken.narrow(0, 50, 40).narrow(1, 70, 50).fill_(std::numeric_limits<float>::quiet_NaN());
+  broken.narrow(0, 70, 10).narrow(1, 0, 60).fill_(1e4);
+  valid.narrow(0, 50, 40).narrow(1, 70, 50).zero_();
+  valid.narrow(0, 70, 10).narrow(1, 0, 60).zero_();
+  CHECK(floor_height_scale(broken, valid, K, 1.6) == Approx(2.0).epsilon(0.01));
+  // No floor: a wall everywhere, a floor seen only in the upper half (the lower half is a wall), or no valid
+  // pixel.
+  CHECK(floor_height_scale(torch::full({H, W}, 5.0f), ones, K, 1.6) == 0.0);
+  CHECK(floor_height_scale(truth.flip({0}), ones, K, 1.6) == 0.0);
+  CHECK(floor_height_scale(truth, torch::zeros({H, W}), K, 1.6) == 0.0);
+  CHECK_THROWS_WITH(floor_height_scale(truth, ones, K, 0.0), Catch::Contains("camera height must be positive"));
+}
+
+TEST_CASE("prior: camera_height_m sets a monocular prior's scale and keeps the contract", "[prior]") {
+  const auto dir = test::temp_dir("prior_floor");
+  const int64_t H = 72, W = 96;
+  const auto K = estimate_K(W, H, 60.0);
+  const auto truth = floor_depth(H, W, K, 1.6, 0.1);
+  PriorInput in;
+  in.image = (truth / 20.0).unsqueeze(0).repeat({3, 1, 1});  // the model reads depth / 20 off the image
+  in.image[0][0][0] = 0.0f;                                  // one pixel the model leaves without depth
+  in.K = K;
+  PriorOptions o;
+  o.type = "torchscript";
+  o.torchscript = save_module(dir, "third", "def forward(self, x):\n    return x[:, 0:1] * (20.0 / 3.0)\n");
+  const PriorOutput raw = make_depth_prior(o)->predict(in);
+  CHECK_FALSE(raw.floor_scaled);
+  CHECK(raw.depth[40][50].item<float>() == Approx(truth[40][50].item<float>() / 3.0f).epsilon(1e-4));
+  o.camera_height_m = 1.6;
+  const PriorOutput out = make_depth_prior(o)->predict(in);
+  CHECK(out.floor_scaled);
+  CHECK(out.depth.sizes() == torch::IntArrayRef({H, W}));
+  CHECK(out.valid[0][0].item<float>() == 0.0f);
+  CHECK(out.depth[0][0].item<float>() == 0.0f);
+  const auto ok = out.valid > 0;
+  CHECK(((out.depth.masked_select(ok) - truth.masked_select(ok)).abs() / truth.masked_select(ok)).max().item<double>() <
+        0.01);
+  // A frame without a floor keeps the model's own scale.
+  in.image = torch::full({3, H, W}, 0.25f);
+  const PriorOutput wall = make_depth_prior(o)->predict(in);
+  CHECK_FALSE(wall.floor_scaled);
+  CHECK(wall.depth[10][10].item<float>() == Approx(0.25f * 20.0f / 3.0f));
+  // Priors with metric depth of their own refuse the option, naming it.
+  o.type = "dataset";
+  CHECK_THROWS_WITH(make_depth_prior(o), Catch::Contains("prior.camera_height_m"));
+  o.type = "sparse";
+  CHECK_THROWS_WITH(make_depth_prior(o), Catch::Contains("prior.camera_height_m"));
 }

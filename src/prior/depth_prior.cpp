@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <random>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -50,6 +52,11 @@ void PriorOptions::visit(ConfigVisitor& v) {
           "learned depth at or beyond this many metres is sky and marked invalid (no supports); 0 = never. For nets "
           "trained with loss.depth_sky, set it below loss.depth_sky_m",
           Range::at_least(0));
+  v.field("camera_height_m", camera_height_m,
+          "learned and torchscript priors: set the metric scale from the camera's height above the ground (find "
+          "the floor in the lower image, rescale so it lies this many metres below); frames without a visible floor "
+          "keep the net's scale. 1.6 suits photos taken standing; 0 = off",
+          Range::at_least(0));
   v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
 }
 
@@ -79,6 +86,19 @@ PriorOutput finish(torch::Tensor depth, torch::Tensor K) {
   depth = depth.to(torch::kFloat32);
   auto valid = (torch::isfinite(depth) & (depth > 0)).to(torch::kFloat32);
   return {torch::where(valid > 0, depth, torch::zeros_like(depth)), K, valid};
+}
+
+// Monocular priors: metric scale from the camera's height when asked and a floor is visible.
+PriorOutput finish_monocular(torch::Tensor depth, torch::Tensor K, double camera_height_m) {
+  PriorOutput out = finish(std::move(depth), std::move(K));
+  if (camera_height_m > 0) {
+    const double scale = floor_height_scale(out.depth, out.valid, out.K, camera_height_m);
+    if (scale > 0) {
+      out.depth = out.depth * static_cast<float>(scale);
+      out.floor_scaled = true;
+    }
+  }
+  return out;
 }
 
 class DatasetPrior final : public DepthPrior {
@@ -123,7 +143,7 @@ class LearnedPrior final : public DepthPrior {
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
     auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32), K.to(torch::kFloat32).unsqueeze(0))[0][0];
     if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
-    return finish(d, K);
+    return finish_monocular(d, K, o_.camera_height_m);
   }
   std::string describe() const override {
     const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "");
@@ -169,7 +189,7 @@ class TorchScriptPrior final : public DepthPrior {
     if (d.dim() != 2 || d.size(0) != H || d.size(1) != W)
       fail(o_.torchscript, ": depth model returned shape ", out.toTensor().sizes(), ", expected [1, 1, ", H, ", ", W,
            "] (metric depth at the input size)");
-    return finish(d, intrinsics_for(in, o_.hfov_deg));
+    return finish_monocular(d, intrinsics_for(in, o_.hfov_deg), o_.camera_height_m);
   }
   std::string describe() const override { return "TorchScript depth model (" + o_.torchscript + ")"; }
 
@@ -214,6 +234,87 @@ class SparsePrior final : public DepthPrior {
 };
 
 }  // namespace
+
+double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
+                          double height_m) {
+  ISPLAT_CHECK(height_m > 0, "floor_height_scale: the camera height must be positive, got ", height_m);
+  ISPLAT_CHECK(depth.dim() == 2 && K.dim() == 2 && K.size(0) == 3 && K.size(1) == 3,
+               "floor_height_scale: depth must be [H,W] and K [3,3], got ", depth.sizes(), " and ", K.sizes());
+  auto d = depth.to(torch::kFloat32).contiguous();
+  auto ok = usable_depth(d, valid.defined() ? valid : (d > 0)).contiguous();
+  auto k = K.to(torch::kFloat64).contiguous();
+  const double* kp = k.data_ptr<double>();
+  const double fx = kp[0], fy = kp[4], cx = kp[2], cy = kp[5];
+  const int64_t H = d.size(0), W = d.size(1), top = H / 2;
+  // About 4000 samples from the lower half, where the ground of a photo taken standing shows.
+  const int64_t stride =
+      std::max<int64_t>(1, static_cast<int64_t>(std::sqrt(static_cast<double>((H - top) * W) / 4000.0)));
+  const float* dp = d.data_ptr<float>();
+  const bool* okp = ok.data_ptr<bool>();
+  std::vector<Eigen::Vector3d> pts;
+  for (int64_t i = top; i < H; i += stride)
+    for (int64_t j = 0; j < W; j += stride)
+      if (okp[i * W + j]) {
+        const double z = dp[i * W + j];
+        pts.emplace_back((j + 0.5 - cx) / fx * z, (i + 0.5 - cy) / fy * z, z);
+      }
+  const auto n_pts = static_cast<int64_t>(pts.size());
+  constexpr int64_t kMinPoints = 30;
+  if (n_pts < kMinPoints) return 0.0;
+  // Up is -y in the OpenCV camera frame; a floor's normal points up and the floor lies below (h > 0).
+  const double min_up = std::cos(40.0 * M_PI / 180.0), tol = 0.02;  // tol: distance as a share of depth
+  auto inliers = [&](const Eigen::Vector3d& n, double h, double share, std::vector<int64_t>* out) {
+    int64_t count = 0;
+    for (int64_t p = 0; p < n_pts; ++p)
+      if (std::fabs(n.dot(pts[p]) + h) <= share * pts[p].z()) {
+        ++count;
+        if (out) out->push_back(p);
+      }
+    return count;
+  };
+  std::mt19937_64 rng(0x5EEDF100Full);
+  Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
+  double best_h = 0;
+  int64_t best = 0;
+  for (int iter = 0; iter < 256; ++iter) {
+    const auto& a = pts[rng() % n_pts];
+    const auto& b = pts[rng() % n_pts];
+    const auto& c = pts[rng() % n_pts];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-12) continue;
+    n.normalize();
+    if (n.y() > 0) n = -n;
+    const double h = -n.dot(a);
+    if (-n.y() < min_up || h <= 0) continue;
+    const int64_t count = inliers(n, h, tol, nullptr);
+    if (count > best) best = count, best_n = n, best_h = h;
+  }
+  if (best < std::max<int64_t>(kMinPoints, n_pts / 10)) return 0.0;
+  // Weighted least-squares refits on the inliers: weights 1/z^2 make residuals relative, as the depth's
+  // errors are, so far points near a wall's crease do not tilt the plane; the second uses half the tolerance.
+  Eigen::Vector3d n = best_n;
+  double h = best_h;
+  for (int round = 0; round < 2; ++round) {
+    std::vector<int64_t> in;
+    inliers(n, h, tol / (1 + round), &in);
+    double wsum = 0;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int64_t p : in) {
+      const double w = 1.0 / (pts[p].z() * pts[p].z());
+      centroid += w * pts[p], wsum += w;
+    }
+    centroid /= wsum;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int64_t p : in) cov += (pts[p] - centroid) * (pts[p] - centroid).transpose() / (pts[p].z() * pts[p].z());
+    Eigen::Vector3d refit = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+    if (refit.y() > 0) refit = -refit;
+    const double refit_h = -refit.dot(centroid);
+    if (-refit.y() < min_up || refit_h <= 0) break;  // degenerate refit: keep the plane so far
+    n = refit, h = refit_h;
+  }
+  const double scale = height_m / h;
+  return scale > 0.02 && scale < 50.0 ? scale : 0.0;  // beyond: not a floor at any plausible scale
+}
 
 torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,
                            uint64_t seed) {
@@ -308,6 +409,11 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
 
 std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o,
                                              const std::map<std::string, torch::Tensor>* embedded) {
+  if (o.camera_height_m > 0 && (o.type == "dataset" || o.type == "sparse"))
+    fail("prior.camera_height_m = ", o.camera_height_m,
+         " sets the scale of monocular priors (learned, torchscript); "
+         "prior.type = ",
+         o.type, " has metric depth already: set it to 0");
   if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);
   if (o.type == "learned") return std::make_unique<LearnedPrior>(o, embedded);
   if (o.type == "torchscript") return std::make_unique<TorchScriptPrior>(o);

@@ -32,6 +32,7 @@ struct PriorOptions {
   std::string learned_arch = "unet";  // unet (from scratch) | squeeze (frozen pretrained SqueezeNet encoder)
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
   double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
+  double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
   std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
@@ -50,9 +51,10 @@ struct PriorInput {
 };
 
 struct PriorOutput {
-  torch::Tensor depth;  // [H,W] planar metres, 0 where invalid
-  torch::Tensor K;      // [3,3]
-  torch::Tensor valid;  // [H,W] float 0/1
+  torch::Tensor depth;        // [H,W] planar metres, 0 where invalid
+  torch::Tensor K;            // [3,3]
+  torch::Tensor valid;        // [H,W] float 0/1
+  bool floor_scaled = false;  // camera_height_m found a floor and set the metric scale from it
 };
 
 class DepthPrior {
@@ -72,6 +74,14 @@ std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& options,
 
 // Pinhole K for a W x H image with the given horizontal field of view.
 torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);
+
+// Metric scale from the camera's height above the ground (prior.camera_height_m): RANSAC finds the
+// best-supported plane in the lower half of the back-projected depth whose normal is within 40 degrees of
+// the camera's up axis and which lies below the camera; the result is the factor that puts that plane
+// `height_m` below the camera. 0 when no such floor is found (then the depth keeps its own scale).
+// depth, valid [H,W]; K [3,3]. Deterministic.
+double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
+                          double height_m);
 
 // Sparse alignment (exposed for tests): mono depth [H,W] aligned to prompts [P,3] with a global
 // scale/shift in inverse depth, then a smooth residual scale field.
