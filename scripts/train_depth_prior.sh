@@ -3,16 +3,19 @@
 # build, generate mixed-style depth data (rooms, desks, streets; 40-95 degree fields of view), train the
 # prior from scratch (U-Net) and on the frozen pretrained SqueezeNet features, each focal-normalized with a
 # scale-invariant + metric loss; then the SqueezeNet prior on data with a fourth style (halls: large
-# interiors), and again with a sky term (pixels without depth pushed far, then cut as sky); then score them
-# against the old rooms-only prior on the held-out rooms and the two other-style sets (AbsRel, delta < 1.25
-# per depth range, scale and shape apart). 15-25 minutes per prior on 2 cores.
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|eval ...]   (default: all five)
+# interiors), and again with a sky term (pixels without depth pushed far, then cut as sky); then the wide
+# prior: 120 scenes of the four styles, 3000 steps (about 40 minutes on 2 cores); then score them against
+# the old rooms-only prior on the held-out rooms and the two other-style sets (AbsRel, delta < 1.25 per depth
+# range, scale and shape apart), with and without the camera-height scale, and on the wide data's
+# validation scenes (the development set: choices are made there, never on the evaluation sets).
+# 15-25 minutes per prior on 2 cores, except the wide one.
+# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|eval ...]   (default: all six)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 bin="${BUILD_DIR:-$root/build}"
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky eval)
+[ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky wide eval)
 scripts/setup.sh
 scripts/build.sh
 data() {  # $1: data config name under configs/depth_prior, $2: its output folder
@@ -27,13 +30,20 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
+    wide)
+      data data_wide out/depth_prior/data_wide
+      "$bin/infinisplat-train" --config configs/depth_prior/squeeze_wide.json --resume auto ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
       # the "before" prior: the rooms-only net of the experiments (scripts/experiments.sh trains it too)
       "$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | eval)" >&2; exit 2 ;;
+      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval.json
+      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
+      data data_wide out/depth_prior/data_wide
+      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | eval)" >&2
+       exit 2 ;;
   esac
 done
-echo "report: out/depth_prior/eval/report.md"
+echo "reports: out/depth_prior/eval/report.md, out/depth_prior/eval_height/report.md, out/depth_prior/dev/report.md"

@@ -409,11 +409,15 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
 
 std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o,
                                              const std::map<std::string, torch::Tensor>* embedded) {
-  if (o.camera_height_m > 0 && (o.type == "dataset" || o.type == "sparse"))
-    fail("prior.camera_height_m = ", o.camera_height_m,
-         " sets the scale of monocular priors (learned, torchscript); "
-         "prior.type = ",
-         o.type, " has metric depth already: set it to 0");
+  // A run trained on a monocular prior is often scored with dataset depth (an experiment's variant): the
+  // height has nothing to scale there, so it is ignored, and said so.
+  if (o.camera_height_m > 0 && (o.type == "dataset" || o.type == "sparse")) {
+    log_warn("prior.camera_height_m = ", o.camera_height_m, " is ignored: prior.type = ", o.type,
+             " has metric depth of its own");
+    PriorOptions metric = o;
+    metric.camera_height_m = 0;
+    return make_depth_prior(metric, embedded);
+  }
   if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);
   if (o.type == "learned") return std::make_unique<LearnedPrior>(o, embedded);
   if (o.type == "torchscript") return std::make_unique<TorchScriptPrior>(o);
