@@ -164,18 +164,20 @@ void run(const Case& cs) {
   }
   const double peak_fwd = peak_memory_mb();
 
-  // Forward + backward of an L1 loss on rgb plus light depth and alpha terms.
+  // Forward + backward of an L1 loss on rgb plus light depth and alpha terms, rendered as the trainer does.
   std::vector<double> fb;
   if (cs.bwd_runs > 0) {
     Gaussians p = g;
     for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
       *t = t->clone().requires_grad_(true);
     const auto target = torch::full({3, cs.H, cs.W}, 0.5f);
+    RenderOptions training;  // as the trainer renders: no loss reads the normal map
+    training.normals = false;
     for (int r = 0; r < cs.bwd_runs; ++r) {
       for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
         t->mutable_grad() = torch::Tensor();
       const double t0 = now_ms();
-      const RenderOutput out = render(p, cam);
+      const RenderOutput out = render(p, cam, training);
       const auto loss = (out.rgb - target).abs().mean() + 0.01 * out.depth.mean() + 0.1 * out.alpha.mean();
       loss.backward();
       fb.push_back(now_ms() - t0);
@@ -220,7 +222,8 @@ int main(int argc, char** argv) {
         << "freed memory is kept for reuse (as in every executable); MALLOC_MMAP_MAX_=65536 in the environment "
            "gives glibc's default instead\n"
         << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "
-           "render + L1 loss + backward; Misect/s = intersections per second of "
+           "render without the normal map (as in training) + L1 loss + backward; Misect/s = intersections per second "
+           "of "
            "fwd;\n      proj/bin/rast/rbwd/pbwd = phases (project, tile binning, rasterize fwd, rasterize bwd, "
            "project bwd);\n      peakF/peakFB = VmHWM (MB, process peak reset before the case) after the fwd "
            "runs / after fwd+bwd;\n      rss0 = VmRSS at the start of the case (scene inputs included); bufF/bufB "

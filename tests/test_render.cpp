@@ -460,6 +460,32 @@ TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]")
   CHECK(max_abs(results[1][4]) > 0);
 }
 
+TEST_CASE("render: leaving the normal map out changes nothing else", "[render]") {
+  // The trainer renders without normals; its images and gradients must be those of the full render, on both
+  // the AVX2 and the portable loops, in float and double.
+  for (auto dtype : {torch::kFloat32, torch::kFloat64}) {
+    for (bool simd : {true, false}) {
+      CAPTURE(dtype, simd);
+      const bool before = splat::set_simd_enabled(simd);
+      const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, dtype);
+      const Gaussians scene = random_scene(800, cam, 21).to(dtype);
+      const Weights w = random_weights(80, 96, 22, dtype);
+      RenderOptions without;
+      without.normals = false;
+      const auto full = outputs_and_grads(scene, cam, w), lean = outputs_and_grads(scene, cam, w, without);
+      splat::set_simd_enabled(before);
+      CHECK(full[3].sizes() == torch::IntArrayRef({3, 80, 96}));
+      CHECK(max_abs(full[3]) > 0.5);
+      CHECK(lean[3].numel() == 0);
+      for (size_t k = 0; k < full.size(); ++k) {
+        if (k == 3) continue;
+        CAPTURE(k);
+        CHECK(torch::equal(full[k], lean[k]));
+      }
+    }
+  }
+}
+
 namespace {
 // Each Gaussian's largest weight α·T over the pixels, from the dense reference: weights do not depend on
 // colours, so three Gaussians at a time get one-hot colours and the rendered channels are their weights.

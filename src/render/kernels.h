@@ -100,8 +100,9 @@ struct RasterOutput {
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
 };
 
+// normals = false skips compositing the normal (a quarter of the pixel work); `normal` is then empty ([0]).
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
-                           const double background[3]);
+                           const double background[3], bool normals = true);
 
 // Per Gaussian [N]: the largest weight w = α·T it reaches at any pixel (0 if culled or never composited).
 torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam);
@@ -115,8 +116,9 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_alpha,   // [1, H, W]
                             const torch::Tensor& grad_depth);  // [1, H, W]
 
-// The rasterizers run AVX2 pixel loops (float only) when the CPU has them. They do the same IEEE operations
-// in the same order as the portable loops (no FMA), so both give bit-identical images and gradients.
+// The rasterizers run AVX2 + FMA pixel loops (float only) when the CPU has both. They do the same IEEE
+// operations in the same order as the portable loops, fusing the same multiply-adds (std::fma there), so both
+// give bit-identical images and gradients.
 // Tests can force the portable loops; returns the previous setting.
 bool set_simd_enabled(bool enabled);
 bool simd_enabled();

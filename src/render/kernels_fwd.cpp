@@ -142,9 +142,10 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
-// forward model. The AVX2 twin below has the same loops. With kMaxWeight, best[i] receives the largest weight
-// α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
-template <class T, bool kMaxWeight = false>
+// forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
+// leaves the normal out. With kMaxWeight, best[i] receives the largest weight α·T entry i reaches in this tile
+// (the contribution measure); entries never reached keep their value.
+template <class T, int kChannels, bool kMaxWeight = false>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last, T* best = nullptr) {
   fwd_init(x0, y0, x1, y1, st, last);
@@ -158,15 +159,16 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     if constexpr (kMaxWeight) {
       T m = 0;
       auto keep_max = [&m](T w) { m = std::max(m, w); };
-      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1), keep_max);
+      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels>(s, groups[k], st, last, int32_t(i + 1), keep_max);
       best[i] = m;
     } else {
-      for (int k = 0; k < n; ++k) active -= fwd_group(s, groups[k], st, last, int32_t(i + 1));
+      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels>(s, groups[k], st, last, int32_t(i + 1));
     }
   }
 }
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
+template <int kChannels>
 ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                   float* st, int32_t* last) {
   fwd_init(x0, y0, x1, y1, st, last);
@@ -179,25 +181,30 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
     const Avx2Splat a = avx2_splat(s, 7);
     int k = 0;
-    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i + 1));
-    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i + 1));
-    if (k < n) active -= fwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i + 1));
+    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4, kChannels>(a, groups + k, st, last, int32_t(i + 1));
+    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2, kChannels>(a, groups + k, st, last, int32_t(i + 1));
+    if (k < n) active -= fwd_groups_avx2<1, kChannels>(a, groups + k, st, last, int32_t(i + 1));
   }
 }
 #endif
 
+// normal_out == nullptr: the normal is neither composited nor written.
 template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const double* background, T* rgb, T* alpha_out, T* depth_out, T* normal_out, T* final_T,
                         int32_t* n_contrib) {
   const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
-  void (*tile_fn)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*,
-                  int32_t*) = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                                 int32_t* last) { fwd_tile_generic<T>(local, count, x0, y0, x1, y1, st, last); };
+  using TileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*);
+  TileFn tile_fn = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                      int32_t* last) { fwd_tile_generic<T, 7>(local, count, x0, y0, x1, y1, st, last); };
+  if (!normal_out)
+    tile_fn = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
+      fwd_tile_generic<T, 4>(local, count, x0, y0, x1, y1, st, last);
+    };
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
-    if (simd_enabled()) tile_fn = fwd_tile_avx2;
+    if (simd_enabled()) tile_fn = normal_out ? fwd_tile_avx2<7> : fwd_tile_avx2<4>;
 #endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     T* st = scratch.pixel_planes(kFwdPlanes);
@@ -210,7 +217,8 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
         for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[fwd_at(p, kPlAcc + c)] + t * bg[c];
         alpha_out[o] = 1 - t;
         depth_out[o] = st[fwd_at(p, kPlAcc + 3)];
-        for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[fwd_at(p, kPlAcc + 4 + c)];
+        if (normal_out)
+          for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[fwd_at(p, kPlAcc + 4 + c)];
         final_T[o] = t;
         n_contrib[o] = scratch.last[p];
       }
@@ -223,26 +231,26 @@ template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    fwd_tile_generic<T, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
-                              scratch.pixel_planes(kFwdPlanes), scratch.last.data(), per_entry + begin);
+    fwd_tile_generic<T, 4, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+                                 scratch.pixel_planes(kFwdPlanes), scratch.last.data(), per_entry + begin);
   });
 }
 
 }  // namespace
 
 namespace {
-bool cpu_has_avx2() {
+bool cpu_has_avx2_fma() {
 #ifdef ISPLAT_HAVE_AVX2_LANES
   __builtin_cpu_init();  // may run before main (static initialization)
-  return __builtin_cpu_supports("avx2");
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
   return false;
 #endif
 }
-std::atomic<bool> g_simd{cpu_has_avx2()};
+std::atomic<bool> g_simd{cpu_has_avx2_fma()};
 }  // namespace
 bool set_simd_enabled(bool enabled) {
-  return g_simd.exchange(enabled && cpu_has_avx2());
+  return g_simd.exchange(enabled && cpu_has_avx2_fma());
 }
 bool simd_enabled() {
   return g_simd.load();
@@ -258,17 +266,18 @@ TileBins bin_tiles(const Projection& proj, const CameraParams& cam) {
 }
 
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
-                           const double background[3]) {
+                           const double background[3], bool normals) {
   const int64_t H = cam.height, W = cam.width;
   const auto opts = packed.options();
   RasterOutput out{torch::empty({3, H, W}, opts), torch::empty({1, H, W}, opts),
-                   torch::empty({1, H, W}, opts), torch::empty({3, H, W}, opts),
+                   torch::empty({1, H, W}, opts), normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
                    torch::empty({H, W}, opts),    torch::empty({H, W}, opts.dtype(torch::kInt32))};
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {
-    rasterize_fwd_impl<scalar_t>(
-        packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
-        background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(), out.depth.data_ptr<scalar_t>(),
-        out.normal.data_ptr<scalar_t>(), out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>());
+    rasterize_fwd_impl<scalar_t>(packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(),
+                                 bins.isect_ids.data_ptr<int32_t>(), cam, background, out.rgb.data_ptr<scalar_t>(),
+                                 out.alpha.data_ptr<scalar_t>(), out.depth.data_ptr<scalar_t>(),
+                                 normals ? out.normal.data_ptr<scalar_t>() : nullptr, out.final_T.data_ptr<scalar_t>(),
+                                 out.n_contrib.data_ptr<int32_t>());
   });
   return out;
 }

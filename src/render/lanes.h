@@ -1,6 +1,7 @@
 // Internal to the render kernels: the per-pixel forward and backward rules on a group of 8 pixels of one tile
-// row, as portable scalar code (float or double) and as AVX2 intrinsics (float). Both do the same IEEE
-// operations in the same order, so they give bit-identical results; the tile loops pick one at run time.
+// row, as portable scalar code (float or double) and as AVX2 + FMA intrinsics (float). Both do the same IEEE
+// operations in the same order, with the same fused multiply-adds, so they give bit-identical results; the tile
+// loops pick one at run time. The render sources build with -ffp-contract=off, so the compiler fuses nothing else.
 #pragma once
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define ISPLAT_HAVE_AVX2_LANES 1
@@ -14,13 +15,21 @@
 #include "render/kernels.h"
 
 #define ISPLAT_INLINE inline __attribute__((always_inline))
-#define ISPLAT_AVX2 __attribute__((target("avx2"), always_inline)) inline
-#define ISPLAT_AVX2_FN __attribute__((target("avx2")))
+#define ISPLAT_AVX2 __attribute__((target("avx2,fma"), always_inline)) inline
+#define ISPLAT_AVX2_FN __attribute__((target("avx2,fma")))
 
 namespace isplat::splat {
 
 constexpr int kPix = kTile * kTile;  // pixels per tile
 constexpr int kLanes = 8;            // pixels per group
+
+// a·b + c rounded once: the scalar twin of _mm256_fmadd_ps.
+ISPLAT_INLINE float madd(float a, float b, float c) {
+  return std::fma(a, b, c);
+}
+ISPLAT_INLINE double madd(double a, double b, double c) {
+  return std::fma(a, b, c);
+}
 
 // exp(x) for the splat weights, x ≤ 0. float: e^x = p(x/16)^16 with p the degree-6 Taylor polynomial
 // (relative error about 1e-6 on the [−4.5, 0] that is ever used); arithmetic only, so it vectorizes.
@@ -28,12 +37,12 @@ constexpr int kLanes = 8;            // pixels per group
 ISPLAT_INLINE float splat_exp(float x) {
   const float y = std::max(x, -16.0f) * 0.0625f;
   float p = 1.0f / 720;
-  p = p * y + 1.0f / 120;
-  p = p * y + 1.0f / 24;
-  p = p * y + 1.0f / 6;
-  p = p * y + 0.5f;
-  p = p * y + 1.0f;
-  p = p * y + 1.0f;
+  p = madd(p, y, 1.0f / 120);
+  p = madd(p, y, 1.0f / 24);
+  p = madd(p, y, 1.0f / 6);
+  p = madd(p, y, 0.5f);
+  p = madd(p, y, 1.0f);
+  p = madd(p, y, 1.0f);
   p = p * p, p = p * p, p = p * p;
   return p * p;
 }
@@ -54,7 +63,7 @@ struct Splat {
   }
 };
 
-// Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy).
+// Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy), see splat_power.
 template <class T>
 struct Row {
   T dy, cdy, bdy, cdy2;
@@ -63,6 +72,12 @@ template <class T>
 ISPLAT_INLINE Row<T> make_row(const Splat<T>& s, int64_t py) {
   const T dy = T(py) + T(0.5) - s.v, cdy = s.C * dy;
   return {dy, cdy, s.B * dy, cdy * dy};
+}
+
+// The exponent of the splat weight at offset dx on row r: both fused multiply-adds as in avx2_power.
+template <class T>
+ISPLAT_INLINE T splat_power(const Splat<T>& s, const Row<T>& r, T dx) {
+  return madd(T(0.5), madd(s.A * dx, dx, r.cdy2), dx * r.bdy);
 }
 
 // Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
@@ -147,15 +162,16 @@ struct NoWeightSink {
 };
 
 // Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink` sees every
-// composited weight w = α·T (the contribution measure uses it; the renderer passes NoWeightSink).
-template <class T, class Sink = NoWeightSink>
+// composited weight w = α·T (the contribution measure uses it; the renderer passes NoWeightSink). The first
+// kChannels of f are accumulated (7 with normals, 4 without).
+template <int kChannels, class T, class Sink = NoWeightSink>
 ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t* last, int32_t id,
                             Sink&& sink = Sink{}) {
   int stops = 0;
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
-    const T power = T(0.5) * (s.A * dx * dx + q.r.cdy2) + dx * q.r.bdy;
+    const T power = splat_power(s, q.r, dx);
     if (!(power <= s.cut)) continue;  // outside 3σ, or α < 1/255 for sure: no exp
     const T raw = s.opac * splat_exp(-power);
     const T alpha = std::min(T(kAlphaMax), raw);
@@ -168,7 +184,7 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t
     }
     const T w = alpha * t;
     sink(w);
-    for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] += w * s.f[c];
+    for (int c = 0; c < kChannels; ++c) st[fwd_at(p, kPlAcc + c)] = madd(w, s.f[c], st[fwd_at(p, kPlAcc + c)]);
     st[fwd_at(p, kPlT)] = next;
     last[p] = id;
   }
@@ -183,7 +199,7 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
-    const T power = T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy;
+    const T power = splat_power(s, r, dx);
     if (!(power <= s.cut) || i >= last[p]) continue;  // not a contributor in forward
     const T G = splat_exp(-power);
     const T raw = s.opac * G;
@@ -192,20 +208,20 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     const T t_in = st[bwd_at(p, kPbT)] / (T(1) - alpha);  // transmittance in front of this Gaussian
     const T w = alpha * t_in;
     T dq = st[bwd_at(p, kPbDC)] * s.f[0];  // Σ_c dL/dC_c·f_c
-    for (int c = 1; c < kBwdCh; ++c) dq = dq + st[bwd_at(p, kPbDC + c)] * s.f[c];
+    for (int c = 1; c < kBwdCh; ++c) dq = madd(st[bwd_at(p, kPbDC + c)], s.f[c], dq);
     T& S = st[bwd_at(p, kPbS)];
     const T d_alpha = (dq - S) * t_in;
-    S = alpha * dq + (T(1) - alpha) * S;
+    S = madd(alpha, dq, (T(1) - alpha) * S);
     st[bwd_at(p, kPbT)] = t_in;
-    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] += w * st[bwd_at(p, kPbDC + c)];
+    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g.s[kGr + c][l]);
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
-    g.s[kGo][l] += G * d_alpha;
+    g.s[kGo][l] = madd(G, d_alpha, g.s[kGo][l]);
     const T dp = -(alpha * d_alpha);  // dL/dpower
-    g.s[kGu][l] -= dp * (s.A * dx + r.bdy);
-    g.s[kGv][l] -= dp * (s.B * dx + r.cdy);
-    g.s[kGA][l] += dp * T(0.5) * dx * dx;
-    g.s[kGB][l] += dp * dx * r.dy;
-    g.s[kGC][l] += dp * T(0.5) * r.dy * r.dy;
+    g.s[kGu][l] = madd(-dp, madd(s.A, dx, r.bdy), g.s[kGu][l]);
+    g.s[kGv][l] = madd(-dp, madd(s.B, dx, r.cdy), g.s[kGv][l]);
+    g.s[kGA][l] = madd(dp * T(0.5) * dx, dx, g.s[kGA][l]);
+    g.s[kGB][l] = madd(dp * dx, r.dy, g.s[kGB][l]);
+    g.s[kGC][l] = madd(dp * T(0.5) * r.dy, r.dy, g.s[kGC][l]);
   }
 }
 
@@ -232,12 +248,12 @@ ISPLAT_AVX2 __m256 avx2_neg(__m256 x) {
 ISPLAT_AVX2 __m256 avx2_exp(__m256 x) {
   const __m256 y = _mm256_mul_ps(_mm256_max_ps(x, _mm256_set1_ps(-16.0f)), _mm256_set1_ps(0.0625f));
   __m256 p = _mm256_set1_ps(1.0f / 720);
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 120));
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 24));
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f / 6));
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(0.5f));
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f));
-  p = _mm256_add_ps(_mm256_mul_ps(p, y), _mm256_set1_ps(1.0f));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(1.0f / 120));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(1.0f / 24));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(1.0f / 6));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(0.5f));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(1.0f));
+  p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(1.0f));
   p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p);
   return _mm256_mul_ps(p, p);
 }
@@ -248,11 +264,11 @@ ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Group<float>& q, __m256& d
       _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(q.xb), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
   const __m256 half = _mm256_set1_ps(0.5f);
   dx = _mm256_sub_ps(_mm256_add_ps(x, half), a.u);
-  const __m256 quad = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(a.A, dx), dx), _mm256_set1_ps(q.r.cdy2));
-  power = _mm256_add_ps(_mm256_mul_ps(half, quad), _mm256_mul_ps(dx, _mm256_set1_ps(q.r.bdy)));
+  const __m256 quad = _mm256_fmadd_ps(_mm256_mul_ps(a.A, dx), dx, _mm256_set1_ps(q.r.cdy2));
+  power = _mm256_fmadd_ps(half, quad, _mm256_mul_ps(dx, _mm256_set1_ps(q.r.bdy)));
 }
 
-template <int N>
+template <int N, int kChannels>
 ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, int32_t* last, int32_t id) {
   __m256 raw[N], power[N];
   for (int k = 0; k < N; ++k) {
@@ -273,9 +289,9 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float
     const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
     const __m256 add = _mm256_andnot_ps(stop, hit);
     const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
-    for (int c = 0; c < 7; ++c) {
+    for (int c = 0; c < kChannels; ++c) {  // w = 0 where nothing is added: 0·f + acc = acc
       float* acc = st + fwd_at(p0, kPlAcc + c);
-      _mm256_storeu_ps(acc, _mm256_add_ps(_mm256_loadu_ps(acc), _mm256_mul_ps(w, a.f[c])));
+      _mm256_storeu_ps(acc, _mm256_fmadd_ps(w, a.f[c], _mm256_loadu_ps(acc)));
     }
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
     __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);
@@ -324,26 +340,25 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     __m256 dc[kBwdCh];
     for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + bwd_at(p0, kPbDC + c));
     __m256 dq = _mm256_mul_ps(dc[0], a.f[0]);
-    for (int c = 1; c < kBwdCh; ++c) dq = _mm256_add_ps(dq, _mm256_mul_ps(dc[c], a.f[c]));
+    for (int c = 1; c < kBwdCh; ++c) dq = _mm256_fmadd_ps(dc[c], a.f[c], dq);
     float* Sp = st + bwd_at(p0, kPbS);
     const __m256 S = _mm256_loadu_ps(Sp);
     const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(dq, S), t_in);
-    const __m256 S_new = _mm256_add_ps(_mm256_mul_ps(alpha, dq), _mm256_mul_ps(one_minus, S));
+    const __m256 S_new = _mm256_fmadd_ps(alpha, dq, _mm256_mul_ps(one_minus, S));
     _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
+    // Masked lanes add exactly zero: wh and dp are 0 there, and every factor they meet is finite.
     const __m256 wh = _mm256_and_ps(hit, w);
-    for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_add_ps(g.s[kGr + c], _mm256_mul_ps(wh, dc[c]));
+    for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_fmadd_ps(wh, dc[c], g.s[kGr + c]);
     const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
-    g.s[kGo] = _mm256_add_ps(g.s[kGo], _mm256_and_ps(free, _mm256_mul_ps(G[k], d_alpha)));
+    g.s[kGo] = _mm256_blendv_ps(g.s[kGo], _mm256_fmadd_ps(G[k], d_alpha, g.s[kGo]), free);
     const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
     const __m256 half = _mm256_set1_ps(0.5f), dy = _mm256_set1_ps(q[k].r.dy);
-    g.s[kGu] =
-        _mm256_sub_ps(g.s[kGu], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.A, dx), _mm256_set1_ps(q[k].r.bdy))));
-    g.s[kGv] =
-        _mm256_sub_ps(g.s[kGv], _mm256_mul_ps(dp, _mm256_add_ps(_mm256_mul_ps(a.B, dx), _mm256_set1_ps(q[k].r.cdy))));
-    g.s[kGA] = _mm256_add_ps(g.s[kGA], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx));
-    g.s[kGB] = _mm256_add_ps(g.s[kGB], _mm256_mul_ps(_mm256_mul_ps(dp, dx), dy));
-    g.s[kGC] = _mm256_add_ps(g.s[kGC], _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy));
+    g.s[kGu] = _mm256_fnmadd_ps(dp, _mm256_fmadd_ps(a.A, dx, _mm256_set1_ps(q[k].r.bdy)), g.s[kGu]);
+    g.s[kGv] = _mm256_fnmadd_ps(dp, _mm256_fmadd_ps(a.B, dx, _mm256_set1_ps(q[k].r.cdy)), g.s[kGv]);
+    g.s[kGA] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx, g.s[kGA]);
+    g.s[kGB] = _mm256_fmadd_ps(_mm256_mul_ps(dp, dx), dy, g.s[kGB]);
+    g.s[kGC] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy, g.s[kGC]);
   }
 }
 

@@ -16,6 +16,9 @@ struct RenderOptions {
   bool antialiased = false;  // opacity compensation (Mip-Splatting / gsplat "antialiased") on top of the dilation
   double near = 0.01;        // metres: Gaussians with camera-space z < near are culled
   double dilation = 0.3;     // px², added to the diagonal of every 2D covariance (low-pass filter)
+  // Composite the normal map. Not a config key: callers that never read `normal` (training) turn it off and
+  // save about a sixth of the forward pass; `normal` is then an empty tensor.
+  bool normals = true;
   void visit(ConfigVisitor& v);
 };
 

@@ -82,7 +82,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     static const char* names[5] = {"means", "scales", "quats", "colors", "opacities"};
     for (int k = 0; k < 5; ++k) check_no_nonfinite(proj.nonfinite[k], names[k]);  // counted by the projection pass
     const TileBins bins = bin_tiles(proj, cam);
-    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data());
+    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(), options.normals);
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
                             out.final_T, out.n_contrib});
     ctx->saved_data["width"] = width;
