@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
+#include "geometry/convert.h"
 #include "render/kernels.h"
 #include "render/prune.h"
 #include "render/render.h"
@@ -451,6 +452,8 @@ TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]")
     RenderOptions opt;
     opt.background = {0.2f, 0.3f, 0.4f};
     results.push_back(outputs_and_grads(scene, cam, w, opt));
+    opt.depth = "plane";
+    results.back().push_back(render(scene, cam, opt).depth);
     splat::set_simd_enabled(before);
   }
   for (size_t k = 0; k < results[0].size(); ++k) {
@@ -484,6 +487,76 @@ TEST_CASE("render: leaving the normal map out changes nothing else", "[render]")
       }
     }
   }
+}
+
+namespace {
+// Flat, opaque Gaussians tiling the slanted plane z = 3 + 0.6·y (camera space) every 1.5 px, seen by `cam`.
+Gaussians slanted_plane(const Camera& cam) {
+  std::vector<double> uv;
+  for (double v = -4; v < cam.height + 4; v += 1.5)
+    for (double u = -4; u < cam.width + 4; u += 1.5) uv.insert(uv.end(), {u, v});
+  const int64_t n = int64_t(uv.size() / 2);
+  const Tensor rays = backproject_points(torch::tensor(uv, kF64).reshape({n, 2}), torch::ones({n}, kF64),
+                                         cam.K.to(kF64));  // (a, b, 1)
+  const Tensor z = 3.0 / (1.0 - 0.6 * rays.select(1, 1));
+  // World rotation whose third column is the plane's normal: the shortest axis.
+  const Tensor R_cw = cam.T_cw.to(kF64).slice(0, 0, 3).slice(1, 0, 3);
+  Eigen::Vector3d n_cam(0.0, -0.6, 1.0), t1_cam(1.0, 0.0, 0.0);
+  n_cam.normalize();
+  Eigen::Matrix3d R_cam;
+  R_cam.col(0) = t1_cam, R_cam.col(1) = n_cam.cross(t1_cam), R_cam.col(2) = n_cam;
+  Eigen::Matrix3d Rcw;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Rcw(r, c) = R_cw[r][c].item<double>();
+  const Eigen::Vector4d q = quaternion_from_rotation(Rcw.transpose() * R_cam);
+  const double f = cam.K[0][0].item<double>();
+  Gaussians g;
+  g.means = to_world(rays * z.unsqueeze(1), cam);
+  g.scales = torch::stack({z * 1.2 / f, z * 1.2 / f, z * 1e-4}, 1);
+  g.quats = torch::tensor({q[0], q[1], q[2], q[3]}, kF64).repeat({n, 1});
+  g.colors = torch::full({n, 3}, 0.5, kF64);
+  g.opacities = torch::full({n}, 0.95, kF64);
+  return g;
+}
+}  // namespace
+
+TEST_CASE("render: plane depth follows a slanted surface that mean depths leave in steps", "[render]") {
+  const Camera cam = make_camera(96, 72, 80.0, 80.0, 0.3, true);
+  const Gaussians g = slanted_plane(cam);
+  const Tensor b = (torch::arange(72, kF64).unsqueeze(1) + 0.5 - cam.K[1][2]) / cam.K[1][1];
+  const Tensor truth = (3.0 / (1.0 - 0.6 * b)).expand({72, 96});
+  auto relative_error = [&](const RenderOutput& o) {
+    const Tensor a = o.alpha[0], ok = a > 0.99;
+    REQUIRE(ok.sum().item<int64_t>() > 72 * 96 * 9 / 10);
+    return ((o.depth[0] / a - truth).abs() / truth).masked_select(ok);
+  };
+  RenderOptions plane;
+  plane.depth = "plane";
+  const Tensor e_center = relative_error(render(g, cam)), e_plane = relative_error(render(g, cam, plane));
+  CHECK(e_plane.max().item<double>() < 1e-9);  // exact on a plane, up to rounding
+  CHECK(e_plane.mean().item<double>() < e_center.mean().item<double>() / 5);
+  CHECK(render(g, cam, plane).rgb.equal(render(g, cam).rgb));  // colour does not depend on the depth mode
+}
+
+TEST_CASE("render: plane depth has no gradient and leaves the other gradients alone", "[render]") {
+  const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, torch::kFloat32);
+  const Gaussians scene = random_scene(600, cam, 31).to(torch::kFloat32);
+  Weights w = random_weights(80, 96, 32, torch::kFloat32);
+  RenderOptions plane;
+  plane.depth = "plane";
+  const Gaussians a = with_grad(scene);
+  const RenderOutput out = render(a, cam, plane);
+  CHECK_FALSE(out.depth.requires_grad());
+  weighted_loss(out, w).backward();  // the depth term adds nothing
+  w.depth = torch::zeros_like(w.depth);
+  const auto center = outputs_and_grads(scene, cam, w);
+  const auto grads = grads_of(a);
+  for (size_t k = 0; k < grads.size(); ++k) {
+    CAPTURE(kNames[k]);
+    CHECK(torch::equal(grads[k], center[4 + k]));
+  }
+  plane.depth = "middle";
+  CHECK_THROWS_WITH(render(scene, cam, plane), Catch::Contains("center or plane"));
 }
 
 namespace {

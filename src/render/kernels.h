@@ -17,7 +17,8 @@ constexpr double kSigmaExtent = 3.0;                             // screen footp
 constexpr double kMaxPower = 0.5 * kSigmaExtent * kSigmaExtent;  // ½dᵀΣ⁻¹d at 3σ
 constexpr int kTile = 16;                                        // 16×16 pixel tiles
 constexpr double kFrustumClamp = 1.3;                            // EWA Jacobian evaluated inside 1.3× the frustum
-constexpr double kSpanMargin = 1e-3;  // widens boxes and group tests so rounding never drops a pixel
+constexpr double kPlaneDepthRange = 2.0;  // plane depth stays within [z/2, 2z] of the mean's depth z
+constexpr double kSpanMargin = 1e-3;      // widens boxes and group tests so rounding never drops a pixel
 
 // One pinhole camera in double precision: K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]], x_cam = R·x_world + t.
 struct CameraParams {
@@ -100,9 +101,14 @@ struct RasterOutput {
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
 };
 
-// normals = false skips compositing the normal (a quarter of the pixel work); `normal` is then empty ([0]).
+// What the forward composites besides colour and alpha.
+struct RasterChannels {
+  bool normals = true;       // false skips the normal (a sixth of the pixel work); `normal` is then empty ([0])
+  bool plane_depth = false;  // depth where the ray meets each Gaussian's plane instead of its mean's depth
+};
+
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
-                           const double background[3], bool normals = true);
+                           const double background[3], const RasterChannels& channels = {});
 
 // Per Gaussian [N]: the largest weight w = α·T it reaches at any pixel (0 if culled or never composited).
 torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam);

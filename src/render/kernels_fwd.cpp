@@ -143,11 +143,11 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
 // forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
-// leaves the normal out. With kMaxWeight, best[i] receives the largest weight α·T entry i reaches in this tile
-// (the contribution measure); entries never reached keep their value.
-template <class T, int kChannels, bool kMaxWeight = false>
+// leaves the normal out; kPlane: plane depth (depth_plane). With kMaxWeight, best[i] receives the largest
+// weight α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
+template <class T, int kChannels, bool kPlane, bool kMaxWeight = false>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                      int32_t* last, T* best = nullptr) {
+                      int32_t* last, const CameraParams& cam, T* best = nullptr) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<T> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
@@ -156,21 +156,23 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<T> s = fwd_splat(rec);
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    const DepthPlane<T> plane = kPlane ? depth_plane(s, cam) : DepthPlane<T>{};
     if constexpr (kMaxWeight) {
       T m = 0;
       auto keep_max = [&m](T w) { m = std::max(m, w); };
-      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels>(s, groups[k], st, last, int32_t(i + 1), keep_max);
+      for (int k = 0; k < n; ++k)
+        active -= fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), keep_max);
       best[i] = m;
     } else {
-      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels>(s, groups[k], st, last, int32_t(i + 1));
+      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1));
     }
   }
 }
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
-template <int kChannels>
+template <int kChannels, bool kPlane>
 ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                  float* st, int32_t* last) {
+                                  float* st, int32_t* last, const CameraParams& cam) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<float> groups[kMaxGroups];
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
@@ -180,36 +182,50 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     Splat<float> s = fwd_splat(rec);
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
     const Avx2Splat a = avx2_splat(s, 7);
+    const Avx2Plane plane = avx2_plane(kPlane ? depth_plane(s, cam) : DepthPlane<float>{});
+    const int32_t id = int32_t(i + 1);
     int k = 0;
-    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4, kChannels>(a, groups + k, st, last, int32_t(i + 1));
-    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2, kChannels>(a, groups + k, st, last, int32_t(i + 1));
-    if (k < n) active -= fwd_groups_avx2<1, kChannels>(a, groups + k, st, last, int32_t(i + 1));
+    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    if (k < n) active -= fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id);
   }
 }
 #endif
 
-// normal_out == nullptr: the normal is neither composited nor written.
 template <class T>
-void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
-                        const double* background, T* rgb, T* alpha_out, T* depth_out, T* normal_out, T* final_T,
-                        int32_t* n_contrib) {
-  const int64_t W = cam.width, HW = W * cam.height;
-  const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
-  using TileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*);
-  TileFn tile_fn = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                      int32_t* last) { fwd_tile_generic<T, 7>(local, count, x0, y0, x1, y1, st, last); };
-  if (!normal_out)
-    tile_fn = [](const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
-      fwd_tile_generic<T, 4>(local, count, x0, y0, x1, y1, st, last);
-    };
+using FwdTileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*, const CameraParams&);
+
+template <class T, int kChannels, bool kPlane>
+void fwd_tile_portable(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
+                       int32_t* last, const CameraParams& cam) {
+  fwd_tile_generic<T, kChannels, kPlane>(local, count, x0, y0, x1, y1, st, last, cam);
+}
+
+// The tile loop for these channels: AVX2 + FMA for float when enabled, else portable.
+template <class T>
+FwdTileFn<T> fwd_tile_fn(const RasterChannels& ch) {
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>)
-    if (simd_enabled()) tile_fn = normal_out ? fwd_tile_avx2<7> : fwd_tile_avx2<4>;
+    if (simd_enabled())
+      return ch.normals ? (ch.plane_depth ? fwd_tile_avx2<7, true> : fwd_tile_avx2<7, false>)
+                        : (ch.plane_depth ? fwd_tile_avx2<4, true> : fwd_tile_avx2<4, false>);
 #endif
+  return ch.normals ? (ch.plane_depth ? fwd_tile_portable<T, 7, true> : fwd_tile_portable<T, 7, false>)
+                    : (ch.plane_depth ? fwd_tile_portable<T, 4, true> : fwd_tile_portable<T, 4, false>);
+}
+
+// normal_out == nullptr when the channels leave the normal out: it is then neither composited nor written.
+template <class T>
+void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
+                        const RasterChannels& channels, const double* background, T* rgb, T* alpha_out, T* depth_out,
+                        T* normal_out, T* final_T, int32_t* n_contrib) {
+  const int64_t W = cam.width, HW = W * cam.height;
+  const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
+  const FwdTileFn<T> tile_fn = fwd_tile_fn<T>(channels);
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data());
+    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data(), cam);
     for (int64_t py = y0; py < y1; ++py)
       for (int64_t px = x0; px < x1; ++px) {
         const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
@@ -231,8 +247,8 @@ template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    fwd_tile_generic<T, 4, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
-                                 scratch.pixel_planes(kFwdPlanes), scratch.last.data(), per_entry + begin);
+    fwd_tile_generic<T, 4, false, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+                                        scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam, per_entry + begin);
   });
 }
 
@@ -266,18 +282,19 @@ TileBins bin_tiles(const Projection& proj, const CameraParams& cam) {
 }
 
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
-                           const double background[3], bool normals) {
+                           const double background[3], const RasterChannels& channels) {
   const int64_t H = cam.height, W = cam.width;
   const auto opts = packed.options();
-  RasterOutput out{torch::empty({3, H, W}, opts), torch::empty({1, H, W}, opts),
-                   torch::empty({1, H, W}, opts), normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
-                   torch::empty({H, W}, opts),    torch::empty({H, W}, opts.dtype(torch::kInt32))};
+  RasterOutput out{
+      torch::empty({3, H, W}, opts), torch::empty({1, H, W}, opts),
+      torch::empty({1, H, W}, opts), channels.normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
+      torch::empty({H, W}, opts),    torch::empty({H, W}, opts.dtype(torch::kInt32))};
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {
-    rasterize_fwd_impl<scalar_t>(packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(),
-                                 bins.isect_ids.data_ptr<int32_t>(), cam, background, out.rgb.data_ptr<scalar_t>(),
-                                 out.alpha.data_ptr<scalar_t>(), out.depth.data_ptr<scalar_t>(),
-                                 normals ? out.normal.data_ptr<scalar_t>() : nullptr, out.final_T.data_ptr<scalar_t>(),
-                                 out.n_contrib.data_ptr<int32_t>());
+    rasterize_fwd_impl<scalar_t>(
+        packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
+        channels, background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(),
+        out.depth.data_ptr<scalar_t>(), channels.normals ? out.normal.data_ptr<scalar_t>() : nullptr,
+        out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>());
   });
   return out;
 }

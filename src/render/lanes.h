@@ -63,6 +63,32 @@ struct Splat {
   }
 };
 
+// Plane depth (RenderOptions::depth = "plane"): where the pixel's ray meets the plane through the mean across
+// the Gaussian's shortest axis (the record's normal). Its inverse is affine in the pixel, 1/z = iz0 + gx·dx +
+// gy·dy, and z is kept within kPlaneDepthRange of the mean's depth, so grazing planes stay bounded.
+template <class T>
+struct DepthPlane {
+  T iz0 = 0, gx = 0, gy = 0, zlo = 0, izmin = 0;  // izmin = 1 / the largest depth allowed
+};
+template <class T>
+DepthPlane<T> depth_plane(const Splat<T>& s, const CameraParams& cam) {
+  const T z = s.f[3], nx = s.f[4], ny = s.f[5], nz = s.f[6];
+  const T b = (s.v - T(cam.cy)) / T(cam.fy), a = (s.u - T(cam.cx) - T(cam.skew) * b) / T(cam.fx);
+  const T n_dot_ray = nx * a + ny * b + nz;  // ray of the mean's pixel: (a, b, 1)
+  DepthPlane<T> p;
+  p.iz0 = T(1) / z, p.zlo = z / T(kPlaneDepthRange), p.izmin = T(1) / (z * T(kPlaneDepthRange));
+  const T scale = std::sqrt((a * a + b * b + T(1)) * (nx * nx + ny * ny + nz * nz));
+  if (!(std::abs(n_dot_ray) > T(1e-3) * scale)) return p;  // seen edge-on: the mean's depth (gx = gy = 0)
+  const T k = T(1) / (z * n_dot_ray);
+  p.gx = k * nx / T(cam.fx);
+  p.gy = k * (ny - nx * T(cam.skew) / T(cam.fx)) / T(cam.fy);
+  return p;
+}
+template <class T>
+ISPLAT_INLINE T plane_z(const DepthPlane<T>& p, T dx, T dy) {
+  return std::max(p.zlo, T(1) / std::max(madd(p.gx, dx, madd(p.gy, dy, p.iz0)), p.izmin));
+}
+
 // Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy), see splat_power.
 template <class T>
 struct Row {
@@ -163,10 +189,10 @@ struct NoWeightSink {
 
 // Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink` sees every
 // composited weight w = α·T (the contribution measure uses it; the renderer passes NoWeightSink). The first
-// kChannels of f are accumulated (7 with normals, 4 without).
-template <int kChannels, class T, class Sink = NoWeightSink>
-ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t* last, int32_t id,
-                            Sink&& sink = Sink{}) {
+// kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
+template <int kChannels, bool kPlane, class T, class Sink = NoWeightSink>
+ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const Group<T>& q, T* st, int32_t* last,
+                            int32_t id, Sink&& sink = Sink{}) {
   int stops = 0;
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
@@ -184,7 +210,9 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const Group<T>& q, T* st, int32_t
     }
     const T w = alpha * t;
     sink(w);
-    for (int c = 0; c < kChannels; ++c) st[fwd_at(p, kPlAcc + c)] = madd(w, s.f[c], st[fwd_at(p, kPlAcc + c)]);
+    const T z = kPlane ? plane_z(plane, dx, q.r.dy) : s.f[3];
+    for (int c = 0; c < kChannels; ++c)
+      st[fwd_at(p, kPlAcc + c)] = madd(w, c == 3 ? z : s.f[c], st[fwd_at(p, kPlAcc + c)]);
     st[fwd_at(p, kPlT)] = next;
     last[p] = id;
   }
@@ -233,6 +261,13 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
 struct Avx2Splat {
   __m256 u, A, B, opac, cut, f[7];
 };
+struct Avx2Plane {
+  __m256 iz0, gx, gy, zlo, izmin;
+};
+ISPLAT_AVX2 Avx2Plane avx2_plane(const DepthPlane<float>& p) {
+  return {_mm256_set1_ps(p.iz0), _mm256_set1_ps(p.gx), _mm256_set1_ps(p.gy), _mm256_set1_ps(p.zlo),
+          _mm256_set1_ps(p.izmin)};
+}
 ISPLAT_AVX2 Avx2Splat avx2_splat(const Splat<float>& s, int channels) {
   Avx2Splat a;
   a.u = _mm256_set1_ps(s.u), a.A = _mm256_set1_ps(s.A), a.B = _mm256_set1_ps(s.B);
@@ -268,12 +303,12 @@ ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Group<float>& q, __m256& d
   power = _mm256_fmadd_ps(half, quad, _mm256_mul_ps(dx, _mm256_set1_ps(q.r.bdy)));
 }
 
-template <int N, int kChannels>
-ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, int32_t* last, int32_t id) {
-  __m256 raw[N], power[N];
+template <int N, int kChannels, bool kPlane>
+ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, const Group<float>* q, float* st,
+                                int32_t* last, int32_t id) {
+  __m256 raw[N], power[N], dxs[N];
   for (int k = 0; k < N; ++k) {
-    __m256 dx;
-    avx2_power(a, q[k], dx, power[k]);
+    avx2_power(a, q[k], dxs[k], power[k]);
     raw[k] = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power[k])));
   }
   int stops = 0;
@@ -289,9 +324,15 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float
     const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
     const __m256 add = _mm256_andnot_ps(stop, hit);
     const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
+    __m256 z = a.f[3];
+    if constexpr (kPlane) {  // plane_z
+      const __m256 iz =
+          _mm256_fmadd_ps(plane.gx, dxs[k], _mm256_fmadd_ps(plane.gy, _mm256_set1_ps(q[k].r.dy), plane.iz0));
+      z = _mm256_max_ps(plane.zlo, _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_max_ps(iz, plane.izmin)));
+    }
     for (int c = 0; c < kChannels; ++c) {  // w = 0 where nothing is added: 0·f + acc = acc
       float* acc = st + fwd_at(p0, kPlAcc + c);
-      _mm256_storeu_ps(acc, _mm256_fmadd_ps(w, a.f[c], _mm256_loadu_ps(acc)));
+      _mm256_storeu_ps(acc, _mm256_fmadd_ps(w, c == 3 ? z : a.f[c], _mm256_loadu_ps(acc)));
     }
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
     __m256i* Lp = reinterpret_cast<__m256i*>(last + p0);

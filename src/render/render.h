@@ -2,6 +2,7 @@
 #pragma once
 #include <torch/types.h>
 
+#include <string>
 #include <vector>
 
 #include "core/gaussians.h"
@@ -13,9 +14,10 @@ class ConfigVisitor;
 
 struct RenderOptions {
   std::vector<double> background = {0.0, 0.0, 0.0};  // linear RGB behind the splats: rgb += T_final·bg
-  bool antialiased = false;  // opacity compensation (Mip-Splatting / gsplat "antialiased") on top of the dilation
-  double near = 0.01;        // metres: Gaussians with camera-space z < near are culled
-  double dilation = 0.3;     // px², added to the diagonal of every 2D covariance (low-pass filter)
+  bool antialiased = false;      // opacity compensation (Mip-Splatting / gsplat "antialiased") on top of the dilation
+  double near = 0.01;            // metres: Gaussians with camera-space z < near are culled
+  double dilation = 0.3;         // px², added to the diagonal of every 2D covariance (low-pass filter)
+  std::string depth = "center";  // center: each Gaussian's mean depth (differentiable); plane: ray-plane (no gradient)
   // Composite the normal map. Not a config key: callers that never read `normal` (training) turn it off and
   // save about a sixth of the forward pass; `normal` is then an empty tensor.
   bool normals = true;
@@ -23,9 +25,11 @@ struct RenderOptions {
 };
 
 // Unbatched: rgb [3,H,W], alpha [1,H,W], depth [1,H,W], normal [3,H,W]; batched: a leading [B] on each.
-// rgb = Σ wᵢcᵢ + T_final·bg, alpha = Σ wᵢ = 1 − T_final, depth = Σ wᵢzᵢ (expected camera-space z of the
-// means, not normalized by alpha), normal = Σ wᵢnᵢ with nᵢ the shortest axis in camera space facing the
-// camera. rgb, alpha and depth are differentiable; normal is not (it has no gradient).
+// rgb = Σ wᵢcᵢ + T_final·bg, alpha = Σ wᵢ = 1 − T_final, depth = Σ wᵢzᵢ (not normalized by alpha), normal =
+// Σ wᵢnᵢ with nᵢ the shortest axis in camera space facing the camera. zᵢ is the camera-space z of the mean
+// (depth "center"), or with depth "plane" the z where the pixel's ray meets the plane through the mean normal
+// to nᵢ, kept within [z/2, 2z] of the mean's z (smooth across slanted surfaces). rgb and alpha are
+// differentiable, depth only in "center" mode; normal is not (it has no gradient).
 struct RenderOutput {
   torch::Tensor rgb, alpha, depth, normal;
 };

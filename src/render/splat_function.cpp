@@ -17,6 +17,10 @@ void RenderOptions::visit(ConfigVisitor& v) {
   v.field("near", near, "near plane in metres: Gaussians closer than this are culled", Range::above(0.0));
   v.field("dilation", dilation, "screen-space low-pass filter in px², added to each 2D covariance",
           Range::at_least(0.0));
+  v.field("depth", depth,
+          "rendered depth: center (each Gaussian's mean depth, differentiable) or plane (where the pixel's ray meets "
+          "the Gaussian's flattest plane: smooth on slanted surfaces, no gradient)",
+          {"center", "plane"});
 }
 
 namespace splat {
@@ -82,7 +86,8 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     static const char* names[5] = {"means", "scales", "quats", "colors", "opacities"};
     for (int k = 0; k < 5; ++k) check_no_nonfinite(proj.nonfinite[k], names[k]);  // counted by the projection pass
     const TileBins bins = bin_tiles(proj, cam);
-    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(), options.normals);
+    const bool plane = options.depth == "plane";
+    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(), {options.normals, plane});
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
                             out.final_T, out.n_contrib});
     ctx->saved_data["width"] = width;
@@ -91,7 +96,11 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     ctx->saved_data["dilation"] = options.dilation;
     ctx->saved_data["antialiased"] = options.antialiased;
     ctx->saved_data["background"] = options.background;
-    ctx->mark_non_differentiable({out.normal});
+    ctx->saved_data["plane_depth"] = plane;
+    if (plane)
+      ctx->mark_non_differentiable({out.normal, out.depth});
+    else
+      ctx->mark_non_differentiable({out.normal});
     return {out.rgb, out.alpha, out.depth, out.normal};
   }
 
@@ -102,8 +111,9 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
         camera_params(saved[4], saved[5], ctx->saved_data["width"].toInt(), ctx->saved_data["height"].toInt());
     const Settings s = settings_from(ctx);
     const TileBins bins{saved[7], saved[8]};
+    const Tensor grad_depth = ctx->saved_data["plane_depth"].toBool() ? Tensor() : grads[2];  // plane depth: none
     const Tensor grad2d =
-        rasterize_bwd(saved[6], bins, cam, s.background, saved[9], saved[10], grads[0], grads[1], grads[2]);
+        rasterize_bwd(saved[6], bins, cam, s.background, saved[9], saved[10], grads[0], grads[1], grad_depth);
     variable_list out(10);
     if (ctx->needs_input_grad(3)) out[3] = grad2d.narrow(1, 6, 3).contiguous();  // colours: columns r, g, b
     if (ctx->needs_input_grad(0) || ctx->needs_input_grad(1) || ctx->needs_input_grad(2) || ctx->needs_input_grad(4)) {
@@ -156,6 +166,8 @@ RenderOutput render(const Gaussians& gaussians, const Camera& camera, const Rend
   ISPLAT_CHECK(options.near > 0 && std::isfinite(options.near), "render: near must be > 0, got ", options.near);
   ISPLAT_CHECK(options.dilation >= 0 && std::isfinite(options.dilation), "render: dilation must be >= 0, got ",
                options.dilation);
+  ISPLAT_CHECK(options.depth == "center" || options.depth == "plane", "render: depth must be center or plane, got '",
+               options.depth, "'");
   ISPLAT_CHECK(camera.width > 0 && camera.height > 0, "render: image size must be positive, got ", camera.width, "x",
                camera.height);
   ISPLAT_CHECK(gaussians.means.defined(), "render: means is undefined");
