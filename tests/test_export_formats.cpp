@@ -332,7 +332,6 @@ TEST_CASE("html: the viewer page opens in headless Chromium at the source camera
   }
   const std::string shot = dir + "/shot.png", profile = dir + "/profile";
   fs::create_directories(profile);
-  // The viewer renders only after its scene is decoded; virtual time lets that finish in a few real seconds.
   // The viewer draws once its sort worker has run, and workers run in real time while Chromium's virtual time
   // races ahead: on its own the page is shot blank about half the time (more under load). So it is shot inside
   // a frame of a page that spins its main thread in slices, which holds virtual time back while the worker

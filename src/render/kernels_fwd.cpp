@@ -181,8 +181,8 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
-    const Avx2Splat a = avx2_splat(s, 7);
-    const Avx2Plane plane = avx2_plane(kPlane ? depth_plane(s, cam) : DepthPlane<float>{});
+    const Avx2Splat a = avx2_splat(s, kChannels);  // broadcasts only the channels composited
+    const Avx2Plane plane = kPlane ? avx2_plane(depth_plane(s, cam)) : Avx2Plane{};
     const int32_t id = int32_t(i + 1);
     int k = 0;
     for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id);
