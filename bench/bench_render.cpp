@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
   try {
     int64_t threads = 0, runs_scale = 1;
     bool quick = false, huge_large = false;
-    std::string only;
+    std::string only, simd = "best";
     ArgParser parser("bench_render",
                      "Times the CPU splatting renderer on Gaussians from a generated room (the project's generator, "
                      "sampler and base Gaussians).");
@@ -214,11 +214,22 @@ int main(int argc, char** argv) {
     parser.flag("--quick", quick, "only the two smaller sizes");
     parser.flag("--large-1.5m", huge_large, "also run the large-splats variant at 1.5M");
     parser.option("--only", only, "run only the case with this name (e.g. 100k)", "NAME");
+    parser.option("--simd", simd, "pixel loops: best (what the CPU has), avx512, avx2 or portable", "LEVEL");
     if (!parser.parse(argc, argv)) return 0;
+    const std::vector<std::string> levels = {"portable", "avx2", "avx512"};
+    if (simd != "best") {
+      const auto it = std::find(levels.begin(), levels.end(), simd);
+      ISPLAT_CHECK(it != levels.end(), "--simd: '", simd, "' is not best, avx512, avx2 or portable");
+      const auto wanted = splat::Simd(it - levels.begin());
+      splat::set_simd_level(wanted);
+      ISPLAT_CHECK(splat::simd_level() == wanted, "--simd: this CPU has no ", simd,
+                   " (best: ", splat::simd_name(splat::simd_supported()), ")");
+    }
     keep_freed_memory();  // as every executable does (run_main)
     const int used = configure_threads(threads);
     std::cout
-        << "bench_render: " << used << " threads, median of timed runs (ms); float32; times exclude scene building\n"
+        << "bench_render: " << used << " threads, " << splat::simd_name(splat::simd_level())
+        << " pixel loops, median of timed runs (ms); float32; times exclude scene building\n"
         << "freed memory is kept for reuse (as in every executable); MALLOC_MMAP_MAX_=65536 in the environment "
            "gives glibc's default instead\n"
         << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "

@@ -1,5 +1,5 @@
 // Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
-// culling and input errors, batching, options, thread-count determinism and AVX2/portable agreement; the
+// culling and input errors, batching, options, thread-count determinism and agreement of the SIMD levels; the
 // contribution measure and pruning.
 #include <catch2/catch.hpp>
 
@@ -440,43 +440,63 @@ TEST_CASE("render: options read and write through the config schema", "[render]"
   CHECK_THROWS_AS(config_from_json<RenderOptions>({{"near", 0}}, "test"), Error);
 }
 
-TEST_CASE("render: AVX2 and portable pixel loops agree bit for bit", "[render]") {
+namespace {
+// The SIMD levels this CPU runs, portable first. A level the CPU lacks cannot be checked here: say so.
+std::vector<splat::Simd> simd_levels() {
+  std::vector<splat::Simd> levels;
+  for (auto level : {splat::Simd::portable, splat::Simd::avx2, splat::Simd::avx512}) {
+    if (level <= splat::simd_supported())
+      levels.push_back(level);
+    else
+      WARN("this CPU has no " << splat::simd_name(level) << ": its pixel loops are not checked here");
+  }
+  return levels;
+}
+}  // namespace
+
+TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]") {
   // Double precision (the finite-difference and reference tests) always takes the portable loops; this ties
-  // the float AVX2 loops to them. Without AVX2 both runs are portable and the check is trivially true.
+  // the float AVX2 and AVX-512 loops to them. Large and small splats, so that Gaussians cover odd and even
+  // numbers of 8-pixel groups (AVX-512 pairs them and finishes an odd one on the AVX2 rule).
   const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, torch::kFloat32);
-  const Gaussians scene = random_scene(1500, cam, 15).to(torch::kFloat32);
   const Weights w = random_weights(80, 96, 16, torch::kFloat32);
-  std::vector<std::vector<Tensor>> results;
-  for (bool simd : {true, false}) {
-    const bool before = splat::set_simd_enabled(simd);
-    RenderOptions opt;
-    opt.background = {0.2f, 0.3f, 0.4f};
-    results.push_back(outputs_and_grads(scene, cam, w, opt));
-    opt.depth = "plane";
-    results.back().push_back(render(scene, cam, opt).depth);
-    splat::set_simd_enabled(before);
+  for (bool large : {false, true}) {
+    CAPTURE(large);
+    const Gaussians scene =
+        (large ? random_scene(300, cam, 15, 1.4, 4.0, 20.0) : random_scene(1500, cam, 15)).to(torch::kFloat32);
+    std::vector<std::vector<Tensor>> results;
+    for (splat::Simd level : simd_levels()) {
+      const splat::Simd before = splat::set_simd_level(level);
+      RenderOptions opt;
+      opt.background = {0.2f, 0.3f, 0.4f};
+      results.push_back(outputs_and_grads(scene, cam, w, opt));
+      opt.depth = "plane";
+      results.back().push_back(render(scene, cam, opt).depth);
+      splat::set_simd_level(before);
+    }
+    for (size_t level = 1; level < results.size(); ++level)
+      for (size_t k = 0; k < results[0].size(); ++k) {
+        CAPTURE(splat::simd_name(splat::Simd(level)), k);
+        CHECK(torch::equal(results[0][k], results[level][k]));
+      }
+    CHECK(max_abs(results[0][4]) > 0);
   }
-  for (size_t k = 0; k < results[0].size(); ++k) {
-    CAPTURE(k);
-    CHECK(torch::equal(results[0][k], results[1][k]));
-  }
-  CHECK(max_abs(results[1][4]) > 0);
 }
 
 TEST_CASE("render: leaving the normal map out changes nothing else", "[render]") {
   // The trainer renders without normals; its images and gradients must be those of the full render, on both
   // the AVX2 and the portable loops, in float and double.
   for (auto dtype : {torch::kFloat32, torch::kFloat64}) {
-    for (bool simd : {true, false}) {
-      CAPTURE(dtype, simd);
-      const bool before = splat::set_simd_enabled(simd);
+    for (splat::Simd level : simd_levels()) {
+      CAPTURE(dtype, splat::simd_name(level));
+      const splat::Simd before = splat::set_simd_level(level);
       const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, dtype);
       const Gaussians scene = random_scene(800, cam, 21).to(dtype);
       const Weights w = random_weights(80, 96, 22, dtype);
       RenderOptions without;
       without.normals = false;
       const auto full = outputs_and_grads(scene, cam, w), lean = outputs_and_grads(scene, cam, w, without);
-      splat::set_simd_enabled(before);
+      splat::set_simd_level(before);
       CHECK(full[3].sizes() == torch::IntArrayRef({3, 80, 96}));
       CHECK(max_abs(full[3]) > 0.5);
       CHECK(lean[3].numel() == 0);
@@ -583,7 +603,7 @@ TEST_CASE("prune: the contribution measure equals the dense reference's largest 
   CHECK(max_abs(ours - ref) < 1e-9);
   CHECK((ref > 0.05).sum().item<int64_t>() > 10);  // many contribute
   CHECK((ref == 0).sum().item<int64_t>() > 0);     // and some (outside the frustum or occluded) do not
-  // Float precision and the AVX2 loops' rules agree with the portable measure.
+  // Float precision agrees with the double-precision measure.
   CHECK(max_abs(max_contribution(scene.to(torch::kFloat32), cam.to(torch::kFloat32)).to(kF64) - ref) < 1e-4);
 }
 

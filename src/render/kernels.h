@@ -122,11 +122,15 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_alpha,   // [1, H, W]
                             const torch::Tensor& grad_depth);  // [1, H, W]
 
-// The rasterizers run AVX2 + FMA pixel loops (float only) when the CPU has both. They do the same IEEE
-// operations in the same order as the portable loops, fusing the same multiply-adds (std::fma there), so both
-// give bit-identical images and gradients.
-// Tests can force the portable loops; returns the previous setting.
-bool set_simd_enabled(bool enabled);
-bool simd_enabled();
+// Instruction sets of the pixel loops (float only; double always runs portable). The rasterizers use the best
+// the CPU has. All do the same IEEE operations in the same order, fusing the same multiply-adds (std::fma in
+// the portable loops), so all give bit-identical images and gradients. avx512 runs two 8-pixel groups per
+// register.
+enum class Simd { portable = 0, avx2 = 1, avx512 = 2 };
+const char* simd_name(Simd level);
+Simd simd_supported();  // the best this CPU has: avx2 needs AVX2 + FMA, avx512 also AVX-512 F + DQ
+Simd simd_level();      // the one in use
+// Tests and benchmarks pick one; capped at simd_supported(). Returns the previous level.
+Simd set_simd_level(Simd level);
 
 }  // namespace isplat::splat

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "render/kernels.h"
+#include "render/lanes_avx512.h"
 #include "render/tile_loop.h"
 
 namespace isplat::splat {
@@ -45,21 +46,59 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
   Group<float> groups[kMaxGroups];
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const float* rec = local + i * kRec;
-    LaneSums<float> sums{};
+    float* slot = out + i * kGrad2d;
     int64_t ys, ye, g0, g1;
-    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
-      Splat<float> s = bwd_splat(rec);
-      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
-      const Avx2Splat a = avx2_splat(s, kBwdCh);
-      Avx2Sums g;
-      g.zero();
-      int k = 0;
-      for (; k + 4 <= n; k += 4) bwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i), g);
-      for (; k + 2 <= n; k += 2) bwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i), g);
-      if (k < n) bwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i), g);
-      g.store(sums);
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      std::fill(slot, slot + kGrad2d, 0.0f);
+      continue;
     }
-    sums.reduce(out + i * kGrad2d);
+    Splat<float> s = bwd_splat(rec);
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    const Avx2Splat a = avx2_splat(s, kBwdCh);
+    Avx2Sums g[2];
+    g[0].zero(), g[1].zero();
+    int k = 0;
+    for (; k + 4 <= n; k += 4) bwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i), g);
+    for (; k + 2 <= n; k += 2) bwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i), g);
+    if (k < n) bwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i), g);
+    reduce_sets(g, slot);
+  }
+}
+
+// 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
+// groups for a narrower one (a last unpaired group runs on the AVX2 rule).
+ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                      float* st, const int32_t* last, int32_t max_last, float* out) {
+  std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
+  Job jobs[kTile];
+  TileRows rows;
+  for (int64_t i = max_last - 1; i >= 0; --i) {
+    const float* rec = local + i * kRec;
+    float* slot = out + i * kGrad2d;
+    int64_t ys, ye, g0, g1;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      std::fill(slot, slot + kGrad2d, 0.0f);
+      continue;
+    }
+    Splat<float> s = bwd_splat(rec);
+    s.prepare();
+    tile_rows(s, x0, y0, ys, ye, g0, g1, rows);
+    const Avx512Splat a = avx512_splat(s, kBwdCh);
+    if (g1 - g0 == 2) {
+      Avx512Sums g;
+      g.zero();
+      bwd_all_jobs_avx512<true>(a, jobs, row_jobs(rows, x0, jobs), st, last, int32_t(i), {g});
+      g.reduce(slot);
+      continue;
+    }
+    Group<float> odd;
+    bool has_odd;
+    const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
+    Avx2Sums g[2];  // all in the set of column g0
+    g[0].zero(), g[1].zero();
+    bwd_all_jobs_avx512<false>(a, jobs, n, st, last, int32_t(i), {g[g0]});
+    if (has_odd) bwd_groups_avx2<1>(a.low(kBwdCh), &odd, st, last, int32_t(i), g);
+    reduce_sets(g, slot);
   }
 }
 #endif
@@ -71,8 +110,10 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
   const int64_t W = cam.width, HW = W * cam.height;
   auto tile_fn = bwd_tile_generic<T>;
 #ifdef ISPLAT_HAVE_AVX2_LANES
-  if constexpr (std::is_same_v<T, float>)
-    if (simd_enabled()) tile_fn = bwd_tile_avx2;
+  if constexpr (std::is_same_v<T, float>) {
+    if (simd_level() == Simd::avx512) tile_fn = bwd_tile_avx512;
+    if (simd_level() == Simd::avx2) tile_fn = bwd_tile_avx2;
+  }
 #endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;

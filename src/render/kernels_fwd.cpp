@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "render/kernels.h"
+#include "render/lanes_avx512.h"
 #include "render/tile_loop.h"
 
 namespace isplat::splat {
@@ -170,6 +171,37 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 }
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
+// 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
+// groups for a narrower one (a last unpaired group runs on the AVX2 rule).
+template <int kChannels, bool kPlane>
+ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                      float* st, int32_t* last, const CameraParams& cam) {
+  fwd_init(x0, y0, x1, y1, st, last);
+  Job jobs[kTile];
+  TileRows rows;
+  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && active > 0; ++i) {
+    const float* rec = local + i * kRec;
+    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    Splat<float> s = fwd_splat(rec);
+    s.prepare();
+    tile_rows(s, x0, y0, ys, ye, g0, g1, rows);
+    const int32_t id = int32_t(i + 1);
+    const Avx512Splat a = avx512_splat(s, kChannels);
+    const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
+    if (g1 - g0 == 2) {
+      const int n = row_jobs(rows, x0, jobs);
+      active -= fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, jobs, n, st, last, id);
+      continue;
+    }
+    Group<float> odd;
+    bool has_odd;
+    const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
+    active -= fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, jobs, n, st, last, id);
+    if (has_odd) active -= fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id);
+  }
+}
+
 template <int kChannels, bool kPlane>
 ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                   float* st, int32_t* last, const CameraParams& cam) {
@@ -201,14 +233,18 @@ void fwd_tile_portable(const T* local, int64_t count, int64_t x0, int64_t y0, in
   fwd_tile_generic<T, kChannels, kPlane>(local, count, x0, y0, x1, y1, st, last, cam);
 }
 
-// The tile loop for these channels: AVX2 + FMA for float when enabled, else portable.
+// The tile loop for these channels at the SIMD level in use (float), else portable.
 template <class T>
 FwdTileFn<T> fwd_tile_fn(const RasterChannels& ch) {
 #ifdef ISPLAT_HAVE_AVX2_LANES
-  if constexpr (std::is_same_v<T, float>)
-    if (simd_enabled())
+  if constexpr (std::is_same_v<T, float>) {
+    if (simd_level() == Simd::avx512)
+      return ch.normals ? (ch.plane_depth ? fwd_tile_avx512<7, true> : fwd_tile_avx512<7, false>)
+                        : (ch.plane_depth ? fwd_tile_avx512<4, true> : fwd_tile_avx512<4, false>);
+    if (simd_level() == Simd::avx2)
       return ch.normals ? (ch.plane_depth ? fwd_tile_avx2<7, true> : fwd_tile_avx2<7, false>)
                         : (ch.plane_depth ? fwd_tile_avx2<4, true> : fwd_tile_avx2<4, false>);
+  }
 #endif
   return ch.normals ? (ch.plane_depth ? fwd_tile_portable<T, 7, true> : fwd_tile_portable<T, 7, false>)
                     : (ch.plane_depth ? fwd_tile_portable<T, 4, true> : fwd_tile_portable<T, 4, false>);
@@ -255,21 +291,31 @@ void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, c
 }  // namespace
 
 namespace {
-bool cpu_has_avx2_fma() {
+Simd cpu_simd() {
 #ifdef ISPLAT_HAVE_AVX2_LANES
   __builtin_cpu_init();  // may run before main (static initialization)
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) return Simd::portable;
+  const bool avx512 =
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl");
+  return avx512 ? Simd::avx512 : Simd::avx2;
 #else
-  return false;
+  return Simd::portable;
 #endif
 }
-std::atomic<bool> g_simd{cpu_has_avx2_fma()};
+std::atomic<Simd> g_simd{cpu_simd()};
 }  // namespace
-bool set_simd_enabled(bool enabled) {
-  return g_simd.exchange(enabled && cpu_has_avx2_fma());
+const char* simd_name(Simd level) {
+  return level == Simd::avx512 ? "avx512" : level == Simd::avx2 ? "avx2" : "portable";
 }
-bool simd_enabled() {
+Simd simd_supported() {
+  static const Simd best = cpu_simd();
+  return best;
+}
+Simd simd_level() {
   return g_simd.load();
+}
+Simd set_simd_level(Simd level) {
+  return g_simd.exchange(std::min(level, simd_supported()));
 }
 
 TileBins bin_tiles(const Projection& proj, const CameraParams& cam) {

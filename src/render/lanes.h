@@ -122,6 +122,11 @@ struct Group {
   Row<T> r;
   int32_t xb, p0;
 };
+// The lane-sum set of a group: 0 for the left half of its tile row, 1 for the right half.
+template <class T>
+ISPLAT_INLINE int lane_set(const Group<T>& q) {
+  return (q.p0 / kLanes) & 1;
+}
 constexpr int kMaxGroups = kTile * kTile / kLanes;
 
 // The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit, in row-major order. Branch-free
@@ -155,11 +160,12 @@ enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
 constexpr int kBwdCh = 5;
 enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
 
-// Index of pixel p's value in `plane`. Layout [group][plane][lane]: a group's state is one contiguous block,
-// and no two planes lie a multiple of 4 KiB apart (which makes loads wait on unrelated stores).
+// Index of pixel p's value in `plane`. Layout [tile row][plane][pixel of the row]: a row's state is one
+// contiguous block (a plane of it is 16 floats, one AVX-512 register), and no two planes lie a multiple of
+// 4 KiB apart (which makes loads wait on unrelated stores).
 template <int kPlanes>
 ISPLAT_INLINE int plane_at(int p, int plane) {
-  return ((p / kLanes) * kPlanes + plane) * kLanes + p % kLanes;
+  return ((p / kTile) * kPlanes + plane) * kTile + p % kTile;
 }
 ISPLAT_INLINE int fwd_at(int p, int plane) {
   return plane_at<kFwdPlanes>(p, plane);
@@ -168,13 +174,14 @@ ISPLAT_INLINE int bwd_at(int p, int plane) {
   return plane_at<kBwdPlanes>(p, plane);
 }
 
-// Lane sums of one Gaussian's backward: 10 quantities × 8 lanes, reduced in one fixed tree order.
+// Lane sums of one Gaussian's backward: 10 quantities × 8 lanes in two sets, one per half of the tile's rows
+// (lane_set; so the AVX-512 loops can run whole rows with the same sums), reduced in one fixed tree order.
 template <class T>
 struct LaneSums {
-  T s[kGrad2d][kLanes];
+  T s[2][kGrad2d][kLanes];
   void reduce(T* out) const {
-    for (int k = 0; k < kGrad2d; ++k)
-      out[k] = ((s[k][0] + s[k][1]) + (s[k][2] + s[k][3])) + ((s[k][4] + s[k][5]) + (s[k][6] + s[k][7]));
+    auto tree = [](const T* x) { return ((x[0] + x[1]) + (x[2] + x[3])) + ((x[4] + x[5]) + (x[6] + x[7])); };
+    for (int k = 0; k < kGrad2d; ++k) out[k] = tree(s[0][k]) + tree(s[1][k]);
   }
 };
 enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
@@ -219,11 +226,12 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const
   return stops;
 }
 
-// Back to front over the 8 pixels of group `q` for Gaussian `i` (tile-local), adding to the lane sums.
+// Back to front over the 8 pixels of group `q` for Gaussian `i` (tile-local), adding to the group's lane sums.
 template <class T>
 ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const int32_t* last, int32_t i,
-                             LaneSums<T>& g) {
+                             LaneSums<T>& sums) {
   const Row<T>& r = q.r;
+  auto& g = sums.s[lane_set(q)];
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
@@ -241,15 +249,15 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     const T d_alpha = (dq - S) * t_in;
     S = madd(alpha, dq, (T(1) - alpha) * S);
     st[bwd_at(p, kPbT)] = t_in;
-    for (int c = 0; c < 4; ++c) g.s[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g.s[kGr + c][l]);
+    for (int c = 0; c < 4; ++c) g[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g[kGr + c][l]);
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
-    g.s[kGo][l] = madd(G, d_alpha, g.s[kGo][l]);
+    g[kGo][l] = madd(G, d_alpha, g[kGo][l]);
     const T dp = -(alpha * d_alpha);  // dL/dpower
-    g.s[kGu][l] = madd(-dp, madd(s.A, dx, r.bdy), g.s[kGu][l]);
-    g.s[kGv][l] = madd(-dp, madd(s.B, dx, r.cdy), g.s[kGv][l]);
-    g.s[kGA][l] = madd(dp * T(0.5) * dx, dx, g.s[kGA][l]);
-    g.s[kGB][l] = madd(dp * dx, r.dy, g.s[kGB][l]);
-    g.s[kGC][l] = madd(dp * T(0.5) * r.dy, r.dy, g.s[kGC][l]);
+    g[kGu][l] = madd(-dp, madd(s.A, dx, r.bdy), g[kGu][l]);
+    g[kGv][l] = madd(-dp, madd(s.B, dx, r.cdy), g[kGv][l]);
+    g[kGA][l] = madd(dp * T(0.5) * dx, dx, g[kGA][l]);
+    g[kGB][l] = madd(dp * dx, r.dy, g[kGB][l]);
+    g[kGC][l] = madd(dp * T(0.5) * r.dy, r.dy, g[kGC][l]);
   }
 }
 
@@ -344,26 +352,42 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
   return stops;
 }
 
-// Lane sums as registers; stored to LaneSums for the fixed-order reduction.
+// One set of lane sums as registers.
 struct Avx2Sums {
   __m256 s[kGrad2d];
   ISPLAT_AVX2 void zero() {
     for (auto& v : s) v = _mm256_setzero_ps();
   }
-  ISPLAT_AVX2 void store(LaneSums<float>& out) const {
-    for (int k = 0; k < kGrad2d; ++k) _mm256_storeu_ps(out.s[k], s[k]);
-  }
 };
+// Per 128 bits: a0 + a1, a2 + a3, b0 + b1, b2 + b3.
+ISPLAT_AVX2 __m256 pairs(__m256 a, __m256 b) {
+  return _mm256_add_ps(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)),
+                       _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
+}
+// LaneSums::reduce of the two sets in registers, two quantities at a time: each step adds the neighbours the
+// scalar tree adds (addition commutes, so every partial sum is the tree's), then the left set's total + the
+// right's.
+ISPLAT_AVX2 void reduce_sets(const Avx2Sums* sets, float* out) {
+  for (int k = 0; k < kGrad2d; k += 2) {
+    const __m256 a = pairs(sets[0].s[k], sets[1].s[k]), b = pairs(sets[0].s[k + 1], sets[1].s[k + 1]);
+    const __m256 quads = pairs(a, b);  // per 128 bits: left k, right k, left k+1, right k+1 (4-sums)
+    const __m128 trees = _mm_add_ps(_mm256_castps256_ps128(quads), _mm256_extractf128_ps(quads, 1));
+    const __m128 totals = _mm_add_ps(trees, _mm_movehdup_ps(trees));  // left + right at 0 and 2
+    out[k] = _mm_cvtss_f32(totals), out[k + 1] = _mm_cvtss_f32(_mm_movehl_ps(totals, totals));
+  }
+}
 
+// Groups q[0..N), each into its lane-sum set sums[lane_set].
 template <int N>
 ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, const int32_t* last, int32_t i,
-                                 Avx2Sums& g) {
+                                 Avx2Sums* sums) {
   __m256 dxs[N], power[N], G[N];
   for (int k = 0; k < N; ++k) {
     avx2_power(a, q[k], dxs[k], power[k]);
     G[k] = avx2_exp(avx2_neg(power[k]));
   }
   for (int k = 0; k < N; ++k) {
+    Avx2Sums& g = sums[lane_set(q[k])];
     const int p0 = q[k].p0;
     const __m256 dx = dxs[k];
     const __m256 raw = _mm256_mul_ps(a.opac, G[k]);

@@ -1,0 +1,345 @@
+// Internal to the render kernels: the AVX2 lanes' rules on whole 16-pixel tile rows, one row per AVX-512
+// register (its two 8-pixel groups; a group the culling dropped is masked off). Same operations per lane, and
+// each half of a row feeds its own lane-sum set, so images and gradients are bit-identical to the AVX2 and
+// portable loops.
+#pragma once
+#include "render/lanes.h"
+
+#ifdef ISPLAT_HAVE_AVX2_LANES
+#define ISPLAT_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma"), always_inline)) inline
+#define ISPLAT_AVX512_FN __attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma")))
+
+namespace isplat::splat {
+
+static_assert(kTile == 2 * kLanes, "the AVX-512 loops take a tile row as two 8-pixel groups");
+
+struct Avx512Splat {
+  __m512 u, A, B, opac, cut, f[7];
+  // The same constants in 8 lanes (the low halves: no instruction), for a last unpaired group.
+  ISPLAT_AVX512 Avx2Splat low(int channels) const {
+    Avx2Splat a;
+    a.u = _mm512_castps512_ps256(u), a.A = _mm512_castps512_ps256(A), a.B = _mm512_castps512_ps256(B);
+    a.opac = _mm512_castps512_ps256(opac), a.cut = _mm512_castps512_ps256(cut);
+    for (int c = 0; c < channels; ++c) a.f[c] = _mm512_castps512_ps256(f[c]);
+    return a;
+  }
+};
+struct Avx512Plane {
+  __m512 iz0, gx, gy, zlo, izmin;
+  ISPLAT_AVX512 Avx2Plane low() const {
+    return {_mm512_castps512_ps256(iz0), _mm512_castps512_ps256(gx), _mm512_castps512_ps256(gy),
+            _mm512_castps512_ps256(zlo), _mm512_castps512_ps256(izmin)};
+  }
+};
+ISPLAT_AVX512 Avx512Plane avx512_plane(const DepthPlane<float>& p) {
+  return {_mm512_set1_ps(p.iz0), _mm512_set1_ps(p.gx), _mm512_set1_ps(p.gy), _mm512_set1_ps(p.zlo),
+          _mm512_set1_ps(p.izmin)};
+}
+ISPLAT_AVX512 Avx512Splat avx512_splat(const Splat<float>& s, int channels) {
+  Avx512Splat a;
+  a.u = _mm512_set1_ps(s.u), a.A = _mm512_set1_ps(s.A), a.B = _mm512_set1_ps(s.B);
+  a.opac = _mm512_set1_ps(s.opac), a.cut = _mm512_set1_ps(s.cut);
+  for (int c = 0; c < channels; ++c) a.f[c] = _mm512_set1_ps(s.f[c]);
+  return a;
+}
+
+ISPLAT_AVX512 __m512 avx512_neg(__m512 x) {
+  return _mm512_xor_ps(x, _mm512_set1_ps(-0.0f));
+}
+
+// avx2_exp, 16 lanes.
+ISPLAT_AVX512 __m512 avx512_exp(__m512 x) {
+  const __m512 y = _mm512_mul_ps(_mm512_max_ps(x, _mm512_set1_ps(-16.0f)), _mm512_set1_ps(0.0625f));
+  __m512 p = _mm512_set1_ps(1.0f / 720);
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 120));
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 24));
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 6));
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(0.5f));
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f));
+  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f));
+  p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p);
+  return _mm512_mul_ps(p, p);
+}
+
+// 16 lanes of one Gaussian: two 8-pixel groups, the low half at tile pixel p[0], the high half at p[1].
+// Row jobs (kRow) are a whole tile row, p[1] = p[0] + 8, one contiguous block per plane; a group the culling
+// dropped is masked off in `lanes`. Pair jobs are two consecutive groups of a narrow Gaussian's list (one
+// group per row, all in the same column): their state is loaded and stored in halves.
+struct Job {
+  Row<float> r[2];
+  int32_t p[2];
+  int32_t xb;  // image column of lane 0 (and, for pairs, of lane 8)
+  __mmask16 lanes;
+};
+
+// A Gaussian's terms of the tile's 16 rows (make_row's, computed as one vector) and which groups it may hit
+// (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
+// or not never changes a result.
+struct TileRows {
+  alignas(64) float dy[kTile], cdy[kTile], bdy[kTile], cdy2[kTile];
+  unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
+  Row<float> row(int r) const { return {dy[r], cdy[r], bdy[r], cdy2[r]}; }
+};
+ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
+                             int64_t g1, TileRows& t) {
+  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512 dy =  // T(py) + T(0.5) − v, with py = y0 + lane exactly
+      _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(y0)), lane), _mm512_set1_ps(0.5f)),
+                    _mm512_set1_ps(s.v));
+  const __m512 cdy = _mm512_mul_ps(_mm512_set1_ps(s.C), dy), bdy = _mm512_mul_ps(_mm512_set1_ps(s.B), dy);
+  const __m512 cdy2 = _mm512_mul_ps(cdy, dy);
+  _mm512_store_ps(t.dy, dy), _mm512_store_ps(t.cdy, cdy), _mm512_store_ps(t.bdy, bdy), _mm512_store_ps(t.cdy2, cdy2);
+  const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
+  const __m512 at_min = _mm512_mul_ps(_mm512_set1_ps(s.beta), dy), A = _mm512_set1_ps(s.A);
+  for (int g = 0; g < 2; ++g) {
+    t.groups[g] = 0;
+    if (g < g0 || g >= g1) continue;
+    const float lo = (float(int32_t(x0) + g * kLanes) + 0.5f) - s.u, hi = lo + float(kLanes - 1);
+    const __m512 dx = _mm512_min_ps(_mm512_max_ps(at_min, _mm512_set1_ps(lo)), _mm512_set1_ps(hi));
+    const __m512 q =
+        _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(A, dx), dx), cdy2)),
+                      _mm512_mul_ps(dx, bdy));
+    t.groups[g] = rows & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.cut_wide), _CMP_LE_OQ));
+  }
+}
+
+// Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
+ISPLAT_AVX512 int row_jobs(const TileRows& t, int64_t x0, Job* out) {
+  int n = 0;
+  for (unsigned m = t.groups[0] | t.groups[1]; m != 0; m &= m - 1) {
+    const int r = __builtin_ctz(m);
+    const Row<float> row = t.row(r);
+    const unsigned lanes = ((t.groups[0] >> r) & 1 ? 0x00ffu : 0u) | ((t.groups[1] >> r) & 1 ? 0xff00u : 0u);
+    out[n++] = {{row, row}, {r * kTile, r * kTile + kLanes}, int32_t(x0), __mmask16(lanes)};
+  }
+  return n;
+}
+// Pair jobs, for a Gaussian within the column of group g: its groups in row order, two per job. A last
+// unpaired group goes to `odd`; returns the number of jobs.
+ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, Job* out, Group<float>& odd, bool& has_odd) {
+  const int32_t xb = int32_t(x0) + g * kLanes;
+  int n = 0, first = -1;
+  for (unsigned m = t.groups[g]; m != 0; m &= m - 1) {
+    const int r = __builtin_ctz(m);
+    if (first < 0) {
+      first = r;
+      continue;
+    }
+    out[n++] = {{t.row(first), t.row(r)}, {first * kTile + g * kLanes, r * kTile + g * kLanes}, xb, __mmask16(0xffff)};
+    first = -1;
+  }
+  has_odd = first >= 0;
+  if (has_odd) odd = {t.row(first), xb, first * kTile + g * kLanes};
+  return n;
+}
+
+template <bool kRow>
+ISPLAT_AVX512 __m512 job_load(const float* st, const Job& j, int (*at)(int, int), int plane) {
+  if constexpr (kRow) return _mm512_loadu_ps(st + at(j.p[0], plane));
+  return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(st + at(j.p[0], plane))),
+                            _mm256_loadu_ps(st + at(j.p[1], plane)), 1);
+}
+template <bool kRow>
+ISPLAT_AVX512 void job_store(float* st, const Job& j, int (*at)(int, int), int plane, __m512 v) {
+  if constexpr (kRow) {
+    _mm512_storeu_ps(st + at(j.p[0], plane), v);
+  } else {
+    _mm256_storeu_ps(st + at(j.p[0], plane), _mm512_castps512_ps256(v));
+    _mm256_storeu_ps(st + at(j.p[1], plane), _mm512_extractf32x8_ps(v, 1));
+  }
+}
+template <bool kRow>
+ISPLAT_AVX512 __m512i job_load_last(const int32_t* last, const Job& j) {
+  if constexpr (kRow) return _mm512_loadu_si512(last + j.p[0]);
+  return _mm512_inserti32x8(_mm512_castsi256_si512(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + j.p[0]))),
+                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + j.p[1])), 1);
+}
+// A row term per lane: one value for a row job, the two rows' for a pair job.
+template <bool kRow>
+ISPLAT_AVX512 __m512 job_term(const Job& j, float Row<float>::*term) {
+  if constexpr (kRow) return _mm512_set1_ps(j.r[0].*term);
+  return _mm512_insertf32x8(_mm512_set1_ps(j.r[0].*term), _mm256_set1_ps(j.r[1].*term), 1);
+}
+
+// avx2_power for the 16 lanes of job j: pixel centres at image columns xb + lane + 0.5 (rows) or
+// xb + lane mod 8 + 0.5 (pairs); every term is an integer or half-integer far below 2^23, so each sum is exact.
+template <bool kRow>
+ISPLAT_AVX512 void avx512_power(const Avx512Splat& a, const Job& j, __m512& dx, __m512& power) {
+  const __m512 lane = kRow ? _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+                           : _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
+  const __m512 x = _mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(j.xb)), lane), _mm512_set1_ps(0.5f));
+  dx = _mm512_sub_ps(x, a.u);
+  const __m512 quad = _mm512_fmadd_ps(_mm512_mul_ps(a.A, dx), dx, job_term<kRow>(j, &Row<float>::cdy2));
+  power = _mm512_fmadd_ps(_mm512_set1_ps(0.5f), quad, _mm512_mul_ps(dx, job_term<kRow>(j, &Row<float>::bdy)));
+}
+
+// fwd_groups_avx2 on the N jobs q[0..N).
+template <int N, int kChannels, bool kPlane, bool kRow>
+ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, float* st,
+                                  int32_t* last, int32_t id) {
+  __m512 raw[N], power[N], dxs[N];
+  for (int k = 0; k < N; ++k) {
+    avx512_power<kRow>(a, q[k], dxs[k], power[k]);
+    raw[k] = _mm512_mul_ps(a.opac, avx512_exp(avx512_neg(power[k])));
+  }
+  int stops = 0;
+  for (int k = 0; k < N; ++k) {
+    const Job& j = q[k];
+    const __m512 alpha = _mm512_min_ps(raw[k], _mm512_set1_ps(float(kAlphaMax)));
+    const __m512 t = job_load<kRow>(st, j, fwd_at, kPlT);
+    const __m512 next = _mm512_mul_ps(t, _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha));
+    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(power[k], a.cut, _CMP_LE_OQ) &
+                          _mm512_cmp_ps_mask(raw[k], _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
+                          _mm512_cmp_ps_mask(t, _mm512_setzero_ps(), _CMP_GT_OQ);
+    const __mmask16 stop = hit & _mm512_cmp_ps_mask(next, _mm512_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ);
+    const __mmask16 add = hit & ~stop;
+    const __m512 w = _mm512_maskz_mov_ps(add, _mm512_mul_ps(alpha, t));
+    __m512 z = a.f[3];
+    if constexpr (kPlane) {  // plane_z
+      const __m512 dy = job_term<kRow>(j, &Row<float>::dy);
+      const __m512 iz = _mm512_fmadd_ps(plane.gx, dxs[k], _mm512_fmadd_ps(plane.gy, dy, plane.iz0));
+      z = _mm512_max_ps(plane.zlo, _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_max_ps(iz, plane.izmin)));
+    }
+    for (int c = 0; c < kChannels; ++c)  // w = 0 where nothing is added: 0·f + acc = acc
+      job_store<kRow>(st, j, fwd_at, kPlAcc + c,
+                      _mm512_fmadd_ps(w, c == 3 ? z : a.f[c], job_load<kRow>(st, j, fwd_at, kPlAcc + c)));
+    job_store<kRow>(st, j, fwd_at, kPlT, _mm512_mask_mov_ps(_mm512_mask_mov_ps(t, add, next), stop, avx512_neg(t)));
+    if constexpr (kRow) {
+      _mm512_mask_storeu_epi32(last + j.p[0], add, _mm512_set1_epi32(id));
+    } else {
+      const __m256i ids = _mm256_set1_epi32(id);
+      _mm256_mask_storeu_epi32(last + j.p[0], __mmask8(add), ids);
+      _mm256_mask_storeu_epi32(last + j.p[1], __mmask8(add >> 8), ids);
+    }
+    stops += __builtin_popcount(unsigned(stop));
+  }
+  return stops;
+}
+
+// fwd_jobs_avx512 on jobs q[0..n), four at a time where it can. Returns how many pixels stopped.
+template <int kChannels, bool kPlane, bool kRow>
+ISPLAT_AVX512 int fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, int n, float* st,
+                                      int32_t* last, int32_t id) {
+  int stops = 0, k = 0;
+  for (; k + 4 <= n; k += 4) stops += fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  for (; k + 2 <= n; k += 2) stops += fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  if (k < n) stops += fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  return stops;
+}
+
+// Per 128 bits: a0 + a1, a2 + a3, b0 + b1, b2 + b3.
+ISPLAT_AVX512 __m512 pairs(__m512 a, __m512 b) {
+  return _mm512_add_ps(_mm512_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)),
+                       _mm512_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
+}
+
+// Both lane-sum sets in one register per quantity: the left groups' in the low half, the right groups' in the
+// high half (row jobs).
+struct Avx512Sums {
+  __m512 s[kGrad2d];
+  ISPLAT_AVX512 void zero() {
+    for (auto& v : s) v = _mm512_setzero_ps();
+  }
+  // LaneSums::reduce in registers, four quantities at a time: each step adds the neighbours the scalar tree
+  // adds (addition commutes, so every partial sum is the tree's), then the left set's total + the right's.
+  ISPLAT_AVX512 void reduce(float* out) const {
+    const __m512 p[5] = {pairs(s[0], s[1]), pairs(s[2], s[3]), pairs(s[4], s[5]), pairs(s[6], s[7]), pairs(s[8], s[9])};
+    const __m512 quads[3] = {pairs(p[0], p[1]), pairs(p[2], p[3]), pairs(p[4], p[4])};  // 4-sums of 4 quantities
+    float tail[4];
+    for (int k = 0; k < 3; ++k) {
+      const __m512 trees = _mm512_add_ps(quads[k], _mm512_shuffle_f32x4(quads[k], quads[k], _MM_SHUFFLE(2, 3, 0, 1)));
+      const __m128 total = _mm_add_ps(_mm512_castps512_ps128(trees), _mm512_extractf32x4_ps(trees, 2));
+      _mm_storeu_ps(k < 2 ? out + 4 * k : tail, total);
+    }
+    out[8] = tail[0], out[9] = tail[1];
+  }
+};
+
+// Where a job's 16 lanes add to lane sums. Row jobs: Avx512Sums, each half to its own set. Pair jobs: both
+// groups to one Avx2Sums set (a narrow Gaussian's groups share a column), the low group first.
+template <bool kRow>
+struct JobSums;
+template <>
+struct JobSums<true> {
+  Avx512Sums& g;
+  // g += x·y, or where `keep` is clear g stays.
+  ISPLAT_AVX512 void fma(int k, __m512 x, __m512 y) { g.s[k] = _mm512_fmadd_ps(x, y, g.s[k]); }
+  ISPLAT_AVX512 void fnma(int k, __m512 x, __m512 y) { g.s[k] = _mm512_fnmadd_ps(x, y, g.s[k]); }
+  ISPLAT_AVX512 void fma_where(int k, __mmask16 keep, __m512 x, __m512 y) {
+    g.s[k] = _mm512_mask_mov_ps(g.s[k], keep, _mm512_fmadd_ps(x, y, g.s[k]));
+  }
+};
+template <>
+struct JobSums<false> {
+  Avx2Sums& g;
+  static ISPLAT_AVX512 __m256 lo(__m512 v) { return _mm512_castps512_ps256(v); }
+  static ISPLAT_AVX512 __m256 hi(__m512 v) { return _mm512_extractf32x8_ps(v, 1); }
+  ISPLAT_AVX512 void fma(int k, __m512 x, __m512 y) {
+    g.s[k] = _mm256_fmadd_ps(hi(x), hi(y), _mm256_fmadd_ps(lo(x), lo(y), g.s[k]));
+  }
+  ISPLAT_AVX512 void fnma(int k, __m512 x, __m512 y) {
+    g.s[k] = _mm256_fnmadd_ps(hi(x), hi(y), _mm256_fnmadd_ps(lo(x), lo(y), g.s[k]));
+  }
+  ISPLAT_AVX512 void fma_where(int k, __mmask16 keep, __m512 x, __m512 y) {
+    const __m256 first = _mm256_mask3_fmadd_ps(lo(x), lo(y), g.s[k], __mmask8(keep));
+    g.s[k] = _mm256_mask3_fmadd_ps(hi(x), hi(y), first, __mmask8(keep >> 8));
+  }
+};
+
+// bwd_groups_avx2 on the N jobs q[0..N).
+template <int N, bool kRow>
+ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st, const int32_t* last, int32_t i,
+                                   JobSums<kRow> g) {
+  __m512 dxs[N], power[N], G[N];
+  for (int k = 0; k < N; ++k) {
+    avx512_power<kRow>(a, q[k], dxs[k], power[k]);
+    G[k] = avx512_exp(avx512_neg(power[k]));
+  }
+  for (int k = 0; k < N; ++k) {
+    const Job& j = q[k];
+    const __m512 dx = dxs[k];
+    const __m512 raw = _mm512_mul_ps(a.opac, G[k]);
+    const __m512 alpha = _mm512_min_ps(raw, _mm512_set1_ps(float(kAlphaMax)));
+    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(power[k], a.cut, _CMP_LE_OQ) &
+                          _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
+                          _mm512_cmpgt_epi32_mask(job_load_last<kRow>(last, j), _mm512_set1_epi32(i));
+    const __m512 one_minus = _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha);
+    const __m512 t = job_load<kRow>(st, j, bwd_at, kPbT);
+    const __m512 t_in = _mm512_div_ps(t, one_minus);
+    const __m512 w = _mm512_mul_ps(alpha, t_in);
+    __m512 dc[kBwdCh];
+    for (int c = 0; c < kBwdCh; ++c) dc[c] = job_load<kRow>(st, j, bwd_at, kPbDC + c);
+    __m512 dq = _mm512_mul_ps(dc[0], a.f[0]);
+    for (int c = 1; c < kBwdCh; ++c) dq = _mm512_fmadd_ps(dc[c], a.f[c], dq);
+    const __m512 S = job_load<kRow>(st, j, bwd_at, kPbS);
+    const __m512 d_alpha = _mm512_mul_ps(_mm512_sub_ps(dq, S), t_in);
+    const __m512 S_new = _mm512_fmadd_ps(alpha, dq, _mm512_mul_ps(one_minus, S));
+    job_store<kRow>(st, j, bwd_at, kPbS, _mm512_mask_mov_ps(S, hit, S_new));
+    job_store<kRow>(st, j, bwd_at, kPbT, _mm512_mask_mov_ps(t, hit, t_in));
+    // Masked lanes add exactly zero, as in bwd_groups_avx2.
+    const __m512 wh = _mm512_maskz_mov_ps(hit, w);
+    for (int c = 0; c < 4; ++c) g.fma(kGr + c, wh, dc[c]);
+    const __mmask16 free = hit & _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMax)), _CMP_LE_OQ);
+    g.fma_where(kGo, free, G[k], d_alpha);
+    const __m512 dp = _mm512_maskz_mov_ps(free, avx512_neg(_mm512_mul_ps(alpha, d_alpha)));
+    const __m512 half = _mm512_set1_ps(0.5f), dy = job_term<kRow>(j, &Row<float>::dy);
+    g.fnma(kGu, dp, _mm512_fmadd_ps(a.A, dx, job_term<kRow>(j, &Row<float>::bdy)));
+    g.fnma(kGv, dp, _mm512_fmadd_ps(a.B, dx, job_term<kRow>(j, &Row<float>::cdy)));
+    g.fma(kGA, _mm512_mul_ps(_mm512_mul_ps(dp, half), dx), dx);
+    g.fma(kGB, _mm512_mul_ps(dp, dx), dy);
+    g.fma(kGC, _mm512_mul_ps(_mm512_mul_ps(dp, half), dy), dy);
+  }
+}
+
+// bwd_jobs_avx512 on jobs q[0..n), four at a time where it can.
+template <bool kRow>
+ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const Job* q, int n, float* st, const int32_t* last,
+                                       int32_t i, JobSums<kRow> g) {
+  int k = 0;
+  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, q + k, st, last, i, g);
+  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, q + k, st, last, i, g);
+  if (k < n) bwd_jobs_avx512<1, kRow>(a, q + k, st, last, i, g);
+}
+
+}  // namespace isplat::splat
+#endif  // ISPLAT_HAVE_AVX2_LANES
