@@ -5,6 +5,7 @@
 #include <torch/script.h>
 #include <torch/torch.h>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "prior/depth_prior.h"
@@ -255,4 +256,33 @@ TEST_CASE("prior: camera_height_m sets a monocular prior's scale and keeps the c
   const PriorOutput sparse = make_depth_prior(o)->predict(in);
   CHECK_FALSE(sparse.floor_scaled);
   CHECK(((sparse.depth - truth * 0.5).abs() / (truth * 0.5)).mean().item<double>() < 0.02);
+}
+
+TEST_CASE("prior: reference_scale gives a monocular prior the frame's own scale, and needs its depth", "[prior]") {
+  const auto dir = test::temp_dir("prior_reference");
+  const int64_t H = 40, W = 60;
+  const auto K = estimate_K(W, H, 60.0);
+  const auto truth = 2.0f + torch::rand({H, W});
+  PriorInput in;
+  in.image = (truth / 20.0).unsqueeze(0).repeat({3, 1, 1});
+  in.image[0][0][0] = 0.0f;  // a pixel the model leaves without depth: it stays invalid
+  in.K = K;
+  in.depth = truth;
+  in.valid = torch::ones({H, W});
+  in.valid[5][5] = 0.0f;  // the reference's invalid pixels take no part
+  in.depth[5][5] = 1e6f;
+  PriorOptions o;
+  o.type = "torchscript";
+  o.torchscript = save_module(dir, "third", "def forward(self, x):\n    return x[:, 0:1] * (20.0 / 3.0)\n");
+  o.reference_scale = true;
+  const PriorOutput out = make_depth_prior(o)->predict(in);
+  CHECK(out.valid[0][0].item<float>() == 0.0f);
+  CHECK(out.depth[0][0].item<float>() == 0.0f);
+  const auto ok = (out.valid > 0) & (in.valid > 0);
+  CHECK(((out.depth.masked_select(ok) - truth.masked_select(ok)).abs() / truth.masked_select(ok)).max().item<double>() <
+        1e-4);
+  in.depth = torch::Tensor();
+  CHECK_THROWS_WITH(make_depth_prior(o)->predict(in), Catch::Contains("needs the frame's own depth"));
+  o.camera_height_m = 1.6;
+  CHECK_THROWS_WITH(config_from_json<PriorOptions>(config_to_json(o), "test"), Catch::Contains("camera_height_m"));
 }

@@ -57,6 +57,12 @@ void PriorOptions::visit(ConfigVisitor& v) {
           "the floor in the lower image, rescale so it lies this many metres below); frames without a visible floor "
           "keep the net's scale. 1.6 suits photos taken standing; 0 = off",
           Range::at_least(0));
+  v.field("reference_scale", reference_scale,
+          "diagnostic for learned and torchscript priors: scale each frame's depth so that its median ratio to the "
+          "frame's own depth is 1 (an oracle metric scale with the model's shape; needs dataset depth, so "
+          "evaluations only, never photographs)");
+  v.require("reference_scale", !(reference_scale && camera_height_m > 0),
+            "cannot be combined with prior.camera_height_m (both set the scale)");
   v.section("sparse", "the sparse-prompt (LiDAR) variant", sparse);
 }
 
@@ -88,16 +94,31 @@ PriorOutput finish(torch::Tensor depth, torch::Tensor K) {
   return {torch::where(valid > 0, depth, torch::zeros_like(depth)), K, valid};
 }
 
-// Monocular priors: metric scale from the camera's height when asked and a floor is visible.
-PriorOutput finish_monocular(torch::Tensor depth, torch::Tensor K, double camera_height_m) {
+// The median of reference / depth over the pixels valid in both; 0 when none is.
+double reference_ratio(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& reference,
+                       const torch::Tensor& reference_valid) {
+  auto ref = reference.to(torch::kFloat32);
+  auto both = (valid > 0) & torch::isfinite(ref) & (ref > 0);
+  if (reference_valid.defined()) both = both & (reference_valid > 0);
+  if (!both.any().item<bool>()) return 0.0;
+  return (ref.masked_select(both) / depth.masked_select(both)).median().item<double>();
+}
+
+// Monocular priors: metric scale from the camera's height when asked and a floor is visible, or (a diagnostic)
+// from the frame's own depth.
+PriorOutput finish_monocular(torch::Tensor depth, torch::Tensor K, const PriorOptions& o, const PriorInput& in) {
   PriorOutput out = finish(std::move(depth), std::move(K));
-  if (camera_height_m > 0) {
-    const double scale = floor_height_scale(out.depth, out.valid, out.K, camera_height_m);
-    if (scale > 0) {
-      out.depth = out.depth * static_cast<float>(scale);
-      out.floor_scaled = true;
-    }
+  double scale = 0.0;
+  if (o.camera_height_m > 0) {
+    scale = floor_height_scale(out.depth, out.valid, out.K, o.camera_height_m);
+    out.floor_scaled = scale > 0;
+  } else if (o.reference_scale) {
+    ISPLAT_CHECK(in.depth.defined(),
+                 "prior.reference_scale needs the frame's own depth, and this input has none (it is a diagnostic for "
+                 "datasets with depth)");
+    scale = reference_ratio(out.depth, out.valid, in.depth, in.valid);
   }
+  if (scale > 0) out.depth = out.depth * static_cast<float>(scale);
   return out;
 }
 
@@ -143,7 +164,7 @@ class LearnedPrior final : public DepthPrior {
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
     auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32), K.to(torch::kFloat32).unsqueeze(0))[0][0];
     if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
-    return finish_monocular(d, K, o_.camera_height_m);
+    return finish_monocular(d, K, o_, in);
   }
   std::string describe() const override {
     const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "");
@@ -189,7 +210,7 @@ class TorchScriptPrior final : public DepthPrior {
     if (d.dim() != 2 || d.size(0) != H || d.size(1) != W)
       fail(o_.torchscript, ": depth model returned shape ", out.toTensor().sizes(), ", expected [1, 1, ", H, ", ", W,
            "] (metric depth at the input size)");
-    return finish_monocular(d, intrinsics_for(in, o_.hfov_deg), o_.camera_height_m);
+    return finish_monocular(d, intrinsics_for(in, o_.hfov_deg), o_, in);
   }
   std::string describe() const override { return "TorchScript depth model (" + o_.torchscript + ")"; }
 
@@ -411,11 +432,11 @@ std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o,
                                              const std::map<std::string, torch::Tensor>* embedded) {
   // A run trained on a monocular prior is often scored with dataset depth (an experiment's variant): the
   // height has nothing to scale there, so it is ignored, and said so.
-  if (o.camera_height_m > 0 && (o.type == "dataset" || o.type == "sparse")) {
-    log_warn("prior.camera_height_m = ", o.camera_height_m, " is ignored: prior.type = ", o.type,
-             " has metric depth of its own");
+  if ((o.camera_height_m > 0 || o.reference_scale) && (o.type == "dataset" || o.type == "sparse")) {
+    log_warn(o.reference_scale ? "prior.reference_scale" : cat("prior.camera_height_m = ", o.camera_height_m),
+             " is ignored: prior.type = ", o.type, " has metric depth of its own");
     PriorOptions metric = o;
-    metric.camera_height_m = 0;
+    metric.camera_height_m = 0, metric.reference_scale = false;
     return make_depth_prior(metric, embedded);
   }
   if (o.type == "dataset") return std::make_unique<DatasetPrior>(o);

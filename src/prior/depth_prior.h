@@ -33,6 +33,7 @@ struct PriorOptions {
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
   double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
   double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
+  bool reference_scale = false;       // diagnostic: monocular depth scaled to the frame's own depth (median)
   std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
