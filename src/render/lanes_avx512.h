@@ -50,13 +50,8 @@ ISPLAT_AVX512 __m512 avx512_neg(__m512 x) {
 // avx2_exp, 16 lanes.
 ISPLAT_AVX512 __m512 avx512_exp(__m512 x) {
   const __m512 y = _mm512_mul_ps(_mm512_max_ps(x, _mm512_set1_ps(-16.0f)), _mm512_set1_ps(0.0625f));
-  __m512 p = _mm512_set1_ps(1.0f / 720);
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 120));
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 24));
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f / 6));
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(0.5f));
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f));
-  p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(1.0f));
+  __m512 p = _mm512_set1_ps(kExpPoly[0]);
+  for (int k = 1; k < 7; ++k) p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(kExpPoly[k]));
   p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p);
   return _mm512_mul_ps(p, p);
 }
