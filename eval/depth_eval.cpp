@@ -37,6 +37,15 @@ torch::Tensor scored_pixels(const torch::Tensor& pred, const torch::Tensor& dept
 }
 }  // namespace
 
+ScaleSummary summarize_scales(const std::vector<double>& frame_scales) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (frame_scales.empty()) return {nan, nan};
+  double sum = 0, sum_sq = 0;
+  for (double s : frame_scales) sum += std::log(s), sum_sq += std::log(s) * std::log(s);
+  const double n = static_cast<double>(frame_scales.size()), mean = sum / n;
+  return {std::exp(mean), std::exp(std::sqrt(std::max(0.0, sum_sq / n - mean * mean)))};
+}
+
 DepthScale depth_scale(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid) {
   const auto m = scored_pixels(pred, depth, valid, 0, std::numeric_limits<double>::infinity());
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -78,7 +87,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       ISPLAT_CHECK(!frames.empty(), "depth evaluation: dataset '", ds.name, "' has no frame with depth");
       const size_t n = std::min<size_t>(frames.size(), static_cast<size_t>(c.frames));
       std::vector<DepthErrors> ranges(edges.size());
-      double abs_rel = 0, delta1 = 0, log_scale = 0, abs_rel_aligned = 0, coverage = 0;
+      double abs_rel = 0, delta1 = 0, abs_rel_aligned = 0, coverage = 0;
+      std::vector<double> frame_scales;
       int64_t counted = 0, pixels = 0, floor_scaled = 0;
       ProgressBar bar(cat("depth ", np.name, "/", ds.name), static_cast<int64_t>(n), "frame");
       for (size_t k = 0; k < n; ++k, bar.tick()) {
@@ -99,7 +109,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
           abs_rel += all.abs_rel_sum / all.pixels, delta1 += all.delta1_count / all.pixels, ++counted;
           pixels += all.pixels;
           const DepthScale sc = depth_scale(out.depth, v.depth, v.valid * out.valid);
-          log_scale += std::log(sc.median_ratio), abs_rel_aligned += sc.abs_rel_aligned;
+          frame_scales.push_back(sc.median_ratio), abs_rel_aligned += sc.abs_rel_aligned;
           coverage += static_cast<double>(all.pixels) / std::max<int64_t>(1, (v.valid > 0).sum().item<int64_t>());
         }
         for (size_t r = 0; r < edges.size(); ++r) {
@@ -111,15 +121,16 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
       }
       bar.finish();
       const double nan = std::numeric_limits<double>::quiet_NaN();
+      const ScaleSummary scale = summarize_scales(frame_scales);
       scores.push_back(
           {ds.name, np.name, "all", counted, pixels, counted ? abs_rel / counted : nan,
-           counted ? delta1 / counted : nan, counted ? std::exp(log_scale / counted) : nan,
-           counted ? abs_rel_aligned / counted : nan, counted ? coverage / counted : nan,
+           counted ? delta1 / counted : nan, scale.mean, scale.spread, counted ? abs_rel_aligned / counted : nan,
+           counted ? coverage / counted : nan,
            np.prior.camera_height_m > 0 ? static_cast<double>(floor_scaled) / static_cast<double>(n) : nan});
       for (size_t r = 0; r < edges.size(); ++r) {
         const auto& e = ranges[r];
         scores.push_back({ds.name, np.name, label(r), counted, e.pixels, e.pixels ? e.abs_rel_sum / e.pixels : nan,
-                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan, nan, nan});
+                          e.pixels ? e.delta1_count / e.pixels : nan, nan, nan, nan, nan, nan});
       }
     }
   }
@@ -135,18 +146,21 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   md << "# Depth prior evaluation\n\nAbsRel (lower is better) and δ<1.25 (higher is better) against the datasets' "
         "depth at evaluation size. \"all\": means over frames; depth ranges: pooled over the pixels in the range. "
         "Scale apart from shape: \"scale\" is the geometric mean over frames of each frame's median "
-        "prediction / reference (1 = right metric scale), \"AbsRel aligned\" the AbsRel after dividing each frame "
+        "prediction / reference (1 = right metric scale), \"spread\" how far a typical frame's scale strays from that "
+        "mean (exp of the standard deviation of the log scales; 1 = every frame alike), \"AbsRel aligned\" the AbsRel "
+        "after dividing each frame "
         "by that median (shape error only). \"coverage\": the share of the reference's valid pixels the prior also "
         "marks valid (a prior that cuts far depth as sky is scored only where it keeps depth). \"floor\": the share of "
         "frames whose metric scale came from the camera height (prior.camera_height_m; n/a when off).\n\n";
   CsvTable csv;
-  csv.header = {"dataset", "prior", "range",           "frames",   "pixels", "abs_rel",
-                "delta1",  "scale", "abs_rel_aligned", "coverage", "floor"};
+  csv.header = {"dataset", "prior", "range",        "frames",          "pixels",   "abs_rel",
+                "delta1",  "scale", "scale_spread", "abs_rel_aligned", "coverage", "floor"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const auto& ds : c.datasets) {
-    md << "## " << ds.name << "\n\n| prior | all AbsRel | all δ1 | scale | AbsRel aligned | coverage | floor |";
+    md << "## " << ds.name
+       << "\n\n| prior | all AbsRel | all δ1 | scale | spread | AbsRel aligned | coverage | floor |";
     for (size_t r = 0; r < edges.size(); ++r) md << " " << label(r) << " AbsRel / δ1 (px) |";
-    md << "\n|---|---|---|---|---|---|---|";
+    md << "\n|---|---|---|---|---|---|---|---|";
     for (size_t r = 0; r < edges.size(); ++r) md << "---|";
     md << "\n";
     for (const auto& np : c.priors) {
@@ -155,7 +169,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
         if (s.dataset != ds.name || s.prior != np.name) continue;
         if (s.range == "all")
           md << " | " << fmt(s.abs_rel, 3) << " | " << fmt(s.delta1, 3) << " | " << fmt(s.scale, 3) << " | "
-             << fmt(s.abs_rel_aligned, 3) << " | " << fmt(s.coverage, 3) << " | " << fmt(s.floor, 2);
+             << fmt(s.scale_spread, 3) << " | " << fmt(s.abs_rel_aligned, 3) << " | " << fmt(s.coverage, 3) << " | "
+             << fmt(s.floor, 2);
         else
           md << " | " << fmt(s.abs_rel, 3) << " / " << fmt(s.delta1, 3) << " (" << s.pixels << ")";
       }
@@ -165,8 +180,8 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
   }
   for (const auto& s : scores) {
     csv.rows.push_back({s.dataset, s.prior, s.range, std::to_string(s.frames), std::to_string(s.pixels),
-                        fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.abs_rel_aligned, 5),
-                        fmt(s.coverage, 5), fmt(s.floor, 5)});
+                        fmt(s.abs_rel, 5), fmt(s.delta1, 5), fmt(s.scale, 5), fmt(s.scale_spread, 5),
+                        fmt(s.abs_rel_aligned, 5), fmt(s.coverage, 5), fmt(s.floor, 5)});
     auto num = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
     js.push_back({{"dataset", s.dataset},
                   {"prior", s.prior},
@@ -176,6 +191,7 @@ std::vector<DepthScore> evaluate_depth_priors(const DepthEvalConfig& c) {
                   {"abs_rel", num(s.abs_rel)},
                   {"delta1", num(s.delta1)},
                   {"scale", num(s.scale)},
+                  {"scale_spread", num(s.scale_spread)},
                   {"abs_rel_aligned", num(s.abs_rel_aligned)},
                   {"coverage", num(s.coverage)},
                   {"floor", num(s.floor)}});

@@ -33,8 +33,10 @@ struct DepthScore {
   int64_t frames = 0, pixels = 0;
   double abs_rel = 0, delta1 = 0;  // "all": means over frames; ranges: pooled over their pixels
   // "all" only (NaN for ranges): scale apart from shape. `scale` is the geometric mean over frames of each
-  // frame's median pred/ref; `abs_rel_aligned` the mean AbsRel after dividing each frame by its median.
-  double scale = 0, abs_rel_aligned = 0;
+  // frame's median pred/ref; `scale_spread` how far a typical frame's scale strays from that mean (the
+  // exponential of the standard deviation of the log scales: 1 = the same scale in every frame);
+  // `abs_rel_aligned` the mean AbsRel after dividing each frame by its median.
+  double scale = 0, scale_spread = 0, abs_rel_aligned = 0;
   double coverage = 0;  // "all" only: share of the reference's valid pixels the prior also marks valid
   double floor = 0;     // "all" only: share of frames scaled from the camera height (NaN when the prior does not)
 };
@@ -53,6 +55,11 @@ struct DepthScale {
   double median_ratio = 0, abs_rel_aligned = 0;
 };
 DepthScale depth_scale(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid);
+// The geometric mean of per-frame scales and their spread, exp(std of log scale). NaN when empty.
+struct ScaleSummary {
+  double mean = 0, spread = 0;
+};
+ScaleSummary summarize_scales(const std::vector<double>& frame_scales);
 DepthErrors depth_errors(const torch::Tensor& pred, const torch::Tensor& depth, const torch::Tensor& valid,
                          double lo = 0, double hi = std::numeric_limits<double>::infinity());
 

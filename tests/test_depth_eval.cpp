@@ -33,6 +33,15 @@ TEST_CASE("depth eval: AbsRel and delta1 on hand-built maps", "[eval][depth]") {
   CHECK(bent.median_ratio == Approx(2.0));  // lower median of {2, 2, 2, 3}
   CHECK(bent.abs_rel_aligned == Approx(0.5 / 4));
   CHECK(std::isnan(depth_scale(ref, ref, torch::zeros({2, 2})).median_ratio));
+  // Per-frame scales: a steady bias has no spread; half in one frame and twice in the next average to 1
+  // with a spread of 2.
+  const ScaleSummary steady = summarize_scales({2.0, 2.0, 2.0});
+  CHECK(steady.mean == Approx(2.0));
+  CHECK(steady.spread == Approx(1.0));
+  const ScaleSummary noisy = summarize_scales({0.5, 2.0});
+  CHECK(noisy.mean == Approx(1.0));
+  CHECK(noisy.spread == Approx(2.0));
+  CHECK(std::isnan(summarize_scales({}).mean));
 }
 
 TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, per range", "[eval][depth]") {
@@ -66,6 +75,7 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
       CHECK(s.abs_rel == Approx(0.0).margin(1e-6));
       CHECK(s.delta1 == Approx(1.0));
       CHECK(s.scale == Approx(1.0));
+      CHECK(s.scale_spread == Approx(1.0));
       CHECK(s.abs_rel_aligned == Approx(0.0).margin(1e-6));
       CHECK(s.coverage == Approx(1.0));
     } else {
@@ -78,5 +88,5 @@ TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, p
   CHECK(range_pixels == all_pixels);  // the ranges partition the valid pixels
   for (const char* f : {"report.md", "report.csv", "report.json"}) CHECK(fs::exists(fs::path(c.out) / f));
   CHECK_THAT(test::read_bytes(c.out + "/report.md"),
-             Catch::Contains("| oracle | 0.000 | 1.000 | 1.000 | 0.000 | 1.000 |"));
+             Catch::Contains("| oracle | 0.000 | 1.000 | 1.000 | 1.000 | 0.000 | 1.000 |"));
 }
