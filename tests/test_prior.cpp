@@ -213,6 +213,26 @@ TEST_CASE("prior: floor_height_scale recovers the metric scale from the camera h
   CHECK_THROWS_WITH(floor_height_scale(truth, ones, K, 0.0), Catch::Contains("camera height must be positive"));
 }
 
+TEST_CASE("prior: floor_rule nearest takes the floor, not a table top, when the net's scale says so", "[prior]") {
+  const int64_t H = 96, W = 128;
+  const auto K = estimate_K(W, H, 60.0);
+  // A table top 0.8 m below the camera fills the left 70% of the view; the floor (1.6 m below) shows right.
+  auto scene = floor_depth(H, W, K, 1.6, 0.15);
+  scene.narrow(1, 0, 90).copy_(floor_depth(H, W, K, 0.8, 0.15).narrow(1, 0, 90));
+  const auto ones = torch::ones({H, W});
+  // The best-supported plane is the table: the metric depth would be doubled.
+  CHECK(floor_height_scale(scene, ones, K, 1.6, "best") == Approx(2.0).epsilon(0.01));
+  // nearest: of the two planes, the floor's factor (1) is the one the net's own scale agrees with ...
+  CHECK(floor_height_scale(scene, ones, K, 1.6, "nearest") == Approx(1.0).epsilon(0.01));
+  // ... and with a net at a third of the scale, the floor's factor (3.3) is still nearer than the table's (6.7).
+  CHECK(floor_height_scale(scene * 0.3, ones, K, 1.6, "nearest") == Approx(1.0 / 0.3).epsilon(0.01));
+  // With one floor in view the rules agree.
+  const auto floor_only = floor_depth(H, W, K, 1.6, 0.15) * 0.5;
+  CHECK(floor_height_scale(floor_only, ones, K, 1.6, "nearest") ==
+        Approx(floor_height_scale(floor_only, ones, K, 1.6, "best")));
+  CHECK_THROWS_WITH(floor_height_scale(scene, ones, K, 1.6, "lowest"), Catch::Contains("best or nearest"));
+}
+
 TEST_CASE("prior: camera_height_m sets a monocular prior's scale and keeps the contract", "[prior]") {
   const auto dir = test::temp_dir("prior_floor");
   const int64_t H = 72, W = 96;

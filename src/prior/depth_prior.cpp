@@ -57,6 +57,11 @@ void PriorOptions::visit(ConfigVisitor& v) {
           "the floor in the lower image, rescale so it lies this many metres below); frames without a visible floor "
           "keep the net's scale. 1.6 suits photos taken standing; 0 = off",
           Range::at_least(0));
+  v.field("floor_rule", floor_rule,
+          "camera_height_m: which horizontal plane is the floor. best: the best-supported one in the lower image; "
+          "nearest: of up to three (each with at least a third of the best one's support), the one whose scale is "
+          "nearest the net's own, so a table top is not taken for the floor",
+          {"best", "nearest"});
   v.field("reference_scale", reference_scale,
           "diagnostic for learned and torchscript priors: scale each frame's depth so that its median ratio to the "
           "frame's own depth is 1 (an oracle metric scale with the model's shape; needs dataset depth, so "
@@ -110,7 +115,7 @@ PriorOutput finish_monocular(torch::Tensor depth, torch::Tensor K, const PriorOp
   PriorOutput out = finish(std::move(depth), std::move(K));
   double scale = 0.0;
   if (o.camera_height_m > 0) {
-    scale = floor_height_scale(out.depth, out.valid, out.K, o.camera_height_m);
+    scale = floor_height_scale(out.depth, out.valid, out.K, o.camera_height_m, o.floor_rule);
     out.floor_scaled = scale > 0;
   } else if (o.reference_scale) {
     ISPLAT_CHECK(in.depth.defined(),
@@ -257,8 +262,10 @@ class SparsePrior final : public DepthPrior {
 }  // namespace
 
 double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
-                          double height_m) {
+                          double height_m, const std::string& rule) {
   ISPLAT_CHECK(height_m > 0, "floor_height_scale: the camera height must be positive, got ", height_m);
+  ISPLAT_CHECK(rule == "best" || rule == "nearest", "floor_height_scale: rule must be best or nearest, got '", rule,
+               "'");
   ISPLAT_CHECK(depth.dim() == 2 && K.dim() == 2 && K.size(0) == 3 && K.size(1) == 3,
                "floor_height_scale: depth must be [H,W] and K [3,3], got ", depth.sizes(), " and ", K.sizes());
   auto d = depth.to(torch::kFloat32).contiguous();
@@ -284,57 +291,87 @@ double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid
   if (n_pts < kMinPoints) return 0.0;
   // Up is -y in the OpenCV camera frame; a floor's normal points up and the floor lies below (h > 0).
   const double min_up = std::cos(40.0 * M_PI / 180.0), tol = 0.02;  // tol: distance as a share of depth
+  std::vector<char> active(static_cast<size_t>(n_pts), 1);          // points no earlier plane claimed
   auto inliers = [&](const Eigen::Vector3d& n, double h, double share, std::vector<int64_t>* out) {
     int64_t count = 0;
     for (int64_t p = 0; p < n_pts; ++p)
-      if (std::fabs(n.dot(pts[p]) + h) <= share * pts[p].z()) {
+      if (active[p] && std::fabs(n.dot(pts[p]) + h) <= share * pts[p].z()) {
         ++count;
         if (out) out->push_back(p);
       }
     return count;
   };
+  struct Plane {
+    Eigen::Vector3d n;
+    double h = 0;
+    int64_t support = 0;
+  };
   std::mt19937_64 rng(0x5EEDF100Full);
-  Eigen::Vector3d best_n = Eigen::Vector3d::Zero();
-  double best_h = 0;
-  int64_t best = 0;
-  for (int iter = 0; iter < 256; ++iter) {
-    const auto& a = pts[rng() % n_pts];
-    const auto& b = pts[rng() % n_pts];
-    const auto& c = pts[rng() % n_pts];
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() < 1e-12) continue;
-    n.normalize();
-    if (n.y() > 0) n = -n;
-    const double h = -n.dot(a);
-    if (-n.y() < min_up || h <= 0) continue;
-    const int64_t count = inliers(n, h, tol, nullptr);
-    if (count > best) best = count, best_n = n, best_h = h;
-  }
-  if (best < std::max<int64_t>(kMinPoints, n_pts / 10)) return 0.0;
-  // Weighted least-squares refits on the inliers: weights 1/z^2 make residuals relative, as the depth's
-  // errors are, so far points near a wall's crease do not tilt the plane; the second uses half the tolerance.
-  Eigen::Vector3d n = best_n;
-  double h = best_h;
-  for (int round = 0; round < 2; ++round) {
-    std::vector<int64_t> in;
-    inliers(n, h, tol / (1 + round), &in);
-    double wsum = 0;
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (int64_t p : in) {
-      const double w = 1.0 / (pts[p].z() * pts[p].z());
-      centroid += w * pts[p], wsum += w;
+  // RANSAC over the active points, then weighted least-squares refits on the inliers: weights 1/z^2 make
+  // residuals relative, as the depth's errors are, so far points near a wall's crease do not tilt the plane;
+  // the second refit uses half the tolerance.
+  auto fit_plane = [&]() {
+    std::vector<int64_t> pool;
+    for (int64_t p = 0; p < n_pts; ++p)
+      if (active[p]) pool.push_back(p);
+    Plane best;
+    if (static_cast<int64_t>(pool.size()) < kMinPoints) return best;
+    for (int iter = 0; iter < 256; ++iter) {
+      const auto& a = pts[pool[rng() % pool.size()]];
+      const auto& b = pts[pool[rng() % pool.size()]];
+      const auto& c = pts[pool[rng() % pool.size()]];
+      Eigen::Vector3d n = (b - a).cross(c - a);
+      if (n.norm() < 1e-12) continue;
+      n.normalize();
+      if (n.y() > 0) n = -n;
+      const double h = -n.dot(a);
+      if (-n.y() < min_up || h <= 0) continue;
+      const int64_t count = inliers(n, h, tol, nullptr);
+      if (count > best.support) best = {n, h, count};
     }
-    centroid /= wsum;
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int64_t p : in) cov += (pts[p] - centroid) * (pts[p] - centroid).transpose() / (pts[p].z() * pts[p].z());
-    Eigen::Vector3d refit = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-    if (refit.y() > 0) refit = -refit;
-    const double refit_h = -refit.dot(centroid);
-    if (-refit.y() < min_up || refit_h <= 0) break;  // degenerate refit: keep the plane so far
-    n = refit, h = refit_h;
+    if (best.support == 0) return best;
+    for (int round = 0; round < 2; ++round) {
+      std::vector<int64_t> in;
+      inliers(best.n, best.h, tol / (1 + round), &in);
+      double wsum = 0;
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int64_t p : in) {
+        const double w = 1.0 / (pts[p].z() * pts[p].z());
+        centroid += w * pts[p], wsum += w;
+      }
+      centroid /= wsum;
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (int64_t p : in) cov += (pts[p] - centroid) * (pts[p] - centroid).transpose() / (pts[p].z() * pts[p].z());
+      Eigen::Vector3d refit = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+      if (refit.y() > 0) refit = -refit;
+      const double refit_h = -refit.dot(centroid);
+      if (-refit.y() < min_up || refit_h <= 0) break;  // degenerate refit: keep the plane so far
+      best.n = refit, best.h = refit_h;
+    }
+    return best;
+  };
+  const int64_t min_support = std::max<int64_t>(kMinPoints, n_pts / 10);
+  auto plausible = [&](const Plane& p) {
+    const double scale = height_m / p.h;
+    return p.support >= min_support && scale > 0.02 && scale < 50.0;  // beyond: not a floor at any scale
+  };
+  const Plane first = fit_plane();
+  if (!plausible(first)) return 0.0;
+  if (rule == "best") return height_m / first.h;
+  // nearest: up to three horizontal planes, each fitted to the points the earlier ones left, with at least a
+  // third of the first one's support; the floor is the one whose scale the net's own agrees with best, so a
+  // table top is not taken for the floor when the net's depth already puts the floor lower.
+  Plane chosen = first;
+  Plane current = first;
+  for (int k = 1; k < 3; ++k) {
+    std::vector<int64_t> claimed;
+    inliers(current.n, current.h, tol, &claimed);
+    for (int64_t p : claimed) active[p] = 0;
+    current = fit_plane();
+    if (!plausible(current) || 3 * current.support < first.support) break;
+    if (std::fabs(std::log(height_m / current.h)) < std::fabs(std::log(height_m / chosen.h))) chosen = current;
   }
-  const double scale = height_m / h;
-  return scale > 0.02 && scale < 50.0 ? scale : 0.0;  // beyond: not a floor at any plausible scale
+  return height_m / chosen.h;
 }
 
 torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,

@@ -33,6 +33,7 @@ struct PriorOptions {
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
   double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
   double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
+  std::string floor_rule = "best";    // camera_height_m: best-supported plane | nearest the net's own scale
   bool reference_scale = false;       // diagnostic: monocular depth scaled to the frame's own depth (median)
   std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
   SparsePriorOptions sparse;
@@ -80,9 +81,11 @@ torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);
 // best-supported plane in the lower half of the back-projected depth whose normal is within 40 degrees of
 // the camera's up axis and which lies below the camera; the result is the factor that puts that plane
 // `height_m` below the camera. 0 when no such floor is found (then the depth keeps its own scale).
-// depth, valid [H,W]; K [3,3]. Deterministic.
+// rule "nearest": of up to three such planes (each fitted to the points the earlier ones left, with at least a
+// third of the first one's support), the one whose factor is nearest 1. depth, valid [H,W]; K [3,3].
+// Deterministic.
 double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
-                          double height_m);
+                          double height_m, const std::string& rule = "best");
 
 // Sparse alignment (exposed for tests): mono depth [H,W] aligned to prompts [P,3] with a global
 // scale/shift in inverse depth, then a smooth residual scale field.
