@@ -82,7 +82,9 @@ TEST_CASE("prior: sparse prompts align a wrong-scale monocular depth", "[prior]"
   auto inv = (1.0 / truth - 0.05) / 2.0;
   auto mono = 1.0 / inv * (1.0 + 0.1 * torch::linspace(-1, 1, H).view({H, 1}));
   auto prompts = draw_prompts(truth, torch::ones({H, W}), 300, 0.0, 7);
-  auto aligned = align_to_prompts(mono, prompts, 0.15);
+  SparsePriorOptions smooth;
+  smooth.bandwidth = smooth.finest = 0.15;  // one smooth level
+  auto aligned = align_to_prompts(mono, prompts, smooth);
   const double before = ((mono - truth).abs() / truth).mean().item<double>();
   const double after = ((aligned - truth).abs() / truth).mean().item<double>();
   INFO("relative error before " << before << " after " << after);
@@ -104,6 +106,53 @@ TEST_CASE("prior: sparse prompts align a wrong-scale monocular depth", "[prior]"
   in.depth = truth;
   auto out = prior->predict(in);
   CHECK(((out.depth - truth).abs() / truth).mean().item<double>() < 0.05);
+}
+
+TEST_CASE("prior: sparse alignment refines coarse to fine, and cross-validation keeps noisy prompts smooth",
+          "[prior]") {
+  const int64_t H = 96, W = 128;
+  auto truth = scene_depth(H, W);
+  // A monocular error at a 16-pixel period: finer than the coarsest kernel (12.8 px), coarser than the
+  // prompts' spacing (about 3 px).
+  auto yy = torch::arange(H).view({H, 1}).to(torch::kFloat32), xx = torch::arange(W).view({1, W}).to(torch::kFloat32);
+  auto mono = truth * (1.0 + 0.3 * torch::sin(yy * (2 * M_PI / 16)) * torch::sin(xx * (2 * M_PI / 16)));
+  auto error = [&](const torch::Tensor& d) { return ((d - truth).abs() / truth).mean().item<double>(); };
+  auto clean = draw_prompts(truth, torch::ones({H, W}), 4000, 0.0, 3);
+  SparsePriorOptions o;
+  o.bandwidth = 0.08, o.finest = 0.005;
+  o.cross_validate = false;
+  int64_t levels = 0;
+  const double all_levels = error(align_to_prompts(mono, clean, o, &levels));
+  CHECK(levels == 5);  // 0.08, 0.04, 0.02, 0.01, 0.005
+  SparsePriorOptions one = o;
+  one.finest = one.bandwidth;
+  const double one_level = error(align_to_prompts(mono, clean, one, &levels));
+  CHECK(levels == 1);
+  INFO("error: one level " << one_level << ", five levels " << all_levels);
+  CHECK(one_level > 0.05);
+  CHECK(all_levels < 0.3 * one_level);
+  // Clean prompts: cross-validation refines (nearly) as far as it can.
+  o.cross_validate = true;
+  int64_t clean_levels = 0;
+  const double clean_cv = error(align_to_prompts(mono, clean, o, &clean_levels));
+  CHECK(clean_levels >= 4);
+  CHECK(clean_cv < 1.2 * all_levels);
+  // Noisy prompts (30%): the finest levels would fit the noise; cross-validation stops earlier and does better.
+  auto noisy = draw_prompts(truth, torch::ones({H, W}), 4000, 0.3, 3);
+  int64_t noisy_levels = 0;
+  const double noisy_cv = error(align_to_prompts(mono, noisy, o, &noisy_levels));
+  o.cross_validate = false;
+  const double noisy_all = error(align_to_prompts(mono, noisy, o));
+  INFO("noisy prompts: cross-validated " << noisy_cv << " (" << noisy_levels << " levels), all levels " << noisy_all);
+  CHECK(noisy_levels < clean_levels);
+  CHECK(noisy_cv < noisy_all);
+  // The prior refuses a finest width above the coarsest, naming both keys.
+  PriorOptions bad;
+  bad.type = "sparse";
+  bad.sparse.mono = "none";
+  bad.sparse.finest = 0.1;
+  CHECK_THROWS_WITH(make_depth_prior(bad), Catch::Contains("prior.sparse.finest (0.1) must not exceed "
+                                                           "prior.sparse.bandwidth (0.08)"));
 }
 
 TEST_CASE("prior: the learned net predicts positive metric depth at the input size", "[prior]") {

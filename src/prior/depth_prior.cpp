@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numeric>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -26,7 +27,15 @@ void SparsePriorOptions::visit(ConfigVisitor& v) {
   v.field("prompts", prompts, "sparse depth prompts drawn from the source depth (paper: 1500)", Range::at_least(3));
   v.field("noise", noise, "multiplicative prompt noise sigma (Table 4 uses 0, 0.01, 0.03, 0.05)", Range::at_least(0));
   v.field("mono", mono, "monocular prior aligned to the prompts", {"learned", "torchscript", "none"});
-  v.field("bandwidth", bandwidth, "residual scale field kernel width, fraction of the image diagonal", Range::above(0));
+  v.field("bandwidth", bandwidth, "residual scale field: coarsest kernel width, fraction of the image diagonal",
+          Range::above(0));
+  v.field("finest", finest,
+          "residual scale field: finest kernel width (fraction of the diagonal); levels halve from bandwidth down "
+          "to it, each fitting what the coarser left (= bandwidth: one smooth level)",
+          Range::above(0));
+  v.field("cross_validate", cross_validate,
+          "stop refining at the level after which held-out prompts (5-fold) stop improving, so noisy prompts keep "
+          "a smoother fit");
 }
 
 void PriorOptions::visit(ConfigVisitor& v) {
@@ -92,6 +101,42 @@ void check_image(const PriorInput& in) {
                "depth prior: image must be [3, H, W], got ",
                in.image.defined() ? in.image.sizes() : torch::IntArrayRef{});
 }
+
+// Gaussian-kernel mean of per-prompt values over the prompts within 4 sigma, found through square buckets:
+// sum w v / (sum w + 1e-3), so far from every prompt a level adds nothing.
+class PromptKernel {
+ public:
+  PromptKernel(const float* prompts, const std::vector<int64_t>& ids, const std::vector<double>& values, double sigma)
+      : p_(prompts), values_(values), radius_(4 * sigma), inv2s2_(1 / (2 * sigma * sigma)) {
+    double max_u = 0, max_v = 0;
+    for (int64_t i : ids) max_u = std::max<double>(max_u, p_[3 * i]), max_v = std::max<double>(max_v, p_[3 * i + 1]);
+    nx_ = static_cast<int64_t>(max_u / radius_) + 1, ny_ = static_cast<int64_t>(max_v / radius_) + 1;
+    buckets_.resize(static_cast<size_t>(nx_ * ny_));
+    for (int64_t i : ids)
+      buckets_[static_cast<size_t>(bucket(p_[3 * i + 1], ny_) * nx_ + bucket(p_[3 * i], nx_))].push_back(i);
+  }
+  double at(double u, double v) const {
+    const int64_t bx = bucket(u, nx_), by = bucket(v, ny_);
+    double sw = 0, s = 0;
+    for (int64_t y = std::max<int64_t>(0, by - 1); y <= std::min(ny_ - 1, by + 1); ++y)
+      for (int64_t x = std::max<int64_t>(0, bx - 1); x <= std::min(nx_ - 1, bx + 1); ++x)
+        for (int64_t i : buckets_[static_cast<size_t>(y * nx_ + x)]) {
+          const double du = p_[3 * i] - u, dv = p_[3 * i + 1] - v, r2 = du * du + dv * dv;
+          if (r2 > radius_ * radius_) continue;
+          const double w = std::exp(-r2 * inv2s2_);
+          sw += w, s += w * values_[static_cast<size_t>(i)];
+        }
+    return s / (sw + 1e-3);
+  }
+
+ private:
+  int64_t bucket(double c, int64_t n) const { return std::clamp<int64_t>(static_cast<int64_t>(c / radius_), 0, n - 1); }
+  const float* p_;
+  const std::vector<double>& values_;
+  double radius_, inv2s2_;
+  int64_t nx_ = 1, ny_ = 1;
+  std::vector<std::vector<int64_t>> buckets_;
+};
 
 PriorOutput finish(torch::Tensor depth, torch::Tensor K) {
   depth = depth.to(torch::kFloat32);
@@ -227,6 +272,8 @@ class TorchScriptPrior final : public DepthPrior {
 class SparsePrior final : public DepthPrior {
  public:
   explicit SparsePrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded) : o_(o) {
+    ISPLAT_CHECK(o.sparse.finest <= o.sparse.bandwidth, "prior.sparse.finest (", o.sparse.finest,
+                 ") must not exceed prior.sparse.bandwidth (", o.sparse.bandwidth, ")");
     if (o.sparse.mono == "learned") {
       mono_ = std::make_unique<LearnedPrior>(o, embedded);
     } else if (o.sparse.mono == "torchscript") {
@@ -246,11 +293,12 @@ class SparsePrior final : public DepthPrior {
                  "sparse prior: prompts must be [P>=3, 3] (u, v, z), got ", prompts.sizes());
     const int64_t H = in.image.size(1), W = in.image.size(2);
     torch::Tensor mono = mono_ ? mono_->predict(in).depth : torch::ones({H, W});
-    return finish(align_to_prompts(mono, prompts, o_.sparse.bandwidth), intrinsics_for(in, o_.hfov_deg));
+    return finish(align_to_prompts(mono, prompts, o_.sparse), intrinsics_for(in, o_.hfov_deg));
   }
   std::string describe() const override {
-    return cat("sparse prompts (", o_.sparse.prompts, ", noise ", o_.sparse.noise, ") aligning ",
-               mono_ ? mono_->describe() : std::string("a constant"));
+    return cat("sparse prompts (", o_.sparse.prompts, ", noise ", o_.sparse.noise, ", residual field ",
+               o_.sparse.bandwidth, " -> ", o_.sparse.finest, o_.sparse.cross_validate ? " cross-validated" : "",
+               ") aligning ", mono_ ? mono_->describe() : std::string("a constant"));
   }
   const torch::nn::Module* embeddable_weights() const override { return mono_ ? mono_->embeddable_weights() : nullptr; }
 
@@ -400,7 +448,8 @@ torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& vali
   return out;
 }
 
-torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts, double bandwidth) {
+torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts,
+                               const SparsePriorOptions& options, int64_t* levels_used) {
   auto mono = mono_depth.to(torch::kFloat32).contiguous();
   auto pr = prompts.to(torch::kFloat32).contiguous();
   const int64_t H = mono.size(0), W = mono.size(1), P = pr.size(0);
@@ -435,34 +484,65 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
     const double mad = sorted[P / 2] + 1e-9;
     for (int64_t i = 0; i < P; ++i) use[i] = res[i] <= 4.0 * mad;
   }
-  // 2. Residual log-scale at the prompts, spread by a Gaussian kernel on a coarse grid.
+  // 2. Residual log-scale at the prompts, fitted coarse to fine.
   auto aligned = torch::empty({H, W});
   float* al = aligned.data_ptr<float>();
   for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
   std::vector<double> logs(P);
   for (int64_t i = 0; i < P; ++i)
     logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1])));
-  const int64_t cell = 8, gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
-  const double sigma = bandwidth * std::sqrt(double(H) * H + double(W) * W), inv2s2 = 1.0 / (2 * sigma * sigma);
-  auto field = torch::empty({1, 1, gh, gw});
-  float* f = field.data_ptr<float>();
-  at::parallel_for(0, gh, 1, [&](int64_t b0, int64_t b1) {
-    for (int64_t gy = b0; gy < b1; ++gy)
-      for (int64_t gx = 0; gx < gw; ++gx) {
-        const double cx = (gx + 0.5) * cell, cy = (gy + 0.5) * cell;
-        double sw = 0, s = 0;
-        for (int64_t i = 0; i < P; ++i) {
-          const double dx = p[3 * i] - cx, dy = p[3 * i + 1] - cy;
-          const double w = std::exp(-(dx * dx + dy * dy) * inv2s2);
-          sw += w;
-          s += w * logs[i];
-        }
-        f[gy * gw + gx] = static_cast<float>(s / (sw + 1e-3));  // far from every prompt: no correction
+  const double diag = std::sqrt(double(H) * H + double(W) * W);
+  std::vector<double> sigmas;
+  for (double s = options.bandwidth; sigmas.empty() || s >= options.finest * (1 - 1e-9); s /= 2)
+    sigmas.push_back(s * diag);
+  int64_t levels = static_cast<int64_t>(sigmas.size());
+  if (options.cross_validate && levels > 1) {
+    // 5 folds in a fixed shuffled order; the held-out error after each level, summed over folds.
+    std::vector<int64_t> order(P);
+    std::iota(order.begin(), order.end(), 0);
+    std::mt19937_64 rng(0x5EED);
+    for (int64_t k = P - 1; k > 0; --k) std::swap(order[k], order[rng() % static_cast<uint64_t>(k + 1)]);
+    std::vector<int> fold(P);
+    for (int64_t k = 0; k < P; ++k) fold[order[k]] = static_cast<int>(k % 5);
+    std::vector<double> error(sigmas.size(), 0.0);
+    for (int f = 0; f < 5; ++f) {
+      std::vector<int64_t> train;
+      for (int64_t i = 0; i < P; ++i)
+        if (fold[i] != f) train.push_back(i);
+      std::vector<double> fit(P, 0.0), residual(P);
+      for (size_t l = 0; l < sigmas.size(); ++l) {
+        for (int64_t i = 0; i < P; ++i) residual[i] = logs[i] - fit[i];
+        const PromptKernel kernel(p, train, residual, sigmas[l]);
+        for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1]);
+        for (int64_t i = 0; i < P; ++i)
+          if (fold[i] == f) error[l] += std::fabs(logs[i] - fit[i]);
       }
-  });
-  auto up = resize_bilinear(field, gh * cell, gw * cell);
-  up = up[0][0].narrow(0, 0, H).narrow(1, 0, W);
-  return aligned * torch::exp(up);
+    }
+    levels = std::min_element(error.begin(), error.end()) - error.begin() + 1;
+  }
+  if (levels_used) *levels_used = levels;
+  std::vector<int64_t> all(P);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<double> fit(P, 0.0), residual(P);
+  auto correction = torch::zeros({H, W});
+  for (int64_t l = 0; l < levels; ++l) {
+    for (int64_t i = 0; i < P; ++i) residual[i] = logs[i] - fit[i];
+    const PromptKernel kernel(p, all, residual, sigmas[l]);
+    for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1]);
+    // The level's field on a grid fine enough for its width, upsampled bilinearly.
+    const int64_t cell = std::clamp<int64_t>(static_cast<int64_t>(sigmas[l] / 2), 1, 8);
+    const int64_t gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
+    auto field = torch::empty({1, 1, gh, gw});
+    float* fp = field.data_ptr<float>();
+    at::parallel_for(0, gh, 1, [&](int64_t y0, int64_t y1) {
+      for (int64_t gy = y0; gy < y1; ++gy)
+        for (int64_t gx = 0; gx < gw; ++gx)
+          fp[gy * gw + gx] = static_cast<float>(kernel.at((gx + 0.5) * cell, (gy + 0.5) * cell));
+    });
+    auto up = cell == 1 ? field : resize_bilinear(field, gh * cell, gw * cell);
+    correction += up[0][0].narrow(0, 0, H).narrow(1, 0, W);
+  }
+  return aligned * torch::exp(correction);
 }
 
 std::unique_ptr<DepthPrior> make_depth_prior(const PriorOptions& o,

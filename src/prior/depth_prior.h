@@ -19,7 +19,9 @@ struct SparsePriorOptions {
   int64_t prompts = 1500;        // paper: 1,500 LiDAR-like prompts
   double noise = 0.0;            // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
   std::string mono = "learned";  // monocular prior aligned to the prompts: learned | torchscript | none
-  double bandwidth = 0.08;       // residual scale field: Gaussian kernel width as a fraction of the image diagonal
+  double bandwidth = 0.08;       // residual scale field: coarsest Gaussian kernel width, fraction of the diagonal
+  double finest = 0.005;         // finest kernel width; levels halve from bandwidth down to it
+  bool cross_validate = true;    // stop refining where held-out prompts stop improving (noisy prompts stay smooth)
   void visit(ConfigVisitor& v);
 };
 
@@ -88,8 +90,12 @@ double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid
                           double height_m, const std::string& rule = "best");
 
 // Sparse alignment (exposed for tests): mono depth [H,W] aligned to prompts [P,3] with a global
-// scale/shift in inverse depth, then a smooth residual scale field.
-torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts, double bandwidth);
+// scale/shift in inverse depth, then a residual log-scale field fitted coarse to fine (kernel widths halving
+// from options.bandwidth to options.finest), each level fitting what the coarser ones left at the prompts.
+// With options.cross_validate, the number of levels is the one that predicts held-out prompts best (5-fold);
+// `levels_used` (optional) receives it. Deterministic.
+torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts,
+                               const SparsePriorOptions& options, int64_t* levels_used = nullptr);
 // Draws `count` prompts (u, v, z) from valid depth, with multiplicative noise sigma (deterministic in seed).
 torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,
                            uint64_t seed);
