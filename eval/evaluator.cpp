@@ -348,6 +348,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   const std::vector<std::string>& nets = config_.scoring.lpips;
   std::vector<ReportRow> rows;
   std::vector<DiffRow> differences;
+  std::vector<SweepSlope> slopes;
   std::vector<ReportRow> breakdowns;
   if (config_.scoring.max_per_bin > 0)
     notes_.push_back(cat("only the first ", config_.scoring.max_per_bin,
@@ -395,6 +396,8 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
           paired_differences(ds.name, config_.scoring.reference, by_method, nets.empty() ? "" : nets[0], 2000, labels);
       differences.insert(differences.end(), diffs.begin(), diffs.end());
     }
+    const auto sl = sweep_slopes(ds.name, by_method);
+    slopes.insert(slopes.end(), sl.begin(), sl.end());
   }
   if (shard_count_ > 1) {
     log_info("eval: shard ", shard_index_, "/", shard_count_, " scored; combine the shards with --merge ",
@@ -402,7 +405,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     return rows;
   }
   if (!pairs_only) {
-    write_reports(config_.scoring.out, rows, nets, notes_, differences, breakdowns);
+    write_reports(config_.scoring.out, rows, nets, notes_, differences, breakdowns, slopes);
     log_info("eval: reports in ", config_.scoring.out, " (report.md, report.csv, report.json, speed_quality.png)");
   }
   return rows;

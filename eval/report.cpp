@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <sstream>
 
 #include "core/build_info.h"
@@ -340,10 +341,60 @@ static std::pair<std::function<double(double)>, std::string> perturbation_streng
   return {[](double v) { return v; }, key == "depth_blur_px" ? "pixel" : "unit"};
 }
 
+std::vector<SweepSlope> sweep_slopes(const std::string& dataset,
+                                     const std::map<std::string, std::vector<PairResult>>& results, int64_t resamples) {
+  static const std::map<std::string, double> neutral = {
+      {"depth_scale", 1}, {"exposure", 1},         {"depth_noise", 0},    {"depth_blur_px", 0},
+      {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}};
+  std::map<std::string, std::vector<std::pair<double, const std::vector<PairResult>*>>> families;
+  for (const auto& [method, res] : results)
+    if (method.find('~') != std::string::npos && std::isfinite(sweep_value(method)))
+      families[method_family(method)].push_back({sweep_value(method), &res});
+  std::vector<SweepSlope> out;
+  for (auto& [family, points] : families) {
+    const std::string key = family_key(family);
+    // The unperturbed run stands for the neutral value when the sweep leaves it out (as sweep_points does).
+    const auto it = neutral.find(key);
+    const auto plain = results.find(family.substr(0, family.rfind(' ')));
+    if (it != neutral.end() && plain != results.end() &&
+        std::none_of(points.begin(), points.end(), [&](auto& p) { return p.first == it->second; }))
+      points.push_back({it->second, &plain->second});
+    if (points.size() < 2) continue;
+    const auto [strength, unit] = perturbation_strength(key);
+    std::vector<double> xs;
+    for (const auto& pt : points) xs.push_back(strength(pt.first));
+    const double mx = std::accumulate(xs.begin(), xs.end(), 0.0) / static_cast<double>(xs.size());
+    double sxx = 0;
+    for (double x : xs) sxx += (x - mx) * (x - mx);
+    if (!(sxx > 0)) continue;
+    // Per pair: PSNR at every point (pairs some point missed are left out), then its slope.
+    std::map<int64_t, std::vector<double>> by_pair;
+    for (size_t k = 0; k < points.size(); ++k)
+      for (const auto& r : *points[k].second) {
+        auto& ys = by_pair[r.index];
+        ys.resize(points.size(), std::numeric_limits<double>::quiet_NaN());
+        ys[k] = r.psnr;
+      }
+    std::vector<double> slopes;
+    for (const auto& [index, ys] : by_pair) {
+      if (!std::all_of(ys.begin(), ys.end(), [](double y) { return std::isfinite(y); })) continue;
+      const double my = std::accumulate(ys.begin(), ys.end(), 0.0) / static_cast<double>(ys.size());
+      double sxy = 0;
+      for (size_t k = 0; k < ys.size(); ++k) sxy += (xs[k] - mx) * (ys[k] - my);
+      slopes.push_back(sxy / sxx);
+    }
+    if (slopes.empty()) continue;
+    out.push_back(
+        {dataset, family, unit, paired_bootstrap(slopes, std::vector<double>(slopes.size(), 0.0), resamples)});
+  }
+  return out;
+}
+
 // Per swept family: PSNR against the swept value, its least-squares slope (per 1% for shares and noise
 // sigmas) and whether PSNR is monotone in the value (graceful degradation falls steadily with noise). The
 // unperturbed run counts as the neutral value (see sweep_points).
-static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportRow>& rows, const std::string& d) {
+static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportRow>& rows, const std::string& d,
+                               const std::vector<SweepSlope>& intervals) {
   std::vector<std::string> families = sweep_families(rows, d);
   std::sort(families.begin(), families.end());
   bool header = false;
@@ -369,8 +420,11 @@ static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportR
     if (!header)
       md << "\nSweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and "
             "exposure as abs(ln value) so both sides count, JPEG as quality lost, prompts as e-folds fewer), its "
-            "least-squares slope, and whether PSNR falls steadily as the strength grows (graceful):\n\n"
-            "| sweep | values | PSNR | slope | PSNR as strength grows |\n|---|---|---|---|---|\n",
+            "least-squares slope with its 95% interval over pairs (the mean of per-pair slopes on the pairs "
+            "every point scored; an interval containing 0 is no measurable change), and whether the mean PSNR "
+            "falls steadily as the strength grows (graceful):\n\n"
+            "| sweep | values | PSNR | slope | slope 95% interval (pairs) | PSNR as strength grows |\n"
+            "|---|---|---|---|---|---|\n",
           header = true;
     std::string xs, ys;
     for (const auto& [x, y] : pts) {
@@ -378,7 +432,17 @@ static void write_sweep_slopes(std::ostringstream& md, const std::vector<ReportR
       v << std::setprecision(4) << x;
       xs += (xs.empty() ? "" : ", ") + v.str(), ys += (ys.empty() ? "" : ", ") + fmt(y, 2);
     }
+    const auto ci = std::find_if(intervals.begin(), intervals.end(),
+                                 [&](const SweepSlope& s) { return s.dataset == d && s.family == family; });
+    const std::string interval =
+        ci == intervals.end() || ci->slope.n == 0
+            ? std::string("n/a")
+            : cat("[", fmt(ci->slope.lo, 3), ", ", fmt(ci->slope.hi, 3), "] (", ci->slope.n, "): ",
+                  ci->slope.hi < 0   ? "falls"
+                  : ci->slope.lo > 0 ? "rises"
+                                     : "no measurable change");
     md << "| " << family << " | " << xs << " | " << ys << " | " << fmt(slope, 3) << " dB per " << unit << " | "
+       << interval << " | "
        << (falls   ? "falls"
            : rises ? "rises"
                    : "not monotone")
@@ -440,7 +504,7 @@ static std::vector<Chart> baseline_charts(const std::vector<ReportRow>& breakdow
 
 void write_reports(const std::string& out, const std::vector<ReportRow>& rows, const std::vector<std::string>& nets,
                    const std::vector<std::string>& notes, const std::vector<DiffRow>& differences,
-                   const std::vector<ReportRow>& breakdowns) {
+                   const std::vector<ReportRow>& breakdowns, const std::vector<SweepSlope>& slopes) {
   // Markdown: one table per dataset.
   std::ostringstream md;
   md << "# Evaluation report\n\nMasked metrics on the protocol's pairs (DESIGN §5). PSNR and SSIM higher is better, "
@@ -487,7 +551,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
       if (r.dataset == d && std::isfinite(r.hole_rate))
         md << "| " << r.method << " | " << r.bin << " | " << fmt(100 * r.hole_rate, 2) << " | "
            << fmt(100 * r.crack_rate, 2) << " | " << fmt(r.normal_deg, 2) << " |\n";
-    write_sweep_slopes(md, rows, d);
+    write_sweep_slopes(md, rows, d, slopes);
     write_breakdown_table(md, breakdowns, d, nets);
     md << "\n";
   }
@@ -528,6 +592,14 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     }
     md << "\n";
     write_csv((fs::path(out) / "differences.csv").string(), dcsv);
+  }
+  if (!slopes.empty()) {
+    CsvTable scsv;
+    scsv.header = {"dataset", "sweep", "unit", "pairs", "slope_db", "slope_lo", "slope_hi"};
+    for (const auto& sl : slopes)
+      scsv.rows.push_back({sl.dataset, sl.family, sl.unit, std::to_string(sl.slope.n), fmt(sl.slope.mean, 4),
+                           fmt(sl.slope.lo, 4), fmt(sl.slope.hi, 4)});
+    write_csv((fs::path(out) / "slopes.csv").string(), scsv);
   }
   if (!notes.empty()) {
     md << "## Notes\n\n";

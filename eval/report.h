@@ -79,10 +79,22 @@ double sweep_value(const std::string& method);
 // Indices of the points (x = cost, y = quality) not dominated by a cheaper-or-equal, better one, by cost.
 std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& points);
 
+// A perturbation sweep's PSNR slope on one dataset: the least-squares slope against the perturbation's
+// strength (per % for noise and shares), computed per pair over the pairs every point scored and averaged
+// (the slope of the mean curve), with a paired bootstrap 95% interval over pairs.
+struct SweepSlope {
+  std::string dataset, family, unit;  // family "lidar prior.sparse.noise"
+  Interval slope;                     // dB per unit; n = pairs
+};
+std::vector<SweepSlope> sweep_slopes(const std::string& dataset,
+                                     const std::map<std::string, std::vector<PairResult>>& results,
+                                     int64_t resamples = 2000);
+
 // Writes report.md, report.csv, report.json and speed_quality.png (per dataset: PSNR against time and
 // against Gaussians, log scale, one series per method family, the Pareto front marked) into `out`.
 void write_reports(const std::string& out, const std::vector<ReportRow>& rows,
                    const std::vector<std::string>& lpips_nets, const std::vector<std::string>& notes,
-                   const std::vector<DiffRow>& differences = {}, const std::vector<ReportRow>& breakdowns = {});
+                   const std::vector<DiffRow>& differences = {}, const std::vector<ReportRow>& breakdowns = {},
+                   const std::vector<SweepSlope>& slopes = {});
 
 }  // namespace isplat

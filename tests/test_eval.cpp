@@ -224,6 +224,39 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   CHECK(per_bin[2].bin == "far");
   CHECK(per_bin[2].holes.mean == Approx(2.0));
   CHECK(per_bin[2].holes.excludes_zero());
+
+  // Sweep slopes over pairs: PSNR falls 0.5 dB per % of noise on every pair (plus pair-specific jitter that
+  // does not trend), is flat under blur, and the pair one point missed is left out.
+  std::map<std::string, std::vector<PairResult>> sweeps;
+  for (int64_t i = 0; i < 30; ++i)
+    for (double noise : {0.0, 0.01, 0.02, 0.05}) {
+      PairResult r;
+      r.index = i;
+      r.psnr = 25 + 0.2 * static_cast<double>(i % 3) - 50 * noise + 0.3 * std::sin(7.0 * i + 100 * noise);
+      if (!(i == 4 && noise == 0.02)) sweeps[cat("lidar~noise", noise)].push_back(r);
+    }
+  for (int64_t i = 0; i < 30; ++i)
+    for (double px : {2.0, 4.0}) {
+      PairResult r;
+      r.index = i, r.psnr = 24 + 0.4 * ((i + static_cast<int64_t>(px)) % 2 ? 1 : -1);
+      sweeps[cat("full~depth_blur_px", px)].push_back(r);
+      r.psnr = 24;  // unperturbed: the 0 px point
+      if (px == 2.0) sweeps["full"].push_back(r);
+    }
+  const auto slopes = sweep_slopes("set", sweeps);
+  REQUIRE(slopes.size() == 2);
+  const auto noise = std::find_if(slopes.begin(), slopes.end(), [](auto& s) { return s.family == "lidar noise"; });
+  REQUIRE(noise != slopes.end());
+  CHECK(noise->unit == "%");
+  CHECK(noise->slope.n == 29);
+  CHECK(noise->slope.mean == Approx(-0.5).margin(0.05));
+  CHECK(noise->slope.hi < 0);
+  const auto blur =
+      std::find_if(slopes.begin(), slopes.end(), [](auto& s) { return s.family == "full depth_blur_px"; });
+  REQUIRE(blur != slopes.end());
+  CHECK(blur->slope.n == 30);
+  CHECK(blur->slope.lo < 0);  // no trend: the interval holds 0
+  CHECK(blur->slope.hi > 0);
 }
 
 TEST_CASE("eval: perturbations have the requested strength, are deterministic, and sweep by key", "[eval]") {
