@@ -121,6 +121,7 @@ TEST_CASE("prior: sparse alignment refines coarse to fine, and cross-validation 
   SparsePriorOptions o;
   o.bandwidth = 0.08, o.finest = 0.005;
   o.cross_validate = false;
+  o.depth_range = 0;  // the monocular error here is depth texture, which an edge-aware weight would respect
   int64_t levels = 0;
   const double all_levels = error(align_to_prompts(mono, clean, o, &levels));
   CHECK(levels == 5);  // 0.08, 0.04, 0.02, 0.01, 0.005
@@ -153,6 +154,37 @@ TEST_CASE("prior: sparse alignment refines coarse to fine, and cross-validation 
   bad.sparse.finest = 0.1;
   CHECK_THROWS_WITH(make_depth_prior(bad), Catch::Contains("prior.sparse.finest (0.1) must not exceed "
                                                            "prior.sparse.bandwidth (0.08)"));
+}
+
+TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on its own surface", "[prior]") {
+  const int64_t H = 64, W = 96;
+  // A box at 2 m in front of a wall sloping from 5 to 7 m (the box covers columns 32..63). The monocular depth
+  // has the right shape but each surface's own scale error (box x1.25, wall x0.8): no global map in inverse
+  // depth fixes both, and a smooth residual field blurs the two corrections across the edges.
+  auto truth = (5.0 + 2.0 * torch::arange(H).to(torch::kFloat32) / H).view({H, 1}).expand({H, W}).contiguous();
+  truth.narrow(1, 32, 32).fill_(2.0f);
+  auto mono = truth * 0.8f;
+  mono.narrow(1, 32, 32).fill_(2.0f * 1.25f);
+  auto prompts = draw_prompts(truth, torch::ones({H, W}), 400, 0.0, 5);
+  SparsePriorOptions o;
+  o.bandwidth = o.finest = 0.08;  // one level, 9 px wide: the blur reaches well across the edges
+  o.cross_validate = false;
+  o.depth_range = 0;
+  auto band_error = [&](const torch::Tensor& d) {  // mean relative error within 6 px of either edge
+    auto err = (d - truth).abs() / truth;
+    return torch::cat({err.narrow(1, 26, 12), err.narrow(1, 58, 12)}, 1).mean().item<double>();
+  };
+  const double plain = band_error(align_to_prompts(mono, prompts, o));
+  o.depth_range = 0.1;
+  auto edge_aware = align_to_prompts(mono, prompts, o);
+  const double aware = band_error(edge_aware);
+  INFO("relative error near the edges: plain " << plain << ", edge-aware " << aware);
+  CHECK(plain > 0.025);
+  CHECK(aware < 0.2 * plain);
+  // Away from the edges it still agrees with the truth, and the output stays positive and finite.
+  CHECK(((edge_aware - truth).abs() / truth).narrow(1, 0, 20).mean().item<double>() < 0.01);
+  CHECK(torch::isfinite(edge_aware).all().item<bool>());
+  CHECK((edge_aware > 0).all().item<bool>());
 }
 
 TEST_CASE("prior: the learned net predicts positive metric depth at the input size", "[prior]") {

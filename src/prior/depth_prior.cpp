@@ -36,6 +36,12 @@ void SparsePriorOptions::visit(ConfigVisitor& v) {
   v.field("cross_validate", cross_validate,
           "stop refining at the level after which held-out prompts (5-fold) stop improving, so noisy prompts keep "
           "a smoother fit");
+  v.field("depth_range", depth_range,
+          "edge-aware residual field: > 0 weighs each prompt also by exp(-(log-depth gap)^2 / (2 range^2)) between "
+          "the aligned monocular depth at the prompt and at the pixel, so a prompt corrects its own surface and not "
+          "the one across a depth edge (0 = off; 0.1 chosen on the development scenes, "
+          "docs/results/2026-11-25-lidar-fit.md)",
+          Range::at_least(0));
 }
 
 void PriorOptions::visit(ConfigVisitor& v) {
@@ -103,11 +109,18 @@ void check_image(const PriorInput& in) {
 }
 
 // Gaussian-kernel mean of per-prompt values over the prompts within 4 sigma, found through square buckets:
-// sum w v / (sum w + 1e-3), so far from every prompt a level adds nothing.
+// sum w v / (sum w + 1e-3), so far from every prompt a level adds nothing. With a guide (log depth per prompt)
+// and a range > 0, w also falls with the guide's gap between prompt and query (a joint bilateral kernel).
 class PromptKernel {
  public:
-  PromptKernel(const float* prompts, const std::vector<int64_t>& ids, const std::vector<double>& values, double sigma)
-      : p_(prompts), values_(values), radius_(4 * sigma), inv2s2_(1 / (2 * sigma * sigma)) {
+  PromptKernel(const float* prompts, const std::vector<int64_t>& ids, const std::vector<double>& values, double sigma,
+               const std::vector<double>* guide = nullptr, double range = 0)
+      : p_(prompts),
+        values_(values),
+        guide_(range > 0 ? guide : nullptr),
+        radius_(4 * sigma),
+        inv2s2_(1 / (2 * sigma * sigma)),
+        inv2r2_(range > 0 ? 1 / (2 * range * range) : 0) {
     double max_u = 0, max_v = 0;
     for (int64_t i : ids) max_u = std::max<double>(max_u, p_[3 * i]), max_v = std::max<double>(max_v, p_[3 * i + 1]);
     nx_ = static_cast<int64_t>(max_u / radius_) + 1, ny_ = static_cast<int64_t>(max_v / radius_) + 1;
@@ -115,7 +128,7 @@ class PromptKernel {
     for (int64_t i : ids)
       buckets_[static_cast<size_t>(bucket(p_[3 * i + 1], ny_) * nx_ + bucket(p_[3 * i], nx_))].push_back(i);
   }
-  double at(double u, double v) const {
+  double at(double u, double v, double g = 0) const {
     const int64_t bx = bucket(u, nx_), by = bucket(v, ny_);
     double sw = 0, s = 0;
     for (int64_t y = std::max<int64_t>(0, by - 1); y <= std::min(ny_ - 1, by + 1); ++y)
@@ -123,7 +136,12 @@ class PromptKernel {
         for (int64_t i : buckets_[static_cast<size_t>(y * nx_ + x)]) {
           const double du = p_[3 * i] - u, dv = p_[3 * i + 1] - v, r2 = du * du + dv * dv;
           if (r2 > radius_ * radius_) continue;
-          const double w = std::exp(-r2 * inv2s2_);
+          double e = r2 * inv2s2_;
+          if (guide_) {
+            const double dg = (*guide_)[static_cast<size_t>(i)] - g;
+            e += dg * dg * inv2r2_;
+          }
+          const double w = std::exp(-e);
           sw += w, s += w * values_[static_cast<size_t>(i)];
         }
     return s / (sw + 1e-3);
@@ -133,7 +151,8 @@ class PromptKernel {
   int64_t bucket(double c, int64_t n) const { return std::clamp<int64_t>(static_cast<int64_t>(c / radius_), 0, n - 1); }
   const float* p_;
   const std::vector<double>& values_;
-  double radius_, inv2s2_;
+  const std::vector<double>* guide_;
+  double radius_, inv2s2_, inv2r2_;
   int64_t nx_ = 1, ny_ = 1;
   std::vector<std::vector<int64_t>> buckets_;
 };
@@ -488,9 +507,13 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   auto aligned = torch::empty({H, W});
   float* al = aligned.data_ptr<float>();
   for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
-  std::vector<double> logs(P);
-  for (int64_t i = 0; i < P; ++i)
-    logs[i] = std::log(p[3 * i + 2] / std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1])));
+  std::vector<double> logs(P), guide(P);
+  for (int64_t i = 0; i < P; ++i) {
+    const double at_prompt = std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1]));
+    logs[i] = std::log(p[3 * i + 2] / at_prompt);
+    guide[i] = std::log(at_prompt);
+  }
+  const double range = options.depth_range;
   const double diag = std::sqrt(double(H) * H + double(W) * W);
   std::vector<double> sigmas;
   for (double s = options.bandwidth; sigmas.empty() || s >= options.finest * (1 - 1e-9); s /= 2)
@@ -512,8 +535,8 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
       std::vector<double> fit(P, 0.0), residual(P);
       for (size_t l = 0; l < sigmas.size(); ++l) {
         for (int64_t i = 0; i < P; ++i) residual[i] = logs[i] - fit[i];
-        const PromptKernel kernel(p, train, residual, sigmas[l]);
-        for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1]);
+        const PromptKernel kernel(p, train, residual, sigmas[l], &guide, range);
+        for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1], guide[i]);
         for (int64_t i = 0; i < P; ++i)
           if (fold[i] == f) error[l] += std::fabs(logs[i] - fit[i]);
       }
@@ -527,20 +550,53 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   auto correction = torch::zeros({H, W});
   for (int64_t l = 0; l < levels; ++l) {
     for (int64_t i = 0; i < P; ++i) residual[i] = logs[i] - fit[i];
-    const PromptKernel kernel(p, all, residual, sigmas[l]);
-    for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1]);
+    const PromptKernel kernel(p, all, residual, sigmas[l], &guide, range);
+    for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1], guide[i]);
     // The level's field on a grid fine enough for its width, upsampled bilinearly.
     const int64_t cell = std::clamp<int64_t>(static_cast<int64_t>(sigmas[l] / 2), 1, 8);
     const int64_t gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
     auto field = torch::empty({1, 1, gh, gw});
     float* fp = field.data_ptr<float>();
+    std::vector<double> grid_guide(range > 0 ? static_cast<size_t>(gh * gw) : 0);
     at::parallel_for(0, gh, 1, [&](int64_t y0, int64_t y1) {
       for (int64_t gy = y0; gy < y1; ++gy)
-        for (int64_t gx = 0; gx < gw; ++gx)
-          fp[gy * gw + gx] = static_cast<float>(kernel.at((gx + 0.5) * cell, (gy + 0.5) * cell));
+        for (int64_t gx = 0; gx < gw; ++gx) {
+          const double u = (gx + 0.5) * cell, v = (gy + 0.5) * cell;
+          double g = 0;
+          if (range > 0) g = grid_guide[gy * gw + gx] = std::log(std::max(1e-6f, bilinear_at(al, H, W, u, v)));
+          fp[gy * gw + gx] = static_cast<float>(kernel.at(u, v, g));
+        }
     });
-    auto up = cell == 1 ? field : resize_bilinear(field, gh * cell, gw * cell);
-    correction += up[0][0].narrow(0, 0, H).narrow(1, 0, W);
+    if (cell == 1) {
+      correction += field[0][0].narrow(0, 0, H).narrow(1, 0, W);
+    } else if (range == 0) {
+      correction += resize_bilinear(field, gh * cell, gw * cell)[0][0].narrow(0, 0, H).narrow(1, 0, W);
+    } else {
+      // Joint bilateral upsampling: the four grid values nearest a pixel count by bilinear weight times the
+      // guide's agreement, so a coarse level does not blur a correction across a depth edge either.
+      float* cp = correction.data_ptr<float>();
+      const double inv2r2 = 1 / (2 * range * range);
+      at::parallel_for(0, H, 1, [&](int64_t y0, int64_t y1) {
+        for (int64_t y = y0; y < y1; ++y)
+          for (int64_t x = 0; x < W; ++x) {
+            const double gxf = std::clamp((x + 0.5) / cell - 0.5, 0.0, double(gw - 1));
+            const double gyf = std::clamp((y + 0.5) / cell - 0.5, 0.0, double(gh - 1));
+            const int64_t ax = static_cast<int64_t>(gxf), ay = static_cast<int64_t>(gyf);
+            const int64_t bx = std::min(ax + 1, gw - 1), by = std::min(ay + 1, gh - 1);
+            const double fx = gxf - ax, fy = gyf - ay;
+            const double g = std::log(std::max(1e-6f, al[y * W + x]));
+            double sw = 0, s = 0, plain = 0;
+            const int64_t cells[4] = {ay * gw + ax, ay * gw + bx, by * gw + ax, by * gw + bx};
+            const double bil[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+            for (int k = 0; k < 4; ++k) {
+              const double dg = grid_guide[static_cast<size_t>(cells[k])] - g;
+              const double w = bil[k] * std::exp(-dg * dg * inv2r2);
+              sw += w, s += w * fp[cells[k]], plain += bil[k] * fp[cells[k]];
+            }
+            cp[y * W + x] += static_cast<float>(sw > 1e-9 ? s / sw : plain);
+          }
+      });
+    }
   }
   return aligned * torch::exp(correction);
 }

@@ -22,6 +22,7 @@ struct SparsePriorOptions {
   double bandwidth = 0.08;       // residual scale field: coarsest Gaussian kernel width, fraction of the diagonal
   double finest = 0.005;         // finest kernel width; levels halve from bandwidth down to it
   bool cross_validate = true;    // stop refining where held-out prompts stop improving (noisy prompts stay smooth)
+  double depth_range = 0.1;      // > 0: a prompt's weight also falls with the log-depth gap to the pixel (edge-aware)
   void visit(ConfigVisitor& v);
 };
 
