@@ -187,6 +187,34 @@ TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on i
   CHECK((edge_aware > 0).all().item<bool>());
 }
 
+TEST_CASE("prior: a pole narrower than the field's grid keeps its own correction", "[prior]") {
+  const int64_t H = 64, W = 96;
+  // A 2-px pole at 2 m (columns 47-48) before a wall sloping from 5 to 7 m (so no global map in inverse depth fits
+  // both). The one level is 9 px wide and is computed on a 4-px grid whose samples (u = 46, 50) all fall on the
+  // wall, so upsampling the grid alone gives the pole the wall's correction. Monocular depth: pole x1.25, wall x0.8.
+  auto truth = (5.0 + 2.0 * torch::arange(H).to(torch::kFloat32) / H).view({H, 1}).expand({H, W}).contiguous();
+  truth.narrow(1, 47, 2).fill_(2.0f);
+  auto mono = truth * 0.8f;
+  mono.narrow(1, 47, 2).fill_(2.0f * 1.25f);
+  auto prompts = draw_prompts(truth, torch::ones({H, W}), 1500, 0.0, 7);
+  SparsePriorOptions o;
+  o.bandwidth = o.finest = 0.08;
+  o.cross_validate = false;
+  o.depth_range = 0.1;
+  auto d = align_to_prompts(mono, prompts, o);
+  const double pole = ((d - truth).abs() / truth).narrow(1, 47, 2).mean().item<double>();
+  const double wall = ((d - truth).abs() / truth).narrow(1, 0, 40).mean().item<double>();
+  INFO("relative error: pole " << pole << ", wall " << wall);
+  CHECK(pole < 0.05);  // the wall's correction would leave it tens of percent off
+  CHECK(wall < 0.01);
+  // A range so small that its kernel would overflow is refused, naming the key.
+  PriorOptions bad;
+  bad.type = "sparse";
+  bad.sparse.mono = "none";
+  bad.sparse.depth_range = 1e-5;
+  CHECK_THROWS_WITH(make_depth_prior(bad), Catch::Contains("prior.sparse.depth_range (1e-05) must be 0 (off)"));
+}
+
 TEST_CASE("prior: the learned net predicts positive metric depth at the input size", "[prior]") {
   LearnedDepthNet net(8);
   auto d = net->forward(torch::rand({2, 3, 40, 56}));

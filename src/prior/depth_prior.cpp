@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -293,6 +294,9 @@ class SparsePrior final : public DepthPrior {
   explicit SparsePrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded) : o_(o) {
     ISPLAT_CHECK(o.sparse.finest <= o.sparse.bandwidth, "prior.sparse.finest (", o.sparse.finest,
                  ") must not exceed prior.sparse.bandwidth (", o.sparse.bandwidth, ")");
+    // Below 1e-3 the range kernel's 1/(2 range^2) overflows to inf and 0 * inf poisons the fit with NaN.
+    ISPLAT_CHECK(o.sparse.depth_range == 0 || o.sparse.depth_range >= 1e-3, "prior.sparse.depth_range (",
+                 o.sparse.depth_range, ") must be 0 (off) or at least 0.001");
     if (o.sparse.mono == "learned") {
       mono_ = std::make_unique<LearnedPrior>(o, embedded);
     } else if (o.sparse.mono == "torchscript") {
@@ -509,7 +513,7 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   for (int64_t k = 0; k < H * W; ++k) al[k] = static_cast<float>(1.0 / std::max(1e-4, a / std::max(1e-6f, m[k]) + b));
   std::vector<double> logs(P), guide(P);
   for (int64_t i = 0; i < P; ++i) {
-    const double at_prompt = std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1]));
+    const float at_prompt = std::max(1e-6f, bilinear_at(al, H, W, p[3 * i], p[3 * i + 1]));  // float: as before
     logs[i] = std::log(p[3 * i + 2] / at_prompt);
     guide[i] = std::log(at_prompt);
   }
@@ -585,15 +589,27 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
             const int64_t bx = std::min(ax + 1, gw - 1), by = std::min(ay + 1, gh - 1);
             const double fx = gxf - ax, fy = gyf - ay;
             const double g = std::log(std::max(1e-6f, al[y * W + x]));
-            double sw = 0, s = 0, plain = 0;
             const int64_t cells[4] = {ay * gw + ax, ay * gw + bx, by * gw + ax, by * gw + bx};
             const double bil[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+            double e[4], e_min = std::numeric_limits<double>::infinity();
             for (int k = 0; k < 4; ++k) {
               const double dg = grid_guide[static_cast<size_t>(cells[k])] - g;
-              const double w = bil[k] * std::exp(-dg * dg * inv2r2);
-              sw += w, s += w * fp[cells[k]], plain += bil[k] * fp[cells[k]];
+              e[k] = dg * dg * inv2r2;
+              if (bil[k] > 0) e_min = std::min(e_min, e[k]);
             }
-            cp[y * W + x] += static_cast<float>(sw > 1e-9 ? s / sw : plain);
+            // A pixel unlike all four grid points (more than two ranges away: a pole or gap narrower than a
+            // cell) gets the level evaluated at itself, so it keeps its own surface's correction.
+            if (e_min > 2) {
+              cp[y * W + x] += static_cast<float>(kernel.at(x + 0.5, y + 0.5, g));
+              continue;
+            }
+            double sw = 0, s = 0;  // exponents relative to the closest guide, so the weights cannot all underflow
+            for (int k = 0; k < 4; ++k) {
+              if (bil[k] <= 0) continue;
+              const double w = bil[k] * std::exp(e_min - e[k]);
+              sw += w, s += w * fp[cells[k]];
+            }
+            cp[y * W + x] += static_cast<float>(s / sw);
           }
       });
     }
