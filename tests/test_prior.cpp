@@ -5,6 +5,9 @@
 #include <torch/script.h>
 #include <torch/torch.h>
 
+#include <tuple>
+#include <utility>
+
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
@@ -156,15 +159,24 @@ TEST_CASE("prior: sparse alignment refines coarse to fine, and cross-validation 
                                                            "prior.sparse.bandwidth (0.08)"));
 }
 
+// A wall sloping from 5 to 7 m with an object at 2 m over columns [first, first + width). The monocular depth has
+// the right shape but each surface's own scale error (object x1.25, wall x0.8), so no global map in inverse depth
+// fixes both. Returns {truth, mono}.
+namespace {
+std::pair<torch::Tensor, torch::Tensor> wall_and_object(int64_t H, int64_t W, int64_t first, int64_t width) {
+  auto truth = (5.0 + 2.0 * torch::arange(H).to(torch::kFloat32) / H).view({H, 1}).expand({H, W}).contiguous();
+  truth.narrow(1, first, width).fill_(2.0f);
+  auto mono = truth * 0.8f;
+  mono.narrow(1, first, width).fill_(2.0f * 1.25f);
+  return {truth, mono};
+}
+}  // namespace
+
 TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on its own surface", "[prior]") {
   const int64_t H = 64, W = 96;
-  // A box at 2 m in front of a wall sloping from 5 to 7 m (the box covers columns 32..63). The monocular depth
-  // has the right shape but each surface's own scale error (box x1.25, wall x0.8): no global map in inverse
-  // depth fixes both, and a smooth residual field blurs the two corrections across the edges.
-  auto truth = (5.0 + 2.0 * torch::arange(H).to(torch::kFloat32) / H).view({H, 1}).expand({H, W}).contiguous();
-  truth.narrow(1, 32, 32).fill_(2.0f);
-  auto mono = truth * 0.8f;
-  mono.narrow(1, 32, 32).fill_(2.0f * 1.25f);
+  // A box over columns 32..63: a smooth residual field blurs the two corrections across its edges.
+  torch::Tensor truth, mono;
+  std::tie(truth, mono) = wall_and_object(H, W, 32, 32);
   auto prompts = draw_prompts(truth, torch::ones({H, W}), 400, 0.0, 5);
   SparsePriorOptions o;
   o.bandwidth = o.finest = 0.08;  // one level, 9 px wide: the blur reaches well across the edges
@@ -189,13 +201,10 @@ TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on i
 
 TEST_CASE("prior: a pole narrower than the field's grid keeps its own correction", "[prior]") {
   const int64_t H = 64, W = 96;
-  // A 2-px pole at 2 m (columns 47-48) before a wall sloping from 5 to 7 m (so no global map in inverse depth fits
-  // both). The one level is 9 px wide and is computed on a 4-px grid whose samples (u = 46, 50) all fall on the
-  // wall, so upsampling the grid alone gives the pole the wall's correction. Monocular depth: pole x1.25, wall x0.8.
-  auto truth = (5.0 + 2.0 * torch::arange(H).to(torch::kFloat32) / H).view({H, 1}).expand({H, W}).contiguous();
-  truth.narrow(1, 47, 2).fill_(2.0f);
-  auto mono = truth * 0.8f;
-  mono.narrow(1, 47, 2).fill_(2.0f * 1.25f);
+  // A 2-px pole (columns 47-48). The one level is 9 px wide and is computed on a 4-px grid whose samples
+  // (u = 46, 50) all fall on the wall, so upsampling the grid alone gives the pole the wall's correction.
+  torch::Tensor truth, mono;
+  std::tie(truth, mono) = wall_and_object(H, W, 47, 2);
   auto prompts = draw_prompts(truth, torch::ones({H, W}), 1500, 0.0, 7);
   SparsePriorOptions o;
   o.bandwidth = o.finest = 0.08;
