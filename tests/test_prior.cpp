@@ -170,6 +170,15 @@ std::pair<torch::Tensor, torch::Tensor> wall_and_object(int64_t H, int64_t W, in
   mono.narrow(1, first, width).fill_(2.0f * 1.25f);
   return {truth, mono};
 }
+
+// One level 9 px wide (on a 64x96 image), all of it used: the blur reaches well across the object's edges.
+SparsePriorOptions one_level(double depth_range) {
+  SparsePriorOptions o;
+  o.bandwidth = o.finest = 0.08;
+  o.cross_validate = false;
+  o.depth_range = depth_range;
+  return o;
+}
 }  // namespace
 
 TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on its own surface", "[prior]") {
@@ -178,10 +187,7 @@ TEST_CASE("prior: the edge-aware residual field keeps a prompt's correction on i
   torch::Tensor truth, mono;
   std::tie(truth, mono) = wall_and_object(H, W, 32, 32);
   auto prompts = draw_prompts(truth, torch::ones({H, W}), 400, 0.0, 5);
-  SparsePriorOptions o;
-  o.bandwidth = o.finest = 0.08;  // one level, 9 px wide: the blur reaches well across the edges
-  o.cross_validate = false;
-  o.depth_range = 0;
+  SparsePriorOptions o = one_level(0);
   auto band_error = [&](const torch::Tensor& d) {  // mean relative error within 6 px of either edge
     auto err = (d - truth).abs() / truth;
     return torch::cat({err.narrow(1, 26, 12), err.narrow(1, 58, 12)}, 1).mean().item<double>();
@@ -206,11 +212,7 @@ TEST_CASE("prior: a pole narrower than the field's grid keeps its own correction
   torch::Tensor truth, mono;
   std::tie(truth, mono) = wall_and_object(H, W, 47, 2);
   auto prompts = draw_prompts(truth, torch::ones({H, W}), 1500, 0.0, 7);
-  SparsePriorOptions o;
-  o.bandwidth = o.finest = 0.08;
-  o.cross_validate = false;
-  o.depth_range = 0.1;
-  auto d = align_to_prompts(mono, prompts, o);
+  auto d = align_to_prompts(mono, prompts, one_level(0.1));
   const double pole = ((d - truth).abs() / truth).narrow(1, 47, 2).mean().item<double>();
   const double wall = ((d - truth).abs() / truth).narrow(1, 0, 40).mean().item<double>();
   INFO("relative error: pole " << pole << ", wall " << wall);

@@ -552,11 +552,13 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
   std::iota(all.begin(), all.end(), 0);
   std::vector<double> fit(P, 0.0), residual(P);
   auto correction = torch::zeros({H, W});
+  std::vector<double> log_aligned(range > 0 ? static_cast<size_t>(H * W) : 0);  // the pixels' guide, once
+  for (size_t k = 0; k < log_aligned.size(); ++k) log_aligned[k] = std::log(std::max(1e-6f, al[k]));
   for (int64_t l = 0; l < levels; ++l) {
     for (int64_t i = 0; i < P; ++i) residual[i] = logs[i] - fit[i];
     const PromptKernel kernel(p, all, residual, sigmas[l], &guide, range);
     for (int64_t i = 0; i < P; ++i) fit[i] += kernel.at(p[3 * i], p[3 * i + 1], guide[i]);
-    // The level's field on a grid fine enough for its width, upsampled bilinearly.
+    // The level's field on a grid fine enough for its width, upsampled bilinearly (jointly bilateral with a range).
     const int64_t cell = std::clamp<int64_t>(static_cast<int64_t>(sigmas[l] / 2), 1, 8);
     const int64_t gh = (H + cell - 1) / cell, gw = (W + cell - 1) / cell;
     auto field = torch::empty({1, 1, gh, gw});
@@ -588,7 +590,7 @@ torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Ten
             const int64_t ax = static_cast<int64_t>(gxf), ay = static_cast<int64_t>(gyf);
             const int64_t bx = std::min(ax + 1, gw - 1), by = std::min(ay + 1, gh - 1);
             const double fx = gxf - ax, fy = gyf - ay;
-            const double g = std::log(std::max(1e-6f, al[y * W + x]));
+            const double g = log_aligned[static_cast<size_t>(y * W + x)];
             const int64_t cells[4] = {ay * gw + ax, ay * gw + bx, by * gw + ax, by * gw + bx};
             const double bil[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
             double e[4], e_min = std::numeric_limits<double>::infinity();
