@@ -72,6 +72,10 @@ class GaussianTask final : public TrainTask {
       oi.depth =
           transform_points(batch.context_T[b].to(p.gaussians.means.scalar_type()), p.gaussians.means).select(1, 2);
       oi.support_uv = p.supports.uv;
+      if (config_.loss.depth_grad > 0) {
+        oi.render_depth = out.depth, oi.render_alpha = out.alpha;
+        oi.target_depth = batch.target_depth[b], oi.target_valid = batch.target_valid[b];
+      }
       if (views) views->push_back({oi.render.detach(), oi.mask.squeeze(1)});
       for (auto& [k, v] : objective_.terms(oi)) acc[k] = acc[k] + v;
       stats.timings_ms["losses"] += ms_since(t0);
