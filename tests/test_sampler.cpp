@@ -173,6 +173,41 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   CHECK(s.area.sum().item<double>() == Approx(faces.area.sum().item<double>()).epsilon(1e-4));
 }
 
+TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",
+          "[sampler]") {
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);  // the step between columns 31 and 32, as above
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  const Supports edge_only = sample_supports(depth, ones(), K(), image(), o, 2);
+  o.edge_band = 2;
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(s.count() == 4000);
+  const auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
+  const auto on_centre = ((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  // Columns 29..34 (the step's two edge columns widened by 2) and the 3 outer columns and rows of the border
+  // are a band: a pixel-centre support on every one of their pixels ...
+  const int64_t band_pixels = H * (6 + 3 + 3) + 2 * 3 * (W - 12);
+  CHECK(on_centre.sum().item<int64_t>() >= band_pixels);
+  CHECK(on_centre.sum().item<int64_t>() > edge_only.uv.sub(0.5).frac().abs().lt(1e-6).all(1).sum().item<int64_t>());
+  for (double col : {29.5, 30.5, 31.5, 32.5, 33.5, 34.5})
+    CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == H);
+  // ... and no face support inside it: faces stop at the band's pixel centres.
+  const auto face = ~on_centre;
+  CHECK((face & (u > 29.5 + 1e-4) & (u < 34.5 - 1e-4)).sum().item<int64_t>() == 0);
+  CHECK((face & ((v < 2.5 - 1e-4) | (v > H - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
+  CHECK((face & ((u < 2.5 - 1e-4) | (u > W - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
+  // The represented area is still the surface's, once.
+  CHECK(s.area.sum().item<double>() == Approx(edge_only.area.sum().item<double>()).epsilon(1e-4));
+  // A budget smaller than twice the band spreads the band's supports over all of it, not just its first rows.
+  o.budget = 600;
+  const Supports few = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(few.count() == 600);
+  const auto few_centre = ((few.uv - 0.5 - (few.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  CHECK(few_centre.sum().item<int64_t>() == 300);
+  CHECK((few.uv.select(1, 1).masked_select(few_centre) > H - 3).any().item<bool>());
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

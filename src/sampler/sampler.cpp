@@ -56,6 +56,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.field("edge_supports", edge_supports,
           "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
           "triangle surrounds it and faces leave a half-pixel gap), taken from the budget");
+  v.field("edge_band", edge_band,
+          "area mode with edge_supports: pixels within this many pixels of a depth edge, hole or border get a "
+          "pixel-centre support too and triangles wholly inside the band get none (silhouettes on pixel rays, "
+          "area sampling elsewhere); 0 = the edge pixels only",
+          Range::between(0, 16));
+  v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -383,6 +389,50 @@ std::vector<int64_t> edge_pixels(const Grid& g, const std::vector<float>& area) 
   return out;
 }
 
+// The edge pixels widened by `band` pixels (Chebyshev) over valid pixels, row-major; the triangles whose three
+// vertices all lie in the band get area 0, so faces leave the band to its pixel supports.
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band) {
+  const std::vector<int64_t> edges = edge_pixels(g, area);
+  if (band <= 0) return edges;
+  const int64_t H = g.H, W = g.W, Wq = W - 1;
+  std::vector<uint8_t> in(static_cast<size_t>(H * W), 0), rows(static_cast<size_t>(H * W), 0);
+  for (int64_t p : edges) in[p] = 1;
+  for (int64_t i = 0; i < H; ++i)  // dilate along rows, then along columns
+    for (int64_t j = 0; j < W; ++j)
+      if (in[i * W + j])
+        for (int64_t b = std::max<int64_t>(0, j - band); b <= std::min(W - 1, j + band); ++b) rows[i * W + b] = 1;
+  std::fill(in.begin(), in.end(), 0);
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j)
+      if (rows[i * W + j])
+        for (int64_t a = std::max<int64_t>(0, i - band); a <= std::min(H - 1, i + band); ++a) in[a * W + j] = 1;
+  std::vector<int64_t> out;
+  for (int64_t p = 0; p < H * W; ++p)
+    if (in[p] && g.valid[p] != 0.0f) out.push_back(p);
+  std::vector<float> faces = area;
+  bool any_face = false;
+  for (int64_t i = 0; i + 1 < H; ++i)
+    for (int64_t j = 0; j < Wq; ++j)
+      for (int t = 0; t < 2; ++t) {
+        int64_t r[3], c[3];
+        triangle_pixels(i, j, t, r, c);
+        float& a = faces[(i * Wq + j) * 2 + t];
+        if (in[r[0] * W + c[0]] && in[r[1] * W + c[1]] && in[r[2] * W + c[2]]) a = 0.0f;
+        any_face |= a > 0;
+      }
+  if (any_face) area = std::move(faces);  // a band over the whole image leaves the faces as they were
+  return out;
+}
+
+// `count` of the pixels, spread evenly over the list (all of them when count equals its size).
+std::vector<int64_t> spread(const std::vector<int64_t>& pixels, int64_t count) {
+  const int64_t size = static_cast<int64_t>(pixels.size());
+  if (count >= size) return pixels;
+  std::vector<int64_t> out(static_cast<size_t>(count));
+  for (int64_t k = 0; k < count; ++k) out[k] = pixels[static_cast<size_t>(k * size / count)];
+  return out;
+}
+
 }  // namespace
 
 namespace {
@@ -507,14 +557,17 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     const Output o = pointers(s);
     std::vector<float> area = triangle_areas(g);
     int64_t ne = 0;
+    double total = 0;
+    for (float a : area) total += a;  // the whole surface, before a band takes triangles from the faces
     if (options.edge_supports) {
-      const std::vector<int64_t> edges = edge_pixels(g, area);
+      const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
-      write_pixel_supports(g, o, edges, ne);
+      write_pixel_supports(g, o, spread(edges, ne), ne);
     }
-    const double total = sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
-                                      options.image_share, options.placement == "centroid");
-    if (ne > 0) rescale_areas(s, total);
+    const double face_total =
+        sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
+                     options.image_share, options.placement == "centroid");
+    if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

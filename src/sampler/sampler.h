@@ -33,6 +33,10 @@ struct SamplerOptions {
   // area mode: one support at the centre of every valid pixel that no accepted triangle surrounds (depth
   // edges, holes, the image border), taken from the budget; faces get the rest.
   bool edge_supports = false;
+  // With edge_supports: valid pixels within this many pixels (Chebyshev) of an edge pixel get a pixel-centre
+  // support too, and triangles wholly inside that band get none, so silhouettes sit on pixel rays as in pixel
+  // mode while surfaces keep area sampling. 0 = only the edge pixels themselves.
+  int64_t edge_band = 0;
   void visit(ConfigVisitor& v);
 };
 
