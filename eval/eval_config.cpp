@@ -137,6 +137,10 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           Range::between(0, 64));
   v.field("baseline_step", baseline_step, "metres per group of the finer baseline breakdown (report and baseline.png)",
           Range::between(0.01, 100.0));
+  v.field("crack_edge_margin", crack_edge_margin,
+          "cracks skip neighbour pairs within this many pixels of a reference depth edge, so they count tears in "
+          "surfaces, not silhouettes drawn a pixel or two off (0 = every smooth pair, the default measure)",
+          Range::between(0, 16));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

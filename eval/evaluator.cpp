@@ -146,9 +146,11 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
 // the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
 // a fingerprint (older runs) adopts the current checkpoint's.
-static void check_method_stamp(const std::string& results, const MethodOptions& mo) {
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, int64_t crack_edge_margin) {
   nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
   now.erase("name");
+  // Only when set, so folders scored before the option existed keep their stamps.
+  if (crack_edge_margin > 0) now["scoring.crack_edge_margin"] = crack_edge_margin;
   if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
   const std::string stamp = results + ".method.json";
@@ -240,7 +242,9 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
     r.hole_rate = hole_rate(o.alpha, mask);
     if (tgt.valid.defined() && tgt.valid.sum().item<double>() > 0) {
       const auto ref = tgt.depth * (tgt.valid > 0);
-      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask);
+      StabilityOptions so;
+      so.edge_margin = config_.scoring.crack_edge_margin;
+      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, so);
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
   }
@@ -253,7 +257,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
   const bool has_depth = dataset_has_depth(sequences);
-  check_method_stamp(results_path(d, mo.name), mo);
+  check_method_stamp(results_path(d, mo.name), mo, config_.scoring.crack_edge_margin);
   ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
@@ -354,6 +358,9 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     notes_.push_back(cat("only the first ", config_.scoring.max_per_bin,
                          " pairs of each bin were scored "
                          "(scoring.max_per_bin); the full protocol scores every pair of the manifest"));
+  if (config_.scoring.crack_edge_margin > 0)
+    notes_.push_back(cat("cracks skip neighbour pairs within ", config_.scoring.crack_edge_margin,
+                         " px of a reference depth edge (scoring.crack_edge_margin): tears in surfaces only"));
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto& ds = config_.datasets[d];
     const auto sequences = load_eval_dataset(ds);

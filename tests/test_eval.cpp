@@ -543,6 +543,10 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
     changed.methods.back().sweep_values = {0.8};
     changed.methods.back().perturb.exposure = 1.5;
     CHECK_THROWS_WITH(Evaluator(changed).run(), Catch::Contains("was scored with other options"));
+    // ... and so is another crack definition: scores with and without an edge margin never mix.
+    EvalConfig margin = c;
+    margin.scoring.crack_edge_margin = 2;
+    CHECK_THROWS_WITH(Evaluator(margin).run(), Catch::Contains("scoring.crack_edge_margin"));
   }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));

@@ -142,6 +142,22 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   CHECK(crack_rate(depth, opaque, ref_edge, full) == 0.0);
   // Holes are not cracks.
   CHECK(std::isnan(crack_rate(depth, torch::zeros({1, H, W}), ref, full)));
+
+  // A silhouette drawn one pixel off: the reference steps at 4|5, the render at 5|6. Without a margin the
+  // misplaced step is a crack on every row; with edge_margin 2 the pairs near the reference edge are skipped,
+  // and a tear in the middle of a surface, far from that edge, still counts.
+  auto shifted = torch::full({1, H, W}, 2.0);
+  shifted.narrow(2, 6, 4).fill_(3.0);
+  CHECK(crack_rate(shifted, opaque, ref_edge, full) == Approx(10.0 / 170.0));  // 10 of 80 + 90 smooth pairs
+  StabilityOptions margin;
+  margin.edge_margin = 2;
+  CHECK(crack_rate(shifted, opaque, ref_edge, full, margin) == 0.0);
+  auto torn = shifted.clone();
+  torn.narrow(1, 0, 1).narrow(2, 0, 2).fill_(2.5);  // row 0, columns 0..1: left of the band (columns 2..7)
+  // Counted pairs: columns 0..1 and 8..9 only (0|1 and 8|9 on 10 rows, 9 down pairs in 4 columns: 20 + 36 = 56); the
+  // tear breaks the two down pairs below it.
+  CHECK(crack_rate(torn, opaque, ref_edge, full, margin) == Approx(2.0 / 56.0));
+  CHECK_THROWS_AS(crack_rate(shifted, opaque, ref_edge, torch::ones({H, W + 1}), margin), Error);
 }
 
 TEST_CASE("stability: normal incoherence is 0 on a coherent plane and the tilt on a checkerboard", "[metrics]") {

@@ -21,6 +21,32 @@ torch::Tensor plane(const torch::Tensor& t, int64_t H, int64_t W, const char* na
   return t.detach().reshape({H, W}).to(torch::kFloat64).contiguous();
 }
 
+// Pixels within `margin` (Chebyshev) of a reference depth edge: a neighbour pair that jumps by >= jump·z, or
+// pairs a valid with an invalid pixel. Empty when margin is 0.
+std::vector<uint8_t> near_reference_edge(const double* ref, int64_t H, int64_t W, double jump, int64_t margin) {
+  if (margin <= 0) return {};
+  auto ok = [&](int64_t p) { return std::isfinite(ref[p]) && ref[p] > 0; };
+  std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0), rows(edge.size(), 0), out(edge.size(), 0);
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      const int64_t p = i * W + j;
+      for (const int64_t q : {j + 1 < W ? p + 1 : -1, i + 1 < H ? p + W : -1}) {
+        if (q < 0) continue;
+        if (ok(p) != ok(q) || (ok(p) && std::abs(ref[p] - ref[q]) >= jump * 0.5 * (ref[p] + ref[q])))
+          edge[p] = edge[q] = 1;
+      }
+    }
+  for (int64_t i = 0; i < H; ++i)  // dilate along rows, then along columns
+    for (int64_t j = 0; j < W; ++j)
+      if (edge[i * W + j])
+        for (int64_t b = std::max<int64_t>(0, j - margin); b <= std::min(W - 1, j + margin); ++b) rows[i * W + b] = 1;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j)
+      if (rows[i * W + j])
+        for (int64_t a = std::max<int64_t>(0, i - margin); a <= std::min(H - 1, i + margin); ++a) out[a * W + j] = 1;
+  return out;
+}
+
 }  // namespace
 
 double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const StabilityOptions& o) {
@@ -43,6 +69,7 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
   const double *pd = ds.data_ptr<double>(), *pa = a.data_ptr<double>(), *pr = r.data_ptr<double>(),
                *pm = m.data_ptr<double>();
   auto usable = [&](int64_t p) { return pm[p] != 0 && pa[p] >= o.hole_alpha && std::isfinite(pr[p]) && pr[p] > 0; };
+  const std::vector<uint8_t> near_edge = near_reference_edge(pr, H, W, o.crack_jump, o.edge_margin);
   int64_t pairs = 0, cracks = 0;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
@@ -52,6 +79,7 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
         if (q < 0 || !usable(q)) continue;
         const double zr = 0.5 * (pr[p] + pr[q]);
         if (std::abs(pr[p] - pr[q]) >= o.smooth_jump * zr) continue;  // the reference itself has an edge
+        if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
         ++pairs;
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
         cracks += std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq);

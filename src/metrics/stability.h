@@ -10,6 +10,7 @@ struct StabilityOptions {
   double crack_jump = 0.05;   // rendered depth jump between neighbours, relative to depth, that makes a crack
   double smooth_jump = 0.01;  // ... where the reference depth changes by less than this (relative)
   double planar_deg = 2.0;    // reference normals of neighbours within this angle mark a planar surface
+  int64_t edge_margin = 0;    // crack_rate skips pairs within this many pixels of a reference depth edge
 };
 
 // Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
@@ -19,7 +20,9 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // Share of masked neighbour pairs (right and down) where the rendered depth (depth_sum / alpha, both
 // rendered) jumps by more than crack_jump·z while the reference depth (ref_depth [H,W], valid where > 0 and
 // finite) changes by less than smooth_jump·z; pairs where either pixel is a hole are not counted (hole_rate
-// counts them). NaN when no pair qualifies.
+// counts them). With edge_margin > 0, pairs with a pixel within that many pixels (Chebyshev) of a reference
+// depth edge (a neighbour jump >= crack_jump·z, or valid next to invalid) are skipped too: what remains are
+// cracks in surfaces, not silhouettes drawn a pixel or two off. NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 
