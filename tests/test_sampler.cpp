@@ -115,6 +115,33 @@ TEST_CASE("sampler: image_share moves supports toward an even spread per pixel a
   CHECK(e.area.masked_select(near).mean().item<double>() < 0.5 * e.area.masked_select(far).mean().item<double>());
 }
 
+TEST_CASE("sampler: pixel_floor lifts the sparse (near) strips to an even share and leaves denser ones by area",
+          "[sampler]") {
+  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto z_row = 1.0 / (1.0 - 0.9 * (u - cx) / fx);  // the slanted plane above: far columns cover more area
+  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  SamplerOptions area_only = fixed(20000), floored = fixed(20000);
+  floored.pixel_floor = 1.0;
+  const Supports a = sample_supports(depth, ones(), K(), image(), area_only, 3);
+  const Supports f = sample_supports(depth, ones(), K(), image(), floored, 3);
+  REQUIRE(f.count() == 20000);
+  const auto ha = column_histogram(a, 4), hf = column_histogram(f, 4);
+  REQUIRE(ha[0] < 0.25 * 20000);  // by area alone the near strip gets less than its share of the image ...
+  CHECK(hf[0] > ha[0]);           // ... the floor lifts it ...
+  CHECK(hf[3] < ha[3]);           // ... from the far strip, which still gets the most
+  CHECK(hf[3] > hf[0]);
+  // Near triangles draw exactly the even share (a quarter of the unfloored total per strip) and far ones their
+  // area, so near / far = (total / 4) / far area = 0.25 n / (far count by area alone).
+  CHECK(hf[0] / hf[3] == Approx(0.25 * 20000 / ha[3]).epsilon(0.05));
+  CHECK(f.area.sum().item<double>() == Approx(a.area.sum().item<double>()).epsilon(1e-3));
+  // A floor at or below what image_share already gives changes nothing.
+  SamplerOptions half = fixed(20000), half_floor = fixed(20000);
+  half.image_share = half_floor.image_share = 0.5;
+  half_floor.pixel_floor = 0.5;
+  CHECK(torch::equal(sample_supports(depth, ones(), K(), image(), half, 3).uv,
+                     sample_supports(depth, ones(), K(), image(), half_floor, 3).uv));
+}
+
 TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear blends", "[sampler]") {
   // A checkerboard of 0 and 1: bilinear reads between centres give values strictly inside (0, 1).
   auto img = ((torch::arange(H).view({H, 1}) + torch::arange(W).view({1, W})) % 2).to(torch::kFloat32);
@@ -146,6 +173,24 @@ TEST_CASE("sampler: placement = centroid puts a triangle's single support at its
   const Supports r = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), image(), fixed(s.count()), 9);
   auto fr = r.uv - 0.5 - (r.uv - 0.5).floor();
   CHECK(((fr - 1.0 / 3).abs().lt(1e-3).all(1)).sum().item<int64_t>() < s.count() / 10);
+}
+
+TEST_CASE("sampler: placement = vertex keeps area-proportional counts on pixel centres", "[sampler]") {
+  // A slanted plane: depth grows with the column, so the right half has more 3D area per pixel.
+  auto depth = (torch::arange(W, torch::kFloat32) * 0.05f + 1.0f).view({1, W}).expand({H, W}).contiguous();
+  SamplerOptions o = fixed(3000);
+  o.placement = "vertex";
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 4);
+  REQUIRE(s.count() == 3000);
+  // Every support sits on a pixel centre and reads that pixel's depth exactly.
+  CHECK(((s.uv - 0.5 - (s.uv - 0.5).round()).abs().lt(1e-6)).all().item<bool>());
+  const auto col = (s.uv.select(1, 0) - 0.5).round().to(torch::kLong);
+  CHECK(torch::allclose(s.depth, depth[0].index_select(0, col), 1e-6, 1e-6));
+  // Counts still follow area: the same columns as random placement get them, to within a triangle's reach.
+  const Supports r = sample_supports(depth, ones(), K(), image(), fixed(3000), 4);
+  const auto hv = column_histogram(s, 4), hr = column_histogram(r, 4);
+  CHECK(hv[3] > 1.5 * hv[0]);
+  for (int b = 0; b < 4; ++b) CHECK(std::abs(hv[b] - hr[b]) < 0.05 * 3000);
 }
 
 TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth step and the border", "[sampler]") {

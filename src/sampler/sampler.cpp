@@ -45,14 +45,20 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area mode: share of supports spread evenly per image pixel instead of by 3D area (0 = the paper's "
           "area sampling; near surfaces get more supports as it grows)",
           Range::unit());
+  v.field("pixel_floor", pixel_floor,
+          "area mode: no accepted triangle draws supports below this share of an even per-pixel spread (applied "
+          "after image_share), so near surfaces keep at least that density; the rest still follows area (0 = off)",
+          Range::between(0.0, 4.0));
   v.field("color", color,
           "how a support reads its colour: bilinear between the 4 nearest pixels (smooths texture when supports "
           "fall between pixel centres) or the pixel it falls in",
           {"bilinear", "nearest"});
   v.field("placement", placement,
           "area mode: a triangle's supports follow a low-discrepancy sequence from a random start (random) or from "
-          "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular)",
-          {"random", "centroid"});
+          "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular), or each "
+          "random point moves to the triangle's nearest vertex (vertex: counts follow area, positions are pixel "
+          "centres as in pixel mode; supports may share a pixel)",
+          {"random", "centroid", "vertex"});
   v.field("edge_supports", edge_supports,
           "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
           "triangle surrounds it and faces leave a half-pixel gap), taken from the budget");
@@ -208,7 +214,8 @@ std::vector<float> triangle_areas(const Grid& g) {
 // proportional to that weight. `image_share`: that share of the measure is spread evenly over the accepted
 // triangles instead.
 double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false) {
+                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false, bool vertex = false,
+                    double pixel_floor = 0.0) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
   for_each_row(Hq, [&](int64_t i) {
@@ -225,7 +232,7 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
   double total_w = total;
   // The allocation's measure differs from the area: keep the area, each support's share is computed from both.
   std::vector<float> raw;
-  if (weight != nullptr || image_share > 0) raw = area;
+  if (weight != nullptr || image_share > 0 || pixel_floor > 0) raw = area;
   if (weight != nullptr) {
     for_each_row(Hq, [&](int64_t i) {
       double s = 0;
@@ -239,8 +246,9 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
     });
     total_w = row_offsets(row_sum, 0.0)[Hq];
   }
-  if (image_share > 0) {
-    // measure = (1 - share) * measure + share * (total / accepted triangles): the total is unchanged.
+  if (image_share > 0 || pixel_floor > 0) {
+    // measure = (1 - share) * measure + share * (total / accepted triangles): the total is unchanged. Then
+    // the floor: no triangle's measure below pixel_floor * that even share (the total grows).
     int64_t accepted = 0;
     for (float a : area) accepted += a > 0;
     const double even = total_w / static_cast<double>(accepted);
@@ -248,7 +256,7 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
       double s = 0;
       for (int64_t q = i * Wq * 2; q < (i + 1) * Wq * 2; ++q) {
         float& a = area[q];
-        if (a > 0) a = static_cast<float>((1.0 - image_share) * a + image_share * even);
+        if (a > 0) a = static_cast<float>(std::max((1.0 - image_share) * a + image_share * even, pixel_floor * even));
         s += a;
       }
       row_sum[i] = s;
@@ -315,6 +323,13 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
           b1 -= std::floor(b1);
           b2 -= std::floor(b2);
           if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
+          if (vertex) {  // the triangle's vertex nearest the point: a pixel centre, on its pixel's ray
+            const double b0 = 1.0 - b1 - b2;
+            const bool first = b0 >= b1 && b0 >= b2;
+            const double n1 = !first && b1 >= b2 ? 1.0 : 0.0;
+            b2 = !first && b1 < b2 ? 1.0 : 0.0;
+            b1 = n1;
+          }
           const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
           const double v = r[0] + 0.5 + b1 * (r[1] - r[0]) + b2 * (r[2] - r[0]);
           float z;
@@ -564,9 +579,9 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       write_pixel_supports(g, o, spread(edges, ne), ne);
     }
-    const double face_total =
-        sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
-                     options.image_share, options.placement == "centroid");
+    const double face_total = sample_faces(
+        g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(), options.image_share,
+        options.placement == "centroid", options.placement == "vertex", options.pixel_floor);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
     return s;
   }

@@ -28,8 +28,10 @@ struct SamplerOptions {
   // area mode: share of the budget spread evenly over the image's accepted triangles (each pixel alike)
   // instead of by 3D area, so near surfaces, whose pixels cover little area, are not starved. 0 = paper.
   double image_share = 0.0;
+  // area mode: a floor under each triangle's measure, as a share of the even per-pixel spread (0 = off).
+  double pixel_floor = 0.0;
   std::string color = "bilinear";    // bilinear | nearest: how a support off a pixel centre reads its colour
-  std::string placement = "random";  // random | centroid: where a triangle's supports sit inside it
+  std::string placement = "random";  // random | centroid | vertex: where a triangle's supports sit in it
   // area mode: one support at the centre of every valid pixel that no accepted triangle surrounds (depth
   // edges, holes, the image border), taken from the budget; faces get the rest.
   bool edge_supports = false;
