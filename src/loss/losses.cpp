@@ -25,8 +25,8 @@ void LossOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("depth_grad", depth_grad,
           "weight of the rendered-depth gradient term: in each target, neighbour log-depth differences match the "
-          "reference depth's where that is smooth (fewer cracks on slanted surfaces; needs target depth; not in "
-          "the paper; 0 = off)",
+          "reference depth's where that is smooth (aimed at cracks, which it did not lower at weights 1-50: "
+          "docs/results/2026-11-25-cracks-edges.md; needs target depth; not in the paper; 0 = off)",
           Range::at_least(0));
   v.field("depth_grad_edge", depth_grad_edge,
           "depth_grad skips neighbour pairs whose reference depth changes by this share or more (depth edges)",
