@@ -185,6 +185,18 @@ TEST_CASE("losses: the depth-gradient term sees steps on smooth reference surfac
     CHECK(depth_gradient_loss(depth.detach() * (which == 0 ? a : alpha), a, ref, v, m, 0.05).item<double>() ==
           Approx(0.0).margin(1e-12));
   }
+  // A non-finite reference outside the valid pixels reaches neither the loss nor its gradient.
+  {
+    auto bad = ref.clone();
+    auto v = valid.clone();
+    bad[0][0][0] = std::numeric_limits<double>::quiet_NaN();
+    v[0][0][0] = 0;
+    auto d = depth.detach().clone().requires_grad_(true);
+    const auto lb = depth_gradient_loss(d, alpha, bad, v, mask, 0.05);
+    lb.backward();
+    CHECK(std::isfinite(lb.item<double>()));
+    CHECK(torch::isfinite(d.grad()).all().item<bool>());
+  }
   // Rendered depth is a sum: the term divides by alpha, so a half-transparent but right surface is no step.
   auto half = alpha.clone();
   half[0][0][0][0] = 0.6;

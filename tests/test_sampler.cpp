@@ -244,10 +244,14 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   CHECK((face & ((u < 2.5 - 1e-4) | (u > W - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
   // The represented area is still the surface's, once.
   CHECK(s.area.sum().item<double>() == Approx(edge_only.area.sum().item<double>()).epsilon(1e-4));
-  // A budget smaller than twice the band spreads the band's supports over all of it, not just its first rows.
+  // A band that half the budget cannot cover would leave pixels with no support at all, so the sampler falls
+  // back to the edge pixels alone; those, over budget too, are spread over the whole list, not its first rows.
   o.budget = 600;
   const Supports few = sample_supports(depth, ones(), K(), image(), o, 2);
   REQUIRE(few.count() == 600);
+  SamplerOptions no_band = o;
+  no_band.edge_band = 0;
+  CHECK(torch::equal(few.uv, sample_supports(depth, ones(), K(), image(), no_band, 2).uv));
   const auto few_centre = ((few.uv - 0.5 - (few.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
   CHECK(few_centre.sum().item<int64_t>() == 300);
   CHECK((few.uv.select(1, 1).masked_select(few_centre) > H - 3).any().item<bool>());

@@ -163,7 +163,9 @@ torch::Tensor depth_gradient_loss(const torch::Tensor& depth_sum, const torch::T
     auto hi = [&](const torch::Tensor& t) { return t.narrow(dim, 1, n); };
     const auto smooth = (hi(r) - lo(r)).abs() < edge * 0.5 * (hi(r) + lo(r));
     const auto pair = (lo(usable) & hi(usable) & smooth).to(depth_sum.scalar_type());
-    sum = sum + (((hi(log_z) - lo(log_z)) - (hi(log_r) - lo(log_r))).abs() * pair).sum();
+    // where(), not a product: a non-finite value outside the pairs must not reach the sum or its gradient.
+    const auto diff = ((hi(log_z) - lo(log_z)) - (hi(log_r) - lo(log_r))).abs();
+    sum = sum + torch::where(pair > 0, diff, torch::zeros_like(diff)).sum();
     count = count + pair.sum();
   }
   return sum / torch::clamp_min(count, 1.0);

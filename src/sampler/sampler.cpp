@@ -56,8 +56,8 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.field("placement", placement,
           "area mode: a triangle's supports follow a low-discrepancy sequence from a random start (random) or from "
           "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular), or each "
-          "random point moves to the triangle's nearest vertex (vertex: counts follow area, positions are pixel "
-          "centres as in pixel mode; supports may share a pixel)",
+          "random point moves to the triangle's vertex with the largest barycentric weight (vertex: counts follow "
+          "area, positions are pixel centres as in pixel mode; supports may share a pixel)",
           {"random", "centroid", "vertex"});
   v.field("edge_supports", edge_supports,
           "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
@@ -323,11 +323,11 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
           b1 -= std::floor(b1);
           b2 -= std::floor(b2);
           if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
-          if (vertex) {  // the triangle's vertex nearest the point: a pixel centre, on its pixel's ray
+          if (vertex) {  // the vertex with the largest barycentric weight (a third of the triangle each)
             const double b0 = 1.0 - b1 - b2;
-            const bool first = b0 >= b1 && b0 >= b2;
-            const double n1 = !first && b1 >= b2 ? 1.0 : 0.0;
-            b2 = !first && b1 < b2 ? 1.0 : 0.0;
+            const bool at_v0 = b0 >= b1 && b0 >= b2;
+            const double n1 = !at_v0 && b1 >= b2 ? 1.0 : 0.0;
+            b2 = !at_v0 && b1 < b2 ? 1.0 : 0.0;
             b1 = n1;
           }
           const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
@@ -405,8 +405,9 @@ std::vector<int64_t> edge_pixels(const Grid& g, const std::vector<float>& area) 
 }
 
 // The edge pixels widened by `band` pixels (Chebyshev) over valid pixels, row-major; the triangles whose three
-// vertices all lie in the band get area 0, so faces leave the band to its pixel supports.
-std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band) {
+// vertices all lie in the band get area 0, so faces leave the band to its pixel supports. A band of more than
+// `max_pixels` would leave band pixels with neither kind of support, so the edge pixels alone are returned then.
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, int64_t max_pixels) {
   const std::vector<int64_t> edges = edge_pixels(g, area);
   if (band <= 0) return edges;
   const int64_t H = g.H, W = g.W, Wq = W - 1;
@@ -424,6 +425,7 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
   std::vector<int64_t> out;
   for (int64_t p = 0; p < H * W; ++p)
     if (in[p] && g.valid[p] != 0.0f) out.push_back(p);
+  if (static_cast<int64_t>(out.size()) > max_pixels) return edges;
   std::vector<float> faces = area;
   bool any_face = false;
   for (int64_t i = 0; i + 1 < H; ++i)
@@ -575,7 +577,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     double total = 0;
     for (float a : area) total += a;  // the whole surface, before a band takes triangles from the faces
     if (options.edge_supports) {
-      const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band);
+      const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       write_pixel_supports(g, o, spread(edges, ne), ne);
     }
