@@ -105,6 +105,9 @@ std::string Evaluator::results_path(size_t d, const std::string& method) const {
   return (fs::path(dataset_dir(d)) / ("results_" + safe_name(method) + shard + ".jsonl")).string();
 }
 
+// Refuses results scored with other method options (or another crack definition) than the config gives now.
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, int64_t crack_edge_margin);
+
 std::vector<ReportRow> Evaluator::merge(int64_t count) {
   ISPLAT_CHECK(count >= 1, "eval: --merge needs the shard count");
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
@@ -121,6 +124,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         const std::string path = results_path(d, mo.name);
         ISPLAT_CHECK(fs::exists(path), "eval --merge: shard ", k, "/", count, " has no results for ", ds.name, " / ",
                      mo.name, " (", path, ")");
+        check_method_stamp(path, mo, config_.scoring.crack_edge_margin);  // scored as this config says
         const ResultsLog shard(path);
         for (int64_t i : select_pairs(m)) {
           auto it = shard.done().find(i);
@@ -130,6 +134,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         }
       }
       set_shard(0, 1);
+      check_method_stamp(results_path(d, mo.name), mo, config_.scoring.crack_edge_margin);
       ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.name, ": ", merged.size(),
                    " pairs from the shards, the manifest selects ", all.size());
       // Rewritten whole, in manifest order, so the merged file equals an unsharded run's.

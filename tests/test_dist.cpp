@@ -155,6 +155,9 @@ TEST_CASE("eval: 3 shards merged give the unsharded reports (timings aside)", "[
   }
   CHECK_FALSE(fs::exists(s.scoring.out + "/report.md"));                                  // shards write no report
   CHECK_THROWS_WITH(Evaluator(s).merge(4), Catch::Contains("shard 0/4 has no results"));  // only 3 were run
+  EvalConfig other = s;  // merging under another crack definition than the shards were scored with is refused
+  other.scoring.crack_edge_margin = 2;
+  CHECK_THROWS_WITH(Evaluator(other).merge(3), Catch::Contains("scored with other options"));
   Evaluator(s).merge(3);
   // The reports agree once the timing columns are dropped.
   auto strip = [](const std::string& path) {
