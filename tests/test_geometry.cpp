@@ -1,5 +1,5 @@
 // Geometry: projection round trips, pose converters on hand-computed cases, Hypersim tilt-shift RQ,
-// and image/intrinsics resizing.
+// image/intrinsics resizing, and byte-mask dilation.
 #include <catch2/catch.hpp>
 
 #include <torch/torch.h>
@@ -10,6 +10,7 @@
 #include "geometry/camera_torch.h"
 #include "geometry/convert.h"
 #include "geometry/image_ops.h"
+#include "geometry/pixel_mask.h"
 
 using namespace isplat;
 
@@ -189,4 +190,23 @@ TEST_CASE("geometry: resizing and cropping keep projections consistent", "[geome
   CHECK(cropped.size(2) == 16);
   CHECK(Kc[0][2].item<double>() == Approx(28.0));
   CHECK_THROWS_WITH(crop_with_K(img, make_K(1, 1, 0, 0), 60, 0, 16, 10), Catch::Contains("outside"));
+}
+
+TEST_CASE("pixel mask: square dilation grows a pixel to a (2r+1)^2 block, clipped at the border", "[geometry]") {
+  const int64_t H = 6, W = 7;
+  std::vector<uint8_t> m(H * W, 0);
+  m[2 * W + 3] = 1;  // one pixel inside
+  m[0] = 1;          // one in the corner
+  const auto d = dilate_square(m, H, W, 1);
+  int64_t set = 0;
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      const bool near_inner = std::abs(i - 2) <= 1 && std::abs(j - 3) <= 1, near_corner = i <= 1 && j <= 1;
+      CHECK(d[i * W + j] == (near_inner || near_corner ? 1 : 0));
+      set += d[i * W + j];
+    }
+  CHECK(set == 9 + 4);
+  CHECK(dilate_square(m, H, W, 0) == m);
+  CHECK(dilate_square(m, H, W, 10) == std::vector<uint8_t>(H * W, 1));
+  CHECK_THROWS_WITH(dilate_square(m, H, W + 1, 1), Catch::Contains("dilate_square"));
 }

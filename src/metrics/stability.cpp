@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "geometry/pixel_mask.h"
 
 namespace isplat {
 namespace {
@@ -26,7 +27,7 @@ torch::Tensor plane(const torch::Tensor& t, int64_t H, int64_t W, const char* na
 std::vector<uint8_t> near_reference_edge(const double* ref, int64_t H, int64_t W, double jump, int64_t margin) {
   if (margin <= 0) return {};
   auto ok = [&](int64_t p) { return std::isfinite(ref[p]) && ref[p] > 0; };
-  std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0), rows(edge.size(), 0), out(edge.size(), 0);
+  std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0);
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
       const int64_t p = i * W + j;
@@ -36,15 +37,7 @@ std::vector<uint8_t> near_reference_edge(const double* ref, int64_t H, int64_t W
           edge[p] = edge[q] = 1;
       }
     }
-  for (int64_t i = 0; i < H; ++i)  // dilate along rows, then along columns
-    for (int64_t j = 0; j < W; ++j)
-      if (edge[i * W + j])
-        for (int64_t b = std::max<int64_t>(0, j - margin); b <= std::min(W - 1, j + margin); ++b) rows[i * W + b] = 1;
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 0; j < W; ++j)
-      if (rows[i * W + j])
-        for (int64_t a = std::max<int64_t>(0, i - margin); a <= std::min(H - 1, i + margin); ++a) out[a * W + j] = 1;
-  return out;
+  return dilate_square(edge, H, W, margin);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "geometry/bilinear.h"
 #include "geometry/camera_torch.h"
+#include "geometry/pixel_mask.h"
 
 namespace isplat {
 
@@ -411,17 +412,9 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
   const std::vector<int64_t> edges = edge_pixels(g, area);
   if (band <= 0) return edges;
   const int64_t H = g.H, W = g.W, Wq = W - 1;
-  std::vector<uint8_t> in(static_cast<size_t>(H * W), 0), rows(static_cast<size_t>(H * W), 0);
-  for (int64_t p : edges) in[p] = 1;
-  for (int64_t i = 0; i < H; ++i)  // dilate along rows, then along columns
-    for (int64_t j = 0; j < W; ++j)
-      if (in[i * W + j])
-        for (int64_t b = std::max<int64_t>(0, j - band); b <= std::min(W - 1, j + band); ++b) rows[i * W + b] = 1;
-  std::fill(in.begin(), in.end(), 0);
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 0; j < W; ++j)
-      if (rows[i * W + j])
-        for (int64_t a = std::max<int64_t>(0, i - band); a <= std::min(H - 1, i + band); ++a) in[a * W + j] = 1;
+  std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0);
+  for (int64_t p : edges) edge[p] = 1;
+  const std::vector<uint8_t> in = dilate_square(edge, H, W, band);
   std::vector<int64_t> out;
   for (int64_t p = 0; p < H * W; ++p)
     if (in[p] && g.valid[p] != 0.0f) out.push_back(p);
