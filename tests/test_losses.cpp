@@ -234,3 +234,35 @@ TEST_CASE("losses: the objective adds depth_grad only when weighted, and asks fo
   CHECK(t.at("total").item<double>() ==
         Approx(2.0 * t.at("depth_grad").item<double>() + o.reg * o.scale * t.at("scale").item<double>()));
 }
+
+TEST_CASE("losses: the opacity sparsity term is the mean opacity, weighted into the total, and pushes opacity down",
+          "[loss]") {
+  LossOptions o;
+  o.perceptual = 0;
+  o.smooth = 0;
+  ObjectiveInput in;
+  in.render = torch::full({1, 3, 2, 3}, 0.5);
+  in.target = torch::full({1, 3, 2, 3}, 0.5);
+  in.mask = torch::ones({1, 1, 2, 3});
+  in.gaussians.scales = torch::full({4, 3}, 0.02);
+  in.gaussians.opacities = torch::tensor({0.1, 0.2, 0.3, 0.8}).requires_grad_(true);
+  in.depth = torch::full({4}, 2.0);
+  in.support_uv = torch::rand({4, 2});
+  {  // off by default: the term stays zero and has no say in the total
+    GaussianObjective objective(o);
+    auto t = objective.terms(in);
+    objective.add_total(t);
+    CHECK(t.at("opacity").item<double>() == 0.0);
+    CHECK(t.at("total").item<double>() == Approx(o.reg * o.scale * t.at("scale").item<double>()).margin(1e-12));
+  }
+  o.opacity = 0.5;
+  GaussianObjective objective(o);
+  auto t = objective.terms(in);
+  objective.add_total(t);
+  CHECK(t.at("opacity").item<double>() == Approx(0.35));
+  CHECK(t.at("total").item<double>() == Approx(0.5 * 0.35 + o.reg * o.scale * t.at("scale").item<double>()));
+  t.at("total").backward();
+  const auto g = in.gaussians.opacities.grad();
+  REQUIRE(g.defined());
+  CHECK(torch::allclose(g, torch::full({4}, 0.5 / 4)));
+}

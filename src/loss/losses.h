@@ -24,6 +24,7 @@ struct LossOptions {
   double smooth_normal = 0.0;     // weight of neighbour normal coherence inside L_reg (not in the paper)
   double depth_grad = 0.0;        // weight of rendered log-depth gradients matching the target's (not in the paper)
   double depth_grad_edge = 0.05;  // ... on neighbour pairs whose target depth changes by less than this (relative)
+  double opacity = 0.0;           // weight of the mean opacity, a sparsity term for pruning (not in the paper)
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;

@@ -18,8 +18,8 @@ std::string GaussianObjective::describe() const {
 
 LossTerms GaussianObjective::zero_terms() {
   auto zero = torch::zeros({});
-  return {{"l1", zero},     {"perceptual", zero}, {"scale", zero},
-          {"smooth", zero}, {"normal", zero},     {"depth_grad", zero}};
+  return {{"l1", zero},     {"perceptual", zero}, {"scale", zero},  {"smooth", zero},
+          {"normal", zero}, {"depth_grad", zero}, {"opacity", zero}};
 }
 
 LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
@@ -43,6 +43,7 @@ LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
     t["depth_grad"] = depth_gradient_loss(in.render_depth, in.render_alpha, in.target_depth, in.target_valid, mask,
                                           o.depth_grad_edge);
   }
+  if (o.opacity > 0) t["opacity"] = in.gaussians.opacities.mean();
   return t;
 }
 
@@ -50,7 +51,7 @@ void GaussianObjective::add_total(LossTerms& t) const {
   const auto& o = options_;
   t["total"] = o.rgb * t.at("l1") + o.perceptual * t.at("perceptual") +
                o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth") + o.smooth_normal * t.at("normal")) +
-               o.depth_grad * t.at("depth_grad");
+               o.depth_grad * t.at("depth_grad") + o.opacity * t.at("opacity");
 }
 
 LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid,
