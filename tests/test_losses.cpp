@@ -235,7 +235,7 @@ TEST_CASE("losses: the objective adds depth_grad only when weighted, and asks fo
         Approx(2.0 * t.at("depth_grad").item<double>() + o.reg * o.scale * t.at("scale").item<double>()));
 }
 
-TEST_CASE("losses: the opacity sparsity term is the mean opacity, weighted into the total, and pushes opacity down",
+TEST_CASE("losses: the opacity sparsity term is the mean unclamped opacity, weighted into the total, pushing it down",
           "[loss]") {
   LossOptions o;
   o.perceptual = 0;
@@ -245,7 +245,8 @@ TEST_CASE("losses: the opacity sparsity term is the mean opacity, weighted into 
   in.target = torch::full({1, 3, 2, 3}, 0.5);
   in.mask = torch::ones({1, 1, 2, 3});
   in.gaussians.scales = torch::full({4, 3}, 0.02);
-  in.gaussians.opacities = torch::tensor({0.1, 0.2, 0.3, 0.8}).requires_grad_(true);
+  in.gaussians.opacities = torch::full({4}, 0.99);  // clamped: the term must not read these
+  in.opacity_unclamped = torch::tensor({0.1, 0.2, 0.3, 0.8}).requires_grad_(true);
   in.depth = torch::full({4}, 2.0);
   in.support_uv = torch::rand({4, 2});
   {  // off by default: the term stays zero and has no say in the total
@@ -262,7 +263,9 @@ TEST_CASE("losses: the opacity sparsity term is the mean opacity, weighted into 
   CHECK(t.at("opacity").item<double>() == Approx(0.35));
   CHECK(t.at("total").item<double>() == Approx(0.5 * 0.35 + o.reg * o.scale * t.at("scale").item<double>()));
   t.at("total").backward();
-  const auto g = in.gaussians.opacities.grad();
+  const auto g = in.opacity_unclamped.grad();
   REQUIRE(g.defined());
   CHECK(torch::allclose(g, torch::full({4}, 0.5 / 4)));
+  in.opacity_unclamped = torch::Tensor();
+  CHECK_THROWS_WITH(objective.terms(in), Catch::Contains("loss.opacity"));
 }

@@ -200,6 +200,21 @@ TEST_CASE("composer: zero updates reproduce the base Gaussians exactly", "[compo
   d.select(1, 2).fill_(-1e6);
   CHECK((compose_camera(b, d, K, o).means.select(1, 2) > 0).all().item<bool>());
   CHECK(inverse_softplus(torch::tensor({100.0})).item<double>() == Approx(100.0));
+  // Opacity: the clamp to [0.01, 0.99] cuts the gradient; unclamped_opacity is the same value inside the range and
+  // keeps it outside.
+  d.zero_();
+  d.select(1, 13).copy_(torch::tensor({0.3, 8.0}, torch::kFloat64));
+  const auto composed = compose_camera(b, d, K, o).opacities, free = unclamped_opacity(d);
+  CHECK(free[0].item<double>() == Approx(1.0 / (1.0 + std::exp(-0.3))));
+  CHECK(composed[0].item<double>() == Approx(free[0].item<double>()));
+  CHECK(composed[1].item<double>() == Approx(0.99));
+  CHECK(free[1].item<double>() == Approx(1.0 / (1.0 + std::exp(-8.0))));
+  auto da = d.clone().requires_grad_(true);
+  compose_camera(b, da, K, o).opacities[1].backward();
+  CHECK(da.grad()[1][13].item<double>() == 0.0);
+  auto da2 = d.clone().requires_grad_(true);
+  unclamped_opacity(da2)[1].backward();
+  CHECK(da2.grad()[1][13].item<double>() > 0.0);
 }
 
 TEST_CASE("composer: world transform moves means and rotates quaternions", "[composer]") {

@@ -76,6 +76,7 @@ class GaussianTask final : public TrainTask {
         oi.render_depth = out.depth, oi.render_alpha = out.alpha;
         oi.target_depth = batch.target_depth[b], oi.target_valid = batch.target_valid[b];
       }
+      if (config_.loss.opacity > 0) oi.opacity_unclamped = unclamped_opacity(p.delta);
       if (views) views->push_back({oi.render.detach(), oi.mask.squeeze(1)});
       for (auto& [k, v] : objective_.terms(oi)) acc[k] = acc[k] + v;
       stats.timings_ms["losses"] += ms_since(t0);

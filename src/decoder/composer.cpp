@@ -46,6 +46,10 @@ torch::Tensor quaternion_from_matrix(const torch::Tensor& R) {
 }
 }  // namespace
 
+torch::Tensor unclamped_opacity(const torch::Tensor& delta) {
+  return torch::sigmoid(delta.select(1, 13) + std::log(0.5 / 0.5));
+}
+
 torch::Tensor inverse_softplus(const torch::Tensor& y) {
   // log(exp(y) - 1) = y + log(1 - exp(-y)); exact for small y, no overflow for large y.
   return y + torch::log(-torch::expm1(-y));
@@ -59,7 +63,7 @@ Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, 
   const auto dt = delta.scalar_type();
   auto uv = base.uv.to(dt), z_n = base.z_n.to(dt), s_n = base.scale_n.to(dt), color = base.color.to(dt);
   auto d_uv = delta.narrow(1, 0, 2), dz = delta.select(1, 2), ds = delta.narrow(1, 3, 3), dq = delta.narrow(1, 6, 4),
-       dc = delta.narrow(1, 10, 3), da = delta.select(1, 13);
+       dc = delta.narrow(1, 10, 3);
 
   // Position: pixel offset, then inverse depth through softplus (bounded away from zero depth).
   auto uv2 = uv + o.lambda_xy * d_uv;
@@ -78,7 +82,7 @@ Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, 
   auto c = torch::sigmoid(torch::logit(color) + o.color_step * dc);
   c = torch::clamp(c, 0.01, 0.99);
   if (o.linear_rgb) c = srgb_to_linear(c);
-  auto opacity = torch::clamp(torch::sigmoid(da + std::log(0.5 / 0.5)), 0.01, 0.99);
+  auto opacity = torch::clamp(unclamped_opacity(delta), 0.01, 0.99);
   // Back to metres.
   const double inv_df = 1.0 / base.depth_factor;
   return {means_n * inv_df, scales_n * inv_df, quats, c, opacity};

@@ -29,6 +29,10 @@ Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const t
                   const torch::Tensor& T_cw, const ComposerOptions& options);
 Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
 
+// The opacities [N] the updates give (sigmoid of dalpha, base 0.5), before compose's clamp to [0.01, 0.99]. The clamp
+// has no gradient, so a term that should reach Gaussians it has saturated (loss.opacity) reads these instead.
+torch::Tensor unclamped_opacity(const torch::Tensor& delta);
+
 torch::Tensor inverse_softplus(const torch::Tensor& y);  // overflow-safe for large y
 
 }  // namespace isplat

@@ -43,7 +43,11 @@ LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
     t["depth_grad"] = depth_gradient_loss(in.render_depth, in.render_alpha, in.target_depth, in.target_valid, mask,
                                           o.depth_grad_edge);
   }
-  if (o.opacity > 0) t["opacity"] = in.gaussians.opacities.mean();
+  if (o.opacity > 0) {
+    // The clamped opacities have no gradient where the clamp saturates them, which is most of them.
+    ISPLAT_CHECK(in.opacity_unclamped.defined(), "loss.opacity > 0 needs the opacities before the composer's clamp");
+    t["opacity"] = in.opacity_unclamped.mean();
+  }
   return t;
 }
 

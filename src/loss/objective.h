@@ -25,6 +25,8 @@ struct ObjectiveInput {
   // For loss.depth_grad only (may stay undefined otherwise): the render's depth sum and alpha [T,1,H,W], and
   // the targets' reference depth and validity [T,H,W].
   torch::Tensor render_depth, render_alpha, target_depth, target_valid;
+  // For loss.opacity only: the opacities before the composer's clamp [N] (unclamped_opacity of the updates).
+  torch::Tensor opacity_unclamped;
 };
 
 class GaussianObjective {
