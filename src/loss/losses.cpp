@@ -32,9 +32,9 @@ void LossOptions::visit(ConfigVisitor& v) {
           "depth_grad skips neighbour pairs whose reference depth changes by this share or more (depth edges)",
           Range::above(0));
   v.field("opacity", opacity,
-          "weight of the mean decoded opacity, read before the composer's [0.01, 0.99] clamp: a sparsity term, so "
-          "Gaussians the targets do not need fade toward the floor and pruning (prune.min_contribution) can drop "
-          "them (not in the paper; 0 = off)",
+          "weight of the mean decoded opacity, read before the composer's [0.01, 0.99] clamp: a sparsity term meant "
+          "to let pruning drop what the targets do not need; at 0.01-0.05 it fades every Gaussian a little instead "
+          "and pruning gains nothing (docs/results/2026-11-25-opacity-sparsity.md; not in the paper; 0 = off)",
           Range::at_least(0));
   v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)",
           Range::at_least(0));
