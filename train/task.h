@@ -24,6 +24,7 @@ struct StepStats {
   double lr = 0;
   double step_ms = 0;  // the whole step, wall clock
   int64_t supports = 0;
+  int64_t rendered = 0;  // Gaussians the targets saw (fewer than supports when prune.enabled)
   bool skipped = false;
 };
 

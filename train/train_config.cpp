@@ -51,6 +51,11 @@ void TrainConfig::visit(ConfigVisitor& v) {
   v.section("model", "the InfiniSplat model", model);
   v.section("loss", "loss terms and weights", loss);
   v.section("render", "the splatting renderer", render);
+  v.section("prune",
+            "pruning inside the training and validation loop, by the rule the evaluator and predict use: targets are "
+            "rendered from the kept Gaussians only, so the model learns under the drop it meets at inference "
+            "(off by default)",
+            prune);
   v.section("optim", "optimizer and schedule", optim);
   v.section("train", "the training loop", train);
   v.section("dist", "data-parallel training over c10d/Gloo (PyTorch's RANK, WORLD_SIZE, MASTER_ADDR, MASTER_PORT)",

@@ -7,6 +7,7 @@
 #include "data/tuples.h"
 #include "loss/losses.h"
 #include "model/infinisplat.h"
+#include "render/prune.h"
 #include "render/render.h"
 #include "train/data_parallel.h"
 
@@ -56,6 +57,7 @@ struct TrainConfig {
   ModelOptions model;
   LossOptions loss;
   RenderOptions render;
+  PruneOptions prune;  // in the loop: targets see only the Gaussians inference pruning would keep
   OptimOptions optim;
   LoopOptions train;
   DistOptions dist;

@@ -351,6 +351,7 @@ void Trainer::write_log(const StepStats& s) {
                {"loss", s.losses},
                {"time_ms", s.timings_ms},
                {"supports", s.supports},
+               {"rendered", s.rendered},
                {"skipped", s.skipped}});
 }
 
