@@ -97,6 +97,13 @@ TEST_CASE("train: with prune.enabled the targets see only the Gaussians pruning 
   bool changed = false;
   for (const auto& [name, w] : weights(trainer)) changed = changed || !torch::equal(w, before.at(name));
   CHECK(changed);
+  // train.prune_from: steps before it render every support, steps from it on prune.
+  cfg.train.out = test::temp_dir("train_prune_from");
+  cfg.train.prune_from = 1;
+  Trainer delayed(cfg);
+  const StepStats first = delayed.train_step(), second = delayed.train_step();
+  CHECK(first.rendered == first.supports);
+  CHECK(second.rendered < second.supports);
 }
 
 TEST_CASE("train: repeated non-finite losses stop training with a clear message", "[train]") {

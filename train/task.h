@@ -44,6 +44,7 @@ class TrainTask {
   // With `views`, also returns each element's renders.
   virtual LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                            std::vector<RenderedViews>* views) = 0;
+  virtual void set_step(int64_t step) {}                    // the optimizer step the next losses() belong to
   virtual void add_to_checkpoint(Checkpoint& ck) const {}   // e.g. the embedded depth prior
   virtual void finish(const std::string& run_dir) const {}  // e.g. the depth net's own weights file
 };

@@ -32,6 +32,7 @@ class GaussianTask final : public TrainTask {
   std::string describe() const override {
     return cat("prior ", pipeline_.prior().describe(), "; perceptual loss ", objective_.describe());
   }
+  void set_step(int64_t step) override { step_ = step; }
 
   LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                    std::vector<RenderedViews>* views) override {
@@ -59,7 +60,7 @@ class GaussianTask final : public TrainTask {
       RenderOptions render_options = config_.render;
       render_options.normals = false;  // no loss reads the normal map
       Gaussians shown = p.gaussians;
-      if (config_.prune.enabled) {
+      if (config_.prune.enabled && step_ >= config_.train.prune_from) {
         const Camera source{batch.context_K[b], batch.context_T[b], batch.context_image.size(3),
                             batch.context_image.size(2)};
         shown = prune_gaussians(p.gaussians, source, config_.prune, render_options).kept;
@@ -130,6 +131,7 @@ class GaussianTask final : public TrainTask {
   TrainConfig config_;
   Pipeline pipeline_;
   GaussianObjective objective_;
+  int64_t step_ = 0;  // the optimizer step (train.prune_from)
 };
 
 class DepthTask final : public TrainTask {

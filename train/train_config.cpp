@@ -41,6 +41,10 @@ void LoopOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("target_mask", target_mask, "score target pixels that see the context's surface, or all pixels",
           {"projected", "none"});
+  v.field("prune_from", prune_from,
+          "with prune.enabled: prune from this step on (and in validations from then), so the model first learns "
+          "Gaussians worth keeping; pruning from step 0 collapsed a run to ~500 rendered Gaussians in 50 steps",
+          Range::at_least(0));
   v.field("val_images", val_images, "validation tuples saved as PNG panels", Range::at_least(0));
 }
 

@@ -46,6 +46,7 @@ struct LoopOptions {
   int64_t max_bad_steps = 5;
   int64_t stop_at = 0;  // end this sitting after this step (checkpointed; --resume auto continues); 0 = off
   std::string target_mask = "projected";  // projected | none
+  int64_t prune_from = 0;                 // with prune.enabled: the first step (and validation) that prunes
   int64_t val_images = 3;
   void visit(ConfigVisitor& v);
 };
