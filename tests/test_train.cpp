@@ -74,38 +74,6 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
   CHECK_THROWS_WITH(depth.resume(ck), Catch::Contains("checkpoint is for task 'gaussians'"));
 }
 
-TEST_CASE("train: with prune.enabled the targets see only the Gaussians pruning keeps, and training still learns",
-          "[train]") {
-  test::QuietLogs quiet;
-  const auto data = test::make_tiny_dataset("train_prune", 8);
-  auto cfg = test::tiny_train_config(data, test::temp_dir("train_prune_off"), 2);
-  const StepStats off = Trainer(cfg).train_step();
-  CHECK(off.rendered == off.supports);
-  CHECK(off.timings_ms.count("prune") == 0);
-  cfg.train.out = test::temp_dir("train_prune_on");
-  cfg.prune.enabled = true;
-  cfg.prune.min_contribution = 0.3;  // untrained opacity is 0.5: some Gaussians reach 0.3 somewhere, some do not
-  Trainer trainer(cfg);
-  const auto before = weights(trainer);
-  const StepStats on = trainer.train_step();
-  INFO("supports " << on.supports << ", rendered " << on.rendered);
-  CHECK(on.supports == off.supports);
-  CHECK(on.rendered > 0);
-  CHECK(on.rendered < on.supports);
-  CHECK(on.timings_ms.count("prune") == 1);
-  CHECK(std::isfinite(on.losses.at("total")));
-  bool changed = false;
-  for (const auto& [name, w] : weights(trainer)) changed = changed || !torch::equal(w, before.at(name));
-  CHECK(changed);
-  // train.prune_from: steps before it render every support, steps from it on prune.
-  cfg.train.out = test::temp_dir("train_prune_from");
-  cfg.train.prune_from = 1;
-  Trainer delayed(cfg);
-  const StepStats first = delayed.train_step(), second = delayed.train_step();
-  CHECK(first.rendered == first.supports);
-  CHECK(second.rendered < second.supports);
-}
-
 TEST_CASE("train: repeated non-finite losses stop training with a clear message", "[train]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_nan", 8);

@@ -24,7 +24,6 @@ struct StepStats {
   double lr = 0;
   double step_ms = 0;  // the whole step, wall clock
   int64_t supports = 0;
-  int64_t rendered = 0;  // Gaussians the targets saw (fewer than supports when prune.enabled)
   bool skipped = false;
 };
 
@@ -44,7 +43,6 @@ class TrainTask {
   // With `views`, also returns each element's renders.
   virtual LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                            std::vector<RenderedViews>* views) = 0;
-  virtual void set_step(int64_t step) {}                    // the optimizer step the next losses() belong to
   virtual void add_to_checkpoint(Checkpoint& ck) const {}   // e.g. the embedded depth prior
   virtual void finish(const std::string& run_dir) const {}  // e.g. the depth net's own weights file
 };

@@ -32,7 +32,6 @@ class GaussianTask final : public TrainTask {
   std::string describe() const override {
     return cat("prior ", pipeline_.prior().describe(), "; perceptual loss ", objective_.describe());
   }
-  void set_step(int64_t step) override { step_ = step; }
 
   LossTerms losses(const Batch& batch, int64_t first_sample, bool train, StepStats& stats,
                    std::vector<RenderedViews>* views) override {
@@ -57,21 +56,12 @@ class GaussianTask final : public TrainTask {
       }
 
       auto t0 = Clock::now();
+      const Camera cams{batch.target_K[b], batch.target_T[b], W, H};
       RenderOptions render_options = config_.render;
       render_options.normals = false;  // no loss reads the normal map
-      Gaussians shown = p.gaussians;
-      if (config_.prune.enabled && step_ >= config_.train.prune_from) {
-        const Camera source{batch.context_K[b], batch.context_T[b], batch.context_image.size(3),
-                            batch.context_image.size(2)};
-        shown = prune_gaussians(p.gaussians, source, config_.prune, render_options).kept;
-        stats.timings_ms["prune"] += ms_since(t0);
-        t0 = Clock::now();
-      }
-      stats.rendered += shown.count();
-      const Camera cams{batch.target_K[b], batch.target_T[b], W, H};
-      RenderOutput out = render(shown, cams, render_options);
+      RenderOutput out = render(p.gaussians, cams, render_options);
       stats.timings_ms["render_fwd"] += ms_since(t0);
-      if (train) time_render_backward(out, shown, stats);
+      if (train) time_render_backward(out, p.gaussians, stats);
       t0 = Clock::now();
       auto rgb = torch::clamp(out.rgb, 0.0, 1.0);
       ObjectiveInput oi;
@@ -131,7 +121,6 @@ class GaussianTask final : public TrainTask {
   TrainConfig config_;
   Pipeline pipeline_;
   GaussianObjective objective_;
-  int64_t step_ = 0;  // the optimizer step (train.prune_from)
 };
 
 class DepthTask final : public TrainTask {

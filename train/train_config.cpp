@@ -41,10 +41,6 @@ void LoopOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("target_mask", target_mask, "score target pixels that see the context's surface, or all pixels",
           {"projected", "none"});
-  v.field("prune_from", prune_from,
-          "with prune.enabled: prune from this step on (and in validations from then), so the model first learns "
-          "Gaussians worth keeping; pruning from step 0 collapsed a run to ~500 rendered Gaussians in 50 steps",
-          Range::at_least(0));
   v.field("val_images", val_images, "validation tuples saved as PNG panels", Range::at_least(0));
 }
 
@@ -55,11 +51,6 @@ void TrainConfig::visit(ConfigVisitor& v) {
   v.section("model", "the InfiniSplat model", model);
   v.section("loss", "loss terms and weights", loss);
   v.section("render", "the splatting renderer", render);
-  v.section("prune",
-            "pruning inside the training and validation loop, by the rule the evaluator and predict use: targets are "
-            "rendered from the kept Gaussians only, so the model learns under the drop it meets at inference "
-            "(off by default)",
-            prune);
   v.section("optim", "optimizer and schedule", optim);
   v.section("train", "the training loop", train);
   v.section("dist", "data-parallel training over c10d/Gloo (PyTorch's RANK, WORLD_SIZE, MASTER_ADDR, MASTER_PORT)",

@@ -7,7 +7,6 @@
 #include "data/tuples.h"
 #include "loss/losses.h"
 #include "model/infinisplat.h"
-#include "render/prune.h"
 #include "render/render.h"
 #include "train/data_parallel.h"
 
@@ -46,7 +45,6 @@ struct LoopOptions {
   int64_t max_bad_steps = 5;
   int64_t stop_at = 0;  // end this sitting after this step (checkpointed; --resume auto continues); 0 = off
   std::string target_mask = "projected";  // projected | none
-  int64_t prune_from = 0;                 // with prune.enabled: the first step (and validation) that prunes
   int64_t val_images = 3;
   void visit(ConfigVisitor& v);
 };
@@ -58,7 +56,6 @@ struct TrainConfig {
   ModelOptions model;
   LossOptions loss;
   RenderOptions render;
-  PruneOptions prune;  // in the loop: targets see only the Gaussians inference pruning would keep
   OptimOptions optim;
   LoopOptions train;
   DistOptions dist;

@@ -150,7 +150,6 @@ StepStats Trainer::train_step() {
   optimizer_->zero_grad();
   // Global sample index of this rank's first tuple: rank r of W takes tuples r*B .. r*B+B-1 of each global batch.
   const int64_t first_sample = (step_ * world + rank) * config_.data.batch_size;
-  task_->set_step(step_);
   auto losses = task_->losses(batch, first_sample, /*train=*/true, s, nullptr);
   for (const auto& [k, v] : losses) s.losses[k] = v.item<double>();
   auto& total = losses.at("total");
@@ -201,7 +200,6 @@ double Trainer::validate(bool write_images) {
   trainable().eval();
   double total = 0, psnr_sum = 0;
   int64_t psnr_n = 0;
-  task_->set_step(step_);
   for (int64_t i = 0; i < config_.data.val_tuples; ++i) {
     const Batch batch = collate({val_sampler_->sample(i)});
     StepStats s;
@@ -353,7 +351,6 @@ void Trainer::write_log(const StepStats& s) {
                {"loss", s.losses},
                {"time_ms", s.timings_ms},
                {"supports", s.supports},
-               {"rendered", s.rendered},
                {"skipped", s.skipped}});
 }
 

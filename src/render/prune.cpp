@@ -63,32 +63,33 @@ std::vector<Camera> nearby_views(const Camera& source, double shift, int64_t vie
 
 PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const PruneOptions& o,
                             const RenderOptions& render_options) {
+  torch::NoGradGuard no_grad;
   PruneResult r;
   r.before = g.count();
+  r.keep = torch::ones({r.before}, torch::kBool);
   if (!o.enabled || r.before == 0) {
-    r.keep = torch::ones({r.before}, torch::kBool);
     r.kept = g;
     return r;
   }
-  {  // The decision has no gradient; the kept subset below keeps the graph, so training can prune in its loop.
-    torch::NoGradGuard no_grad;
-    const torch::Tensor opaque = g.opacities.detach().reshape({r.before}) >= o.min_opacity;
-    r.low_opacity = r.before - opaque.sum().item<int64_t>();
+  const torch::Tensor opaque = g.opacities.detach().reshape({r.before}) >= o.min_opacity;
+  r.low_opacity = r.before - opaque.sum().item<int64_t>();
+  if (o.min_contribution <= 0) {  // nothing can fall below it: skip the renders
     r.keep = opaque;
-    if (o.min_contribution > 0) {  // else nothing can fall below it: skip the renders
-      torch::Tensor best = max_contribution(g, source, render_options);
-      if (o.views > 0) {
-        // Median depth of the Gaussians in the source camera sets the scale of the virtual moves.
-        const auto T = source.T_cw.to(g.means.scalar_type());
-        const auto z = torch::matmul(g.means.detach(), T.index({2, torch::indexing::Slice(0, 3)})) + T.index({2, 3});
-        const double shift = o.view_shift * std::max(0.0, z.median().item<double>());
-        for (const Camera& c : nearby_views(source, shift, o.views))
-          best = torch::maximum(best, max_contribution(g, c, render_options));
-      }
-      r.keep = opaque.logical_and(best >= o.min_contribution);
-      r.low_contribution = opaque.sum().item<int64_t>() - r.keep.sum().item<int64_t>();
-    }
+    r.kept = g.index(r.keep);
+    return r;
   }
+  torch::Tensor best = max_contribution(g, source, render_options);
+  if (o.views > 0) {
+    // Median depth of the Gaussians in the source camera sets the scale of the virtual moves.
+    const auto T = source.T_cw.to(g.means.scalar_type());
+    const auto z = torch::matmul(g.means.detach(), T.index({2, torch::indexing::Slice(0, 3)})) + T.index({2, 3});
+    const double shift = o.view_shift * std::max(0.0, z.median().item<double>());
+    for (const Camera& c : nearby_views(source, shift, o.views))
+      best = torch::maximum(best, max_contribution(g, c, render_options));
+  }
+  const torch::Tensor visible = best >= o.min_contribution;
+  r.keep = opaque.logical_and(visible);
+  r.low_contribution = opaque.sum().item<int64_t>() - r.keep.sum().item<int64_t>();
   r.kept = g.index(r.keep);
   return r;
 }

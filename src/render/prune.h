@@ -31,7 +31,7 @@ torch::Tensor max_contribution(const Gaussians& gaussians, const Camera& camera,
 std::vector<Camera> nearby_views(const Camera& source, double shift, int64_t views);
 
 struct PruneResult {
-  Gaussians kept;      // indexes the input, so gradients reach the kept Gaussians
+  Gaussians kept;
   torch::Tensor keep;  // [N] bool
   int64_t before = 0, low_opacity = 0, low_contribution = 0;
   int64_t after() const { return before - low_opacity - low_contribution; }
