@@ -212,11 +212,11 @@ std::vector<float> triangle_areas(const Grid& g) {
 // Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
 // `area`: triangle_areas(g). `weight` (per pixel, or null): triangles are drawn in proportion to area × the
 // weight of their quad's first vertex, and each support then stands for a share of area inversely
-// proportional to that weight. `image_share`: that share of the measure is spread evenly over the accepted
-// triangles instead.
+// proportional to that weight. `image_share`, `pixel_floor` and `placement` as in SamplerOptions.
 double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr, double image_share = 0.0, bool centroid = false, bool vertex = false,
-                    double pixel_floor = 0.0) {
+                    const float* weight = nullptr, double image_share = 0.0, double pixel_floor = 0.0,
+                    const std::string& placement = "random") {
+  const bool centroid = placement == "centroid", vertex = placement == "vertex";
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
   for_each_row(Hq, [&](int64_t i) {
@@ -574,9 +574,9 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       write_pixel_supports(g, o, spread(edges, ne), ne);
     }
-    const double face_total = sample_faces(
-        g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(), options.image_share,
-        options.placement == "centroid", options.placement == "vertex", options.pixel_floor);
+    const double face_total =
+        sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
+                     options.image_share, options.pixel_floor, options.placement);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
     return s;
   }
