@@ -11,6 +11,7 @@
 #include "encoder/dual_encoder.h"
 #include "geometry/camera_torch.h"
 #include "geometry/color.h"
+#include "geometry/convert.h"
 #include "io/safetensors.h"
 #include "nets/feature_net.h"
 #include "nets/imagenet.h"
@@ -215,6 +216,45 @@ TEST_CASE("composer: zero updates reproduce the base Gaussians exactly", "[compo
   auto da2 = d.clone().requires_grad_(true);
   unclamped_opacity(da2)[1].backward();
   CHECK(da2.grad()[1][13].item<double>() > 0.0);
+}
+
+TEST_CASE("composer: orientation = surface turns each Gaussian's local z onto its support's normal", "[composer]") {
+  BaseGaussians b;
+  b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}, {3.0f, 4.0f}});
+  b.depth_factor = 0.5;
+  b.z_n = torch::tensor({1.0f, 2.5f, 1.5f});
+  b.scale_n = torch::full({3}, 0.01f);
+  b.color = torch::full({3, 3}, 0.5f);
+  b.opacity = torch::full({3}, 0.5f);
+  const double l = std::sqrt(0.09 + 0.04 + 1.0);
+  b.normal =
+      torch::tensor({{0.0f, 0.0f, -1.0f}, {0.3f / float(l), -0.2f / float(l), -1.0f / float(l)}, {-0.8f, 0.0f, -0.6f}});
+  auto K = make_K(50, 55, 32, 24, torch::kFloat64);
+  ComposerOptions o;
+  o.orientation = "surface";
+  auto d = torch::zeros({3, 14}, torch::kFloat64);
+  const Gaussians g = compose_camera(b, d, K, o);
+  // A camera-facing surface keeps the identity; every local z axis lands on the normal's line, pointing away from
+  // the camera.
+  CHECK(torch::allclose(g.quats[0], torch::tensor({1.0, 0.0, 0.0, 0.0}, torch::kFloat64)));
+  for (int64_t k = 0; k < 3; ++k) {
+    auto q = g.quats[k];
+    const Eigen::Matrix3d R = rotation_from_quaternion(
+        Eigen::Vector4d(q[0].item<double>(), q[1].item<double>(), q[2].item<double>(), q[3].item<double>()));
+    const Eigen::Vector3d n(b.normal[k][0].item<double>(), b.normal[k][1].item<double>(),
+                            b.normal[k][2].item<double>());
+    CHECK((R.col(2) + n).norm() < 1e-6);
+  }
+  // The update dq acts in that frame: q = q_surface * (1 + dq).
+  d.select(1, 7).fill_(0.2);
+  ComposerOptions camera;
+  const auto rotated = compose_camera(b, d, K, o).quats, local = compose_camera(b, d, K, camera).quats;
+  CHECK(torch::allclose(local, torch::tensor({1.0, 0.2, 0.0, 0.0}, torch::kFloat64).expand({3, 4})));
+  CHECK(torch::allclose(rotated[0], local[0]));
+  CHECK_FALSE(torch::allclose(rotated[1], local[1]));
+  // Without normals the option is a clear error.
+  b.normal = torch::Tensor();
+  CHECK_THROWS_WITH(compose_camera(b, d, K, o), Catch::Contains("orientation = surface"));
 }
 
 TEST_CASE("composer: world transform moves means and rotates quaternions", "[composer]") {

@@ -366,6 +366,31 @@ TEST_CASE("sampler: all-invalid depth is a clear error", "[sampler]") {
                     Catch::Contains("image must be [3, H, W]"));
 }
 
+TEST_CASE("sampler: every support carries the plane's normal, facing the camera, in every mode", "[sampler]") {
+  // The plane n.X = -2 with n facing the camera (n.X < 0): depth z = -2 / (n . ray).
+  const double nx = 0.3, ny = -0.2, nz = -1.0, nl = std::sqrt(nx * nx + ny * ny + nz * nz);
+  auto jj = torch::arange(W, torch::kFloat64).add(0.5).sub(cx).div(fx).unsqueeze(0).expand({H, W});
+  auto ii = torch::arange(H, torch::kFloat64).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({H, W});
+  auto depth = (-2.0 * nl / (nx * jj + ny * ii + nz)).to(torch::kFloat32);
+  REQUIRE(depth.min().item<float>() > 0);
+  const auto expected = torch::tensor({nx / nl, ny / nl, nz / nl});
+  SamplerOptions pixel = fixed(0), vf = fixed(1500);
+  pixel.mode = "pixel";
+  vf.mode = "vertex_face";
+  for (const SamplerOptions& o : {fixed(1500), pixel, vf}) {
+    const Supports s = sample_supports(depth, ones(), K(), image(), o, 3);
+    REQUIRE(s.normal.sizes() == torch::IntArrayRef({s.count(), 3}));
+    CHECK(torch::allclose(s.normal, expected.expand({s.count(), 3}), 1e-4, 1e-4));
+  }
+  // A lone valid pixel has no surface around it: its normal points back along its ray.
+  auto valid = torch::zeros({H, W});
+  valid[10][20] = 1;
+  const Supports lone = sample_supports(torch::full({H, W}, 3.0f), valid, K(), image(), pixel);
+  REQUIRE(lone.count() == 1);
+  auto ray = torch::tensor({(20.5 - cx) / fx, (10.5 - cy) / fy, 1.0}, torch::kFloat32);
+  CHECK(torch::allclose(lone.normal[0], -ray / ray.norm(), 1e-5, 1e-6));
+}
+
 TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]") {
   auto depth = torch::full({H, W}, 2.0f);
   depth.narrow(1, 0, 8).fill_(0.5f);
@@ -377,4 +402,5 @@ TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]")
   CHECK(b.color.min().item<float>() >= 0.01f);
   CHECK(b.color.max().item<float>() <= 0.99f);
   CHECK((b.opacity == 0.5f).all().item<bool>());
+  CHECK(torch::equal(b.normal, s.normal));
 }

@@ -23,6 +23,10 @@ void ComposerOptions::visit(ConfigVisitor& v) {
   v.field("scale_min", scale_min, "lower bound of the scale multiplier", Range::between(0, 1));
   v.field("scale_max", scale_max, "upper bound of the scale multiplier (> 1)", Range::above(1));
   v.field("linear_rgb", linear_rgb, "composite in linear RGB (sRGB -> linear on the colours)");
+  v.field("orientation", orientation,
+          "frame of the rotation update: camera (release, identity base) or surface (local z on the depth "
+          "surface's normal at the support)",
+          {"camera", "surface"});
 }
 
 namespace {
@@ -55,6 +59,13 @@ torch::Tensor inverse_softplus(const torch::Tensor& y) {
   return y + torch::log(-torch::expm1(-y));
 }
 
+torch::Tensor quaternion_z_to_normal(const torch::Tensor& normal) {
+  auto m = normal * (1.0 - 2.0 * (normal.select(1, 2) < 0).to(normal.scalar_type())).unsqueeze(1);
+  // q = (1 + z.m, z x m) normalized, with z x m = (-m_y, m_x, 0); 1 + m_z >= 1 keeps it well conditioned.
+  auto q = torch::stack({1.0 + m.select(1, 2), -m.select(1, 1), m.select(1, 0), torch::zeros_like(m.select(1, 0))}, 1);
+  return q / q.norm(2, 1, true);
+}
+
 Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, const torch::Tensor& K,
                          const ComposerOptions& o) {
   const int64_t N = base.count();
@@ -79,6 +90,11 @@ Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, 
   // Rotation, colour and opacity.
   auto identity = torch::tensor({1.0, 0.0, 0.0, 0.0}, delta.options());
   auto quats = identity + dq;
+  if (o.orientation == "surface") {
+    ISPLAT_CHECK(base.normal.defined() && base.normal.sizes() == torch::IntArrayRef({N, 3}),
+                 "composer.orientation = surface needs [", N, ", 3] support normals");
+    quats = quaternion_multiply(quaternion_z_to_normal(base.normal.to(dt)), quats);
+  }
   auto c = torch::sigmoid(torch::logit(color) + o.color_step * dc);
   c = torch::clamp(c, 0.01, 0.99);
   if (o.linear_rgb) c = srgb_to_linear(c);

@@ -2,6 +2,8 @@
 #pragma once
 #include <torch/types.h>
 
+#include <string>
+
 #include "core/gaussians.h"
 #include "sampler/base_gaussians.h"
 
@@ -18,6 +20,9 @@ struct ComposerOptions {
   double color_step = 0.1;  // logit colour step per unit dc
   double scale_min = 0.0, scale_max = 4.0;
   bool linear_rgb = true;  // convert colours sRGB -> linear for compositing (release behaviour)
+  // The frame the rotation update dq acts in: "camera" (release: the identity) or "surface" (the Gaussian's local
+  // z axis starts on the support's surface normal, so a Gaussian flattened along z lies in the surface).
+  std::string orientation = "camera";
   void visit(ConfigVisitor& v);
 };
 
@@ -32,6 +37,10 @@ Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
 // The opacities [N] the updates give (sigmoid of dalpha, base 0.5), before compose's clamp to [0.01, 0.99]. The clamp
 // has no gradient, so a term that should reach Gaussians it has saturated (loss.opacity) reads these instead.
 torch::Tensor unclamped_opacity(const torch::Tensor& delta);
+
+// The shortest-arc rotation [N,4] (wxyz) that takes the local z axis onto the line of each normal [N,3]: onto n or
+// -n, whichever points away from the camera, so the arc stays under 90 degrees.
+torch::Tensor quaternion_z_to_normal(const torch::Tensor& normal);
 
 torch::Tensor inverse_softplus(const torch::Tensor& y);  // overflow-safe for large y
 

@@ -18,6 +18,7 @@ BaseGaussians make_base_gaussians(const Supports& s) {
   b.scale_n = torch::sqrt(torch::clamp_min(s.area, 0.0)) * b.depth_factor;
   b.color = torch::clamp(s.color, 0.01, 0.99);
   b.opacity = torch::full({s.count()}, 0.5f);
+  b.normal = s.normal;
   return b;
 }
 

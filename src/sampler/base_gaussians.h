@@ -12,6 +12,7 @@ struct BaseGaussians {
   torch::Tensor scale_n;      // [N] isotropic scale sqrt(area) * depth_factor
   torch::Tensor color;        // [N,3] sRGB clamped to [0.01, 0.99]
   torch::Tensor opacity;      // [N] 0.5
+  torch::Tensor normal;       // [N,3] unit surface normal in the camera frame (composer.orientation = surface)
   double depth_factor = 1.0;  // 1 / min support depth
   int64_t count() const { return uv.size(0); }
 };

@@ -364,7 +364,61 @@ Supports allocate(int64_t n) {
   s.depth = torch::empty({n});
   s.color = torch::empty({n, 3});
   s.area = torch::empty({n});
+  s.normal = torch::empty({n, 3});
   return s;
+}
+
+// The normal of the depth surface at pixel (i, j): the area-weighted mean of the accepted triangles that have the
+// pixel centre as a vertex, turned to face the camera. Where none is accepted (a lone pixel, a silhouette), the
+// surface is taken to face the camera: -X / |X|.
+void vertex_normal(const Grid& g, int64_t i, int64_t j, float* n) {
+  double X[3], acc[3] = {0, 0, 0};
+  backproject(g, j + 0.5, i + 0.5, g.depth[i * g.W + j], X);
+  for (int64_t qi = std::max<int64_t>(i - 1, 0); qi <= std::min(i, g.H - 2); ++qi)
+    for (int64_t qj = std::max<int64_t>(j - 1, 0); qj <= std::min(j, g.W - 2); ++qj)
+      for (int t = 0; t < 2; ++t) {
+        int64_t r[3], c[3];
+        triangle_pixels(qi, qj, t, r, c);
+        if (!((r[0] == i && c[0] == j) || (r[1] == i && c[1] == j) || (r[2] == i && c[2] == j))) continue;
+        if (triangle_area(g, qi, qj, t) <= 0) continue;
+        double P[3][3];
+        for (int k = 0; k < 3; ++k) backproject(g, c[k] + 0.5, r[k] + 0.5, g.depth[r[k] * g.W + c[k]], P[k]);
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
+        double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        if (cr[0] * X[0] + cr[1] * X[1] + cr[2] * X[2] > 0) cr[0] = -cr[0], cr[1] = -cr[1], cr[2] = -cr[2];
+        for (int k = 0; k < 3; ++k) acc[k] += cr[k];
+      }
+  double len = std::sqrt(acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]);
+  if (!(len > 0)) {
+    for (int k = 0; k < 3; ++k) acc[k] = -X[k];
+    len = std::sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+  }
+  for (int k = 0; k < 3; ++k) n[k] = static_cast<float>(acc[k] / len);
+}
+
+// Every support takes the surface normal at the valid pixel nearest its position.
+void write_normals(const Grid& g, Supports& s) {
+  const float* uv = s.uv.data_ptr<float>();
+  float* n = s.normal.data_ptr<float>();
+  at::parallel_for(0, s.count(), 4096, [&](int64_t b, int64_t e) {
+    for (int64_t k = b; k < e; ++k) {
+      int64_t i = std::clamp<int64_t>(static_cast<int64_t>(uv[2 * k + 1]), 0, g.H - 1),
+              j = std::clamp<int64_t>(static_cast<int64_t>(uv[2 * k]), 0, g.W - 1);
+      if (g.valid[i * g.W + j] == 0.0f) {  // a support between pixels takes the nearest valid corner
+        const double fu = uv[2 * k] - 0.5, fv = uv[2 * k + 1] - 0.5;
+        double best = 1e30;
+        for (int64_t di = 0; di <= 1; ++di)
+          for (int64_t dj = 0; dj <= 1; ++dj) {
+            const int64_t ii = std::clamp<int64_t>(static_cast<int64_t>(std::floor(fv)) + di, 0, g.H - 1),
+                          jj = std::clamp<int64_t>(static_cast<int64_t>(std::floor(fu)) + dj, 0, g.W - 1);
+            const double d2 = (ii - fv) * (ii - fv) + (jj - fu) * (jj - fu);
+            if (g.valid[ii * g.W + jj] != 0.0f && d2 < best) best = d2, i = ii, j = jj;
+          }
+      }
+      vertex_normal(g, i, j, n + 3 * k);
+    }
+  });
 }
 
 Output pointers(Supports& s) {
@@ -557,6 +611,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
     Supports s = allocate(static_cast<int64_t>(idx.size()));
     write_pixel_supports(g, pointers(s), idx, static_cast<int64_t>(idx.size()));
+    write_normals(g, s);
     return s;
   }
   std::vector<float> weight;
@@ -578,6 +633,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
         sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
                      options.image_share, options.pixel_floor, options.placement);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
+    write_normals(g, s);
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,
@@ -612,6 +668,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const Output o = pointers(s);
   write_pixel_supports(g, o, priority, nv);
   rescale_areas(s, sample_faces(g, triangle_areas(g), n - nv, seed, o, nv));
+  write_normals(g, s);
   return s;
 }
 

@@ -45,10 +45,11 @@ struct SamplerOptions {
 // Supports in the source camera. Depth and colour are read bilinearly at uv (barycentric inside a triangle
 // whose quad neighbour was rejected, so values never mix across a depth discontinuity).
 struct Supports {
-  torch::Tensor uv;     // [N,2] continuous pixel coordinates (pixel centres at +0.5)
-  torch::Tensor depth;  // [N] planar metres
-  torch::Tensor color;  // [N,3] sRGB in [0,1]
-  torch::Tensor area;   // [N] surface area each support stands for, m² (area mode: total / N)
+  torch::Tensor uv;      // [N,2] continuous pixel coordinates (pixel centres at +0.5)
+  torch::Tensor depth;   // [N] planar metres
+  torch::Tensor color;   // [N,3] sRGB in [0,1]
+  torch::Tensor area;    // [N] surface area each support stands for, m² (area mode: total / N)
+  torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera (see support_normal)
   int64_t count() const { return uv.size(0); }
 };
 
