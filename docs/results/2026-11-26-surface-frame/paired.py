@@ -1,0 +1,22 @@
+# Paired bootstrap (2000 resamples, seed 0) of per-pair differences between two methods on the same pairs, per set
+# and bin. Usage: python3 paired.py <eval out folder> <method a> <method b> [all,3]  (bin 3 = [2,inf))
+import json, sys, random
+root, a, b = sys.argv[1], sys.argv[2], sys.argv[3]
+bins = sys.argv[4].split(',') if len(sys.argv) > 4 else ['all', '3']
+def load(s, m):
+    return {r['index']: r for r in map(json.loads, open(f"{root}/{s}/results_{m}.jsonl"))}
+for s in ['rooms-heldout', 'courtyard-colmap', 'atrium-nerfstudio']:
+    A, B = load(s, a), load(s, b)
+    for bn in bins:
+        keys = [k for k in A if k in B and (bn == 'all' or A[k]['bin'] == int(bn))]
+        out = []
+        for f, sc in [('psnr', 1), ('hole_rate', 100), ('crack_rate', 100), ('normal_deg', 1), ('lpips_squeeze', 1)]:
+            d = [sc * (A[k][f] - B[k][f]) for k in keys]
+            m = sum(d) / len(d)
+            rng = random.Random(0); bs = []
+            for _ in range(2000):
+                x = [d[rng.randrange(len(d))] for _ in d]; bs.append(sum(x) / len(x))
+            bs.sort()
+            va = sum(sc * A[k][f] for k in keys) / len(keys)
+            out.append(f"{f} {va:.2f} {m:+.2f} [{bs[50]:+.2f}, {bs[1949]:+.2f}]" if f != 'lpips_squeeze' else f"lpips {m:+.3f}")
+        print(s, bn, len(keys), ' | '.join(out))
