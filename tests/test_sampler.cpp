@@ -374,10 +374,13 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
   auto depth = (-2.0 * nl / (nx * jj + ny * ii + nz)).to(torch::kFloat32);
   REQUIRE(depth.min().item<float>() > 0);
   const auto expected = torch::tensor({nx / nl, ny / nl, nz / nl});
-  SamplerOptions pixel = fixed(0), vf = fixed(1500);
+  // Normals cost as much as sampling: only filled on request.
+  CHECK_FALSE(sample_supports(depth, ones(), K(), image(), fixed(1500), 3).normal.defined());
+  SamplerOptions area = fixed(1500), pixel = fixed(0), vf = fixed(1500);
   pixel.mode = "pixel";
   vf.mode = "vertex_face";
-  for (const SamplerOptions& o : {fixed(1500), pixel, vf}) {
+  for (SamplerOptions* o : {&area, &pixel, &vf}) o->normals = true;
+  for (const SamplerOptions& o : {area, pixel, vf}) {
     const Supports s = sample_supports(depth, ones(), K(), image(), o, 3);
     REQUIRE(s.normal.sizes() == torch::IntArrayRef({s.count(), 3}));
     CHECK(torch::allclose(s.normal, expected.expand({s.count(), 3}), 1e-4, 1e-4));
@@ -394,7 +397,9 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
 TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]") {
   auto depth = torch::full({H, W}, 2.0f);
   depth.narrow(1, 0, 8).fill_(0.5f);
-  const Supports s = sample_supports(depth, ones(), K(), image(), fixed(1000), 2);
+  SamplerOptions o = fixed(1000);
+  o.normals = true;
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
   const BaseGaussians b = make_base_gaussians(s);
   CHECK(b.depth_factor == Approx(1.0 / s.depth.min().item<double>()));
   CHECK(b.z_n.min().item<float>() == Approx(1.0f));

@@ -128,24 +128,33 @@ inline void triangle_pixels(int64_t i, int64_t j, int t, int64_t (&r)[3], int64_
   }
 }
 
-// Area of an accepted triangle, 0 when a vertex is invalid or it spans a depth discontinuity.
-double triangle_area(const Grid& g, int64_t i, int64_t j, int t) {
+// Twice the area vector (e1 x e2) of triangle t of quad (i, j); false when a vertex is invalid or the triangle spans
+// a depth discontinuity.
+bool triangle_cross(const Grid& g, int64_t i, int64_t j, int t, double* cross) {
   int64_t r[3], c[3];
   triangle_pixels(i, j, t, r, c);
   double z[3], P[3][3];
   for (int k = 0; k < 3; ++k) {
     const int64_t idx = r[k] * g.W + c[k];
-    if (g.valid[idx] == 0.0f) return 0.0;
+    if (g.valid[idx] == 0.0f) return false;
     z[k] = g.depth[idx];
     backproject(g, c[k] + 0.5, r[k] + 0.5, z[k], P[k]);
   }
   const double zmin = std::min({z[0], z[1], z[2]}), zmax = std::max({z[0], z[1], z[2]});
-  if (zmax / zmin >= discontinuity_threshold((z[0] + z[1] + z[2]) / 3.0)) return 0.0;
+  if (zmax / zmin >= discontinuity_threshold((z[0] + z[1] + z[2]) / 3.0)) return false;
   double e1[3], e2[3];
   for (int k = 0; k < 3; ++k) e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
-  const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
-               cz = e1[0] * e2[1] - e1[1] * e2[0];
-  return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+  cross[0] = e1[1] * e2[2] - e1[2] * e2[1];
+  cross[1] = e1[2] * e2[0] - e1[0] * e2[2];
+  cross[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  return true;
+}
+
+// Area of an accepted triangle, 0 when a vertex is invalid or it spans a depth discontinuity.
+double triangle_area(const Grid& g, int64_t i, int64_t j, int t) {
+  double cr[3];
+  if (!triangle_cross(g, i, j, t, cr)) return 0.0;
+  return 0.5 * std::sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
 }
 
 // 64-bit mix for per-triangle sequence offsets.
@@ -364,7 +373,6 @@ Supports allocate(int64_t n) {
   s.depth = torch::empty({n});
   s.color = torch::empty({n, 3});
   s.area = torch::empty({n});
-  s.normal = torch::empty({n, 3});
   return s;
 }
 
@@ -380,25 +388,22 @@ void vertex_normal(const Grid& g, int64_t i, int64_t j, float* n) {
         int64_t r[3], c[3];
         triangle_pixels(qi, qj, t, r, c);
         if (!((r[0] == i && c[0] == j) || (r[1] == i && c[1] == j) || (r[2] == i && c[2] == j))) continue;
-        if (triangle_area(g, qi, qj, t) <= 0) continue;
-        double P[3][3];
-        for (int k = 0; k < 3; ++k) backproject(g, c[k] + 0.5, r[k] + 0.5, g.depth[r[k] * g.W + c[k]], P[k]);
-        double e1[3], e2[3];
-        for (int k = 0; k < 3; ++k) e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
-        double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        if (cr[0] * X[0] + cr[1] * X[1] + cr[2] * X[2] > 0) cr[0] = -cr[0], cr[1] = -cr[1], cr[2] = -cr[2];
-        for (int k = 0; k < 3; ++k) acc[k] += cr[k];
+        double cr[3];
+        if (!triangle_cross(g, qi, qj, t, cr)) continue;
+        const double facing = cr[0] * X[0] + cr[1] * X[1] + cr[2] * X[2] > 0 ? -1.0 : 1.0;
+        for (int k = 0; k < 3; ++k) acc[k] += facing * cr[k];
       }
   double len = std::sqrt(acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]);
   if (!(len > 0)) {
     for (int k = 0; k < 3; ++k) acc[k] = -X[k];
-    len = std::sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+    len = std::sqrt(acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2]);
   }
   for (int k = 0; k < 3; ++k) n[k] = static_cast<float>(acc[k] / len);
 }
 
 // Every support takes the surface normal at the valid pixel nearest its position.
 void write_normals(const Grid& g, Supports& s) {
+  s.normal = torch::empty({s.count(), 3});
   const float* uv = s.uv.data_ptr<float>();
   float* n = s.normal.data_ptr<float>();
   at::parallel_for(0, s.count(), 4096, [&](int64_t b, int64_t e) {
@@ -611,7 +616,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
     Supports s = allocate(static_cast<int64_t>(idx.size()));
     write_pixel_supports(g, pointers(s), idx, static_cast<int64_t>(idx.size()));
-    write_normals(g, s);
+    if (options.normals) write_normals(g, s);
     return s;
   }
   std::vector<float> weight;
@@ -633,7 +638,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
         sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
                      options.image_share, options.pixel_floor, options.placement);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
-    write_normals(g, s);
+    if (options.normals) write_normals(g, s);
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,
@@ -668,7 +673,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const Output o = pointers(s);
   write_pixel_supports(g, o, priority, nv);
   rescale_areas(s, sample_faces(g, triangle_areas(g), n - nv, seed, o, nv));
-  write_normals(g, s);
+  if (options.normals) write_normals(g, s);
   return s;
 }
 

@@ -39,6 +39,9 @@ struct SamplerOptions {
   // support too, and triangles wholly inside that band get none, so silhouettes sit on pixel rays as in pixel
   // mode while surfaces keep area sampling. 0 = only the edge pixels themselves.
   int64_t edge_band = 0;
+  // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
+  // reads them, because they cost as much as sampling itself.
+  bool normals = false;
   void visit(ConfigVisitor& v);
 };
 
@@ -49,7 +52,7 @@ struct Supports {
   torch::Tensor depth;   // [N] planar metres
   torch::Tensor color;   // [N,3] sRGB in [0,1]
   torch::Tensor area;    // [N] surface area each support stands for, m² (area mode: total / N)
-  torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera (see support_normal)
+  torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera; only with options.normals
   int64_t count() const { return uv.size(0); }
 };
 
