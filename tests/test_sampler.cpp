@@ -394,6 +394,39 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
   CHECK(torch::allclose(lone.normal[0], -ray / ray.norm(), 1e-5, 1e-6));
 }
 
+TEST_CASE("sampler: along a crease the normal is the area-weighted mean of both faces", "[sampler]") {
+  // A back wall at z = 5 (normal (0,0,-1)) meets a floor at y = 1.2 below the camera (normal (0,-1,0)); depth is
+  // continuous across the crease, so its triangles are accepted on both sides.
+  auto v = torch::arange(H, torch::kFloat32).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({H, W});
+  auto depth = torch::minimum(torch::full({H, W}, 5.0f), 1.2f / v.clamp_min(1e-3f)).contiguous();
+  SamplerOptions px = fixed(0);
+  px.mode = "pixel";
+  px.normals = true;
+  const Supports s = sample_supports(depth, ones(), K(), image(), px);
+  REQUIRE(s.count() == H * W);
+  auto n = s.normal;
+  CHECK(torch::allclose(n.norm(2, 1), torch::ones({s.count()}), 1e-5, 1e-5));
+  CHECK(n.select(1, 0).abs().max().item<float>() < 1e-4f);  // no sideways tilt anywhere
+  const auto wall = (n.select(1, 2) + 1).abs() < 1e-4, floor = (n.select(1, 1) + 1).abs() < 1e-4;
+  const auto blend = ~wall & ~floor;
+  // Exactly the crease's pixels blend the two faces, pointing between them toward the camera.
+  const int64_t blended = blend.sum().item<int64_t>();
+  CHECK(blended >= W);
+  CHECK(blended <= 3 * W);
+  CHECK((n.select(1, 1).masked_select(blend) < 0).all().item<bool>());
+  CHECK((n.select(1, 2).masked_select(blend) < 0).all().item<bool>());
+  // Far from the crease, rows are pure wall (top) and pure floor (bottom).
+  CHECK(wall.view({H, W})[2].all().item<bool>());
+  CHECK(floor.view({H, W})[H - 2].all().item<bool>());
+  // Area mode reads the same per-pixel normals: every support's normal is one of the pixel-mode normals.
+  SamplerOptions area = fixed(4000);
+  area.normals = true;
+  const Supports a = sample_supports(depth, ones(), K(), image(), area, 5);
+  auto ia = a.uv.select(1, 1).floor().clamp(0, H - 1).to(torch::kLong),
+       ja = a.uv.select(1, 0).floor().clamp(0, W - 1).to(torch::kLong);
+  CHECK(torch::equal(a.normal, n.index_select(0, ia * W + ja)));
+}
+
 TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]") {
   auto depth = torch::full({H, W}, 2.0f);
   depth.narrow(1, 0, 8).fill_(0.5f);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -376,10 +377,35 @@ Supports allocate(int64_t n) {
   return s;
 }
 
+// Twice the area vectors of the triangles of quad rows [first, first + rows), each computed at most once, when a
+// pixel around it first asks; a band of rows, small enough to stay in cache.
+class TriangleCrosses {
+ public:
+  explicit TriangleCrosses(const Grid& g) : g_(g), Wq_(g.W - 1) {}
+  void reset(int64_t first_row, int64_t rows) {
+    first_ = first_row;
+    cross_.resize(static_cast<size_t>(rows * Wq_ * 6));
+    state_.assign(static_cast<size_t>(rows * Wq_ * 2), kUnknown);
+  }
+  // Null where triangle_cross rejects the triangle.
+  const double* at(int64_t i, int64_t j, int t) {
+    const int64_t q = ((i - first_) * Wq_ + j) * 2 + t;
+    if (state_[q] == kUnknown) state_[q] = triangle_cross(g_, i, j, t, &cross_[3 * q]) ? kAccepted : kRejected;
+    return state_[q] == kAccepted ? &cross_[3 * q] : nullptr;
+  }
+
+ private:
+  enum : uint8_t { kUnknown, kAccepted, kRejected };
+  const Grid& g_;
+  int64_t Wq_, first_ = 0;
+  std::vector<double> cross_;
+  std::vector<uint8_t> state_;
+};
+
 // The normal of the depth surface at pixel (i, j): the area-weighted mean of the accepted triangles that have the
 // pixel centre as a vertex, turned to face the camera. Where none is accepted (a lone pixel, a silhouette), the
 // surface is taken to face the camera: -X / |X|.
-void vertex_normal(const Grid& g, int64_t i, int64_t j, float* n) {
+void vertex_normal(const Grid& g, TriangleCrosses& tc, int64_t i, int64_t j, float* n) {
   double X[3], acc[3] = {0, 0, 0};
   backproject(g, j + 0.5, i + 0.5, g.depth[i * g.W + j], X);
   for (int64_t qi = std::max<int64_t>(i - 1, 0); qi <= std::min(i, g.H - 2); ++qi)
@@ -388,8 +414,8 @@ void vertex_normal(const Grid& g, int64_t i, int64_t j, float* n) {
         int64_t r[3], c[3];
         triangle_pixels(qi, qj, t, r, c);
         if (!((r[0] == i && c[0] == j) || (r[1] == i && c[1] == j) || (r[2] == i && c[2] == j))) continue;
-        double cr[3];
-        if (!triangle_cross(g, qi, qj, t, cr)) continue;
+        const double* cr = tc.at(qi, qj, t);
+        if (cr == nullptr) continue;
         const double facing = cr[0] * X[0] + cr[1] * X[1] + cr[2] * X[2] > 0 ? -1.0 : 1.0;
         for (int k = 0; k < 3; ++k) acc[k] += facing * cr[k];
       }
@@ -401,12 +427,13 @@ void vertex_normal(const Grid& g, int64_t i, int64_t j, float* n) {
   for (int k = 0; k < 3; ++k) n[k] = static_cast<float>(acc[k] / len);
 }
 
-// Every support takes the surface normal at the valid pixel nearest its position.
+// Every support takes the surface normal at the valid pixel nearest its position. Each such pixel's normal is
+// computed once, in bands of rows that compute each triangle once: O(pixels used), not six triangles per support.
 void write_normals(const Grid& g, Supports& s) {
-  s.normal = torch::empty({s.count(), 3});
+  const int64_t N = s.count();
   const float* uv = s.uv.data_ptr<float>();
-  float* n = s.normal.data_ptr<float>();
-  at::parallel_for(0, s.count(), 4096, [&](int64_t b, int64_t e) {
+  std::unique_ptr<int64_t[]> pixel(new int64_t[N]);  // not zero-filled: every entry is written
+  at::parallel_for(0, N, 4096, [&](int64_t b, int64_t e) {
     for (int64_t k = b; k < e; ++k) {
       int64_t i = std::clamp<int64_t>(static_cast<int64_t>(uv[2 * k + 1]), 0, g.H - 1),
               j = std::clamp<int64_t>(static_cast<int64_t>(uv[2 * k]), 0, g.W - 1);
@@ -421,8 +448,27 @@ void write_normals(const Grid& g, Supports& s) {
             if (g.valid[ii * g.W + jj] != 0.0f && d2 < best) best = d2, i = ii, j = jj;
           }
       }
-      vertex_normal(g, i, j, n + 3 * k);
+      pixel[k] = i * g.W + j;
     }
+  });
+  std::vector<uint8_t> used(static_cast<size_t>(g.H * g.W), 0);
+  for (int64_t k = 0; k < N; ++k) used[pixel[k]] = 1;
+  std::unique_ptr<float[]> map(new float[g.H * g.W * 3]);  // written where used, read only there
+  constexpr int64_t kBand = 16;
+  at::parallel_for(0, (g.H + kBand - 1) / kBand, 1, [&](int64_t b, int64_t e) {
+    TriangleCrosses tc(g);
+    for (int64_t band = b; band < e; ++band) {
+      const int64_t r0 = band * kBand, r1 = std::min(g.H, r0 + kBand);
+      const int64_t q0 = std::max<int64_t>(r0 - 1, 0), q1 = std::min(r1, g.H - 1);  // quad rows touching the band
+      tc.reset(q0, std::max<int64_t>(q1 - q0, 0));
+      for (int64_t p = r0 * g.W; p < r1 * g.W; ++p)
+        if (used[p]) vertex_normal(g, tc, p / g.W, p % g.W, &map[3 * p]);
+    }
+  });
+  s.normal = torch::empty({N, 3});
+  float* n = s.normal.data_ptr<float>();
+  at::parallel_for(0, N, 4096, [&](int64_t b, int64_t e) {
+    for (int64_t k = b; k < e; ++k) std::copy_n(&map[3 * pixel[k]], 3, n + 3 * k);
   });
 }
 
