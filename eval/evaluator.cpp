@@ -366,6 +366,12 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   if (config_.scoring.crack_edge_margin > 0)
     notes_.push_back(cat("cracks skip neighbour pairs within ", config_.scoring.crack_edge_margin,
                          " px of a reference depth edge (scoring.crack_edge_margin): tears in surfaces only"));
+  // Every checkpoint must exist before anything is scored: a typo or a row still training must not surface an hour
+  // into a run.
+  if (!pairs_only)
+    for (const auto& mo : config_.methods)
+      ISPLAT_CHECK(mo.checkpoint.empty() || fs::is_regular_file(mo.checkpoint), "eval: method '", mo.name,
+                   "': checkpoint ", mo.checkpoint, ": no such file (nothing was scored)");
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto& ds = config_.datasets[d];
     const auto sequences = load_eval_dataset(ds);

@@ -167,6 +167,13 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   other.runtime.seed = 7;
   Trainer(other).save(ck);
   CHECK_THROWS_WITH(Evaluator(c).run(), Catch::Contains("was scored with other weights for method 'lidar'"));
+  // A missing checkpoint fails before any method is scored, naming the method and the file.
+  EvalConfig missing = c;
+  missing.scoring.out = test::temp_dir("eval_e2e_missing");
+  missing.methods.push_back(named_method("later", "model", ck + ".absent", {}));
+  CHECK_THROWS_WITH(Evaluator(missing).run(),
+                    Catch::Contains("method 'later'") && Catch::Contains("tiny.safetensors.absent: no such file"));
+  CHECK_FALSE(fs::exists(missing.scoring.out + "/courtyard/results_lift.jsonl"));
 }
 
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
