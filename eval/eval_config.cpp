@@ -141,6 +141,9 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "cracks skip neighbour pairs within this many pixels of a reference depth edge, so they count tears in "
           "surfaces, not silhouettes drawn a pixel or two off (0 = every smooth pair, the default measure)",
           Range::between(0, 16));
+  v.field("crack_holes", crack_holes,
+          "cracks count a smooth neighbour pair with a hole (alpha < 0.5) on either side as broken, instead of "
+          "skipping it, so leaving a tear empty is no escape from the measure (false = the default measure)");
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

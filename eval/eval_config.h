@@ -51,6 +51,7 @@ struct ScoringOptions {
   double baseline_step = 0.5;     // metres: the finer baseline groups of the breakdown table
   int64_t max_per_bin = 0;        // score only the first N pairs of each bin (0 = all)
   int64_t crack_edge_margin = 0;  // cracks skip pairs this close (px) to a reference depth edge (0 = none)
+  bool crack_holes = false;       // cracks count pairs with a hole on either side as broken (false = skip them)
   std::string reference;          // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);

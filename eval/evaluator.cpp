@@ -106,7 +106,7 @@ std::string Evaluator::results_path(size_t d, const std::string& method) const {
 }
 
 // Refuses results scored with other method options (or another crack definition) than the config gives now.
-static void check_method_stamp(const std::string& results, const MethodOptions& mo, int64_t crack_edge_margin);
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring);
 
 std::vector<ReportRow> Evaluator::merge(int64_t count) {
   ISPLAT_CHECK(count >= 1, "eval: --merge needs the shard count");
@@ -124,7 +124,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         const std::string path = results_path(d, mo.name);
         ISPLAT_CHECK(fs::exists(path), "eval --merge: shard ", k, "/", count, " has no results for ", ds.name, " / ",
                      mo.name, " (", path, ")");
-        check_method_stamp(path, mo, config_.scoring.crack_edge_margin);  // scored as this config says
+        check_method_stamp(path, mo, config_.scoring);  // scored as this config says
         const ResultsLog shard(path);
         for (int64_t i : select_pairs(m)) {
           auto it = shard.done().find(i);
@@ -134,7 +134,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         }
       }
       set_shard(0, 1);
-      check_method_stamp(results_path(d, mo.name), mo, config_.scoring.crack_edge_margin);
+      check_method_stamp(results_path(d, mo.name), mo, config_.scoring);
       ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.name, ": ", merged.size(),
                    " pairs from the shards, the manifest selects ", all.size());
       // Rewritten whole, in manifest order, so the merged file equals an unsharded run's.
@@ -151,11 +151,12 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
 // the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
 // a fingerprint (older runs) adopts the current checkpoint's.
-static void check_method_stamp(const std::string& results, const MethodOptions& mo, int64_t crack_edge_margin) {
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring) {
   nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
   now.erase("name");
   // Only when set, so folders scored before the option existed keep their stamps.
-  if (crack_edge_margin > 0) now["scoring.crack_edge_margin"] = crack_edge_margin;
+  if (scoring.crack_edge_margin > 0) now["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
+  if (scoring.crack_holes) now["scoring.crack_holes"] = true;
   if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
   const std::string stamp = results + ".method.json";
@@ -249,6 +250,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
       const auto ref = tgt.depth * (tgt.valid > 0);
       StabilityOptions so;
       so.edge_margin = config_.scoring.crack_edge_margin;
+      so.holes_break = config_.scoring.crack_holes;
       r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, so);
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
@@ -262,7 +264,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
   const bool has_depth = dataset_has_depth(sequences);
-  check_method_stamp(results_path(d, mo.name), mo, config_.scoring.crack_edge_margin);
+  check_method_stamp(results_path(d, mo.name), mo, config_.scoring);
   ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
@@ -366,6 +368,10 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   if (config_.scoring.crack_edge_margin > 0)
     notes_.push_back(cat("cracks skip neighbour pairs within ", config_.scoring.crack_edge_margin,
                          " px of a reference depth edge (scoring.crack_edge_margin): tears in surfaces only"));
+  if (config_.scoring.crack_holes)
+    notes_.push_back(
+        "cracks count smooth neighbour pairs with a hole on either side as broken "
+        "(scoring.crack_holes): holes and jumps together");
   // Every checkpoint must exist before anything is scored: a typo or a row still training must not surface an hour
   // into a run.
   if (!pairs_only)

@@ -554,6 +554,9 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
     EvalConfig margin = c;
     margin.scoring.crack_edge_margin = 2;
     CHECK_THROWS_WITH(Evaluator(margin).run(), Catch::Contains("scoring.crack_edge_margin"));
+    EvalConfig holes = c;
+    holes.scoring.crack_holes = true;
+    CHECK_THROWS_WITH(Evaluator(holes).run(), Catch::Contains("scoring.crack_holes"));
   }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));

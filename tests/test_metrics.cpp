@@ -158,6 +158,18 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   // tear breaks the two down pairs below it.
   CHECK(crack_rate(torn, opaque, ref_edge, full, margin) == Approx(2.0 / 56.0));
   CHECK_THROWS_AS(crack_rate(shifted, opaque, ref_edge, torch::ones({H, W + 1}), margin), Error);
+
+  // With holes_break, a hole in the smooth plane counts as broken pairs instead of dropping out of the measure:
+  // a 2x2 hole at rows 0..1, columns 0..1 of an intact render (the 4 pairs inside it and the 4 that leave it).
+  auto holed = opaque.clone();
+  holed.narrow(1, 0, 2).narrow(2, 0, 2).fill_(0.0);
+  const auto flat = torch::full({1, H, W}, 2.0);
+  CHECK(crack_rate(flat, holed, ref, full) == 0.0);  // the default measure skips the hole's pairs
+  StabilityOptions holes;
+  holes.holes_break = true;
+  CHECK(crack_rate(flat, holed, ref, full, holes) == Approx(8.0 / 180.0));
+  CHECK(std::isnan(crack_rate(flat, torch::zeros({1, H, W}), ref, torch::zeros({H, W}), holes)));
+  CHECK(crack_rate(flat, torch::zeros({1, H, W}), ref, full, holes) == 1.0);  // all empty: every pair broken
 }
 
 TEST_CASE("stability: normal incoherence is 0 on a coherent plane and the tilt on a checkerboard", "[metrics]") {

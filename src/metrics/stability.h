@@ -11,6 +11,7 @@ struct StabilityOptions {
   double smooth_jump = 0.01;  // ... where the reference depth changes by less than this (relative)
   double planar_deg = 2.0;    // reference normals of neighbours within this angle mark a planar surface
   int64_t edge_margin = 0;    // crack_rate skips pairs within this many pixels of a reference depth edge
+  bool holes_break = false;   // crack_rate counts a pair with a hole on either side as broken, instead of skipping it
 };
 
 // Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
@@ -20,7 +21,8 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // Share of masked neighbour pairs (right and down) where the rendered depth (depth_sum / alpha, both
 // rendered) jumps by more than crack_jump·z while the reference depth (ref_depth [H,W], valid where > 0 and
 // finite) changes by less than smooth_jump·z; pairs where either pixel is a hole are not counted (hole_rate
-// counts them). With edge_margin > 0, pairs with a pixel within that many pixels (Chebyshev) of a reference
+// counts them), unless holes_break: then such a pair counts as broken, so a method cannot avoid cracks by
+// leaving the gap empty. With edge_margin > 0, pairs with a pixel within that many pixels (Chebyshev) of a reference
 // depth edge (a neighbour jump >= crack_jump·z, or valid next to invalid) are skipped too: what remains are
 // cracks in surfaces, not silhouettes drawn a pixel or two off. NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
