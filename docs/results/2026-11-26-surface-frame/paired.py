@@ -1,16 +1,23 @@
 # Paired bootstrap (2000 resamples, seed 0) of per-pair differences between two methods on the same pairs, per set
-# and bin. Usage: python3 paired.py <eval out folder> <method a> <method b> [all,3]  (bin 3 = [2,inf))
-import json, sys, random
+# and bin (every set folder that holds results of method a). A method may be "m1+m2": the per-pair mean of several
+# (e.g. two seeds of a row). Usage: python3 paired.py <eval out folder> <method a> <method b> [all,3]  (bin 3 = [2,inf))
+import json, os, sys, random
 root, a, b = sys.argv[1], sys.argv[2], sys.argv[3]
 bins = sys.argv[4].split(',') if len(sys.argv) > 4 else ['all', '3']
-def load(s, m):
+FIELDS = [('psnr', 1), ('hole_rate', 100), ('crack_rate', 100), ('normal_deg', 1), ('lpips_squeeze', 1)]
+def load_one(s, m):
     return {r['index']: r for r in map(json.loads, open(f"{root}/{s}/results_{m}.jsonl"))}
-for s in ['rooms-heldout', 'courtyard-colmap', 'atrium-nerfstudio']:
+def load(s, spec):
+    runs = [load_one(s, m) for m in spec.split('+')]
+    keys = [k for k in runs[0] if all(k in r for r in runs)]  # file order, as the single-method results
+    return {k: dict(runs[0][k], **{f: sum(r[k][f] for r in runs) / len(runs) for f, _ in FIELDS}) for k in keys}
+sets = sorted(d for d in os.listdir(root) if os.path.exists(f"{root}/{d}/results_{a.split('+')[0]}.jsonl"))
+for s in sets:
     A, B = load(s, a), load(s, b)
     for bn in bins:
         keys = [k for k in A if k in B and (bn == 'all' or A[k]['bin'] == int(bn))]
         out = []
-        for f, sc in [('psnr', 1), ('hole_rate', 100), ('crack_rate', 100), ('normal_deg', 1), ('lpips_squeeze', 1)]:
+        for f, sc in FIELDS:
             d = [sc * (A[k][f] - B[k][f]) for k in keys]
             m = sum(d) / len(d)
             rng = random.Random(0); bs = []
