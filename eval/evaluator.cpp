@@ -375,9 +375,19 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   // Every checkpoint must exist before anything is scored: a typo or a row still training must not surface an hour
   // into a run.
   if (!pairs_only)
-    for (const auto& mo : config_.methods)
+    for (const auto& mo : config_.methods) {
       ISPLAT_CHECK(mo.checkpoint.empty() || fs::is_regular_file(mo.checkpoint), "eval: method '", mo.name,
                    "': checkpoint ", mo.checkpoint, ": no such file (nothing was scored)");
+      // A training run's checkpoints/ folder: without summary.json the run is still training (or was stopped), so
+      // last.safetensors is an intermediate step that will change under the same name.
+      const fs::path folder = fs::path(mo.checkpoint).parent_path(), run = folder.parent_path();
+      if (!mo.checkpoint.empty() && folder.filename() == "checkpoints" && fs::exists(run / "config.json") &&
+          !fs::exists(run / "summary.json")) {
+        notes_.push_back(cat(mo.name, ": ", mo.checkpoint, " is from a run that has not finished (", run.string(),
+                             " has no summary.json): its scores are of an intermediate step"));
+        log_warn("eval: ", notes_.back());
+      }
+    }
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto& ds = config_.datasets[d];
     const auto sequences = load_eval_dataset(ds);

@@ -174,6 +174,18 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   CHECK_THROWS_WITH(Evaluator(missing).run(),
                     Catch::Contains("method 'later'") && Catch::Contains("tiny.safetensors.absent: no such file"));
   CHECK_FALSE(fs::exists(missing.scoring.out + "/courtyard/results_lift.jsonl"));
+  // A checkpoint of a run that has not finished (no summary.json beside its checkpoints/) is scored, and the report
+  // says so.
+  const std::string run = test::temp_dir("eval_e2e_unfinished");
+  fs::create_directories(run + "/checkpoints");
+  fs::copy_file(ck, run + "/checkpoints/last.safetensors", fs::copy_options::overwrite_existing);
+  write_file_atomic(run + "/config.json", "{}");
+  EvalConfig unfinished = c;
+  unfinished.scoring.out = test::temp_dir("eval_e2e_unfinished_out");
+  unfinished.methods.back().checkpoint = run + "/checkpoints/last.safetensors";
+  Evaluator(unfinished).run();
+  CHECK_THAT(test::read_bytes(unfinished.scoring.out + "/report.md"),
+             Catch::Contains("is from a run that has not finished"));
 }
 
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
