@@ -374,7 +374,7 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
   auto depth = (-2.0 * nl / (nx * jj + ny * ii + nz)).to(torch::kFloat32);
   REQUIRE(depth.min().item<float>() > 0);
   const auto expected = torch::tensor({nx / nl, ny / nl, nz / nl});
-  // Normals cost as much as sampling: only filled on request.
+  // Normals are only filled on request.
   CHECK_FALSE(sample_supports(depth, ones(), K(), image(), fixed(1500), 3).normal.defined());
   SamplerOptions area = fixed(1500), pixel = fixed(0), vf = fixed(1500);
   pixel.mode = "pixel";
