@@ -36,6 +36,12 @@ bool wanted(const std::vector<std::string>& only, const std::string& name) {
   return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
 }
 
+std::string join_seeds(const ExperimentRow& r) {
+  std::string out;
+  for (int64_t s : r.seeds) out += (out.empty() ? "" : ",") + std::to_string(s);
+  return out;
+}
+
 std::string fmt(double v, int digits) {
   if (!std::isfinite(v)) return "n/a";
   std::ostringstream os;
@@ -178,6 +184,20 @@ bool Experiment::finished(const ExperimentRun& run, int64_t steps) const {
 }
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
+  for (const auto& name : only) row(name);  // a misspelt --rows entry fails instead of training nothing
+  int64_t selected = 0;
+  for (const auto& r : config_.rows) {
+    if (!r.from.empty() || !wanted(only, r.name)) continue;
+    int64_t picked = 0;
+    for (const auto& run : runs(r)) picked += seeds.empty() || std::count(seeds.begin(), seeds.end(), run.seed) > 0;
+    if (picked == 0)
+      log_warn("experiment: --seeds selects no run of row '", r.name, "' (its seeds: ", join_seeds(r),
+               "; add the seed to the row's seeds in the config)");
+    selected += picked;
+  }
+  ISPLAT_CHECK(seeds.empty() || selected > 0,
+               "experiment: --seeds selects no run to train (a seed must be listed in the row's seeds; rows that "
+               "reuse another row's runs with `from` are not trained)");
   for (const auto& r : config_.rows) {
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     for (const auto& run : runs(r)) {
@@ -214,6 +234,7 @@ std::string missing_weights(const std::vector<std::string>& overrides) {
 }  // namespace
 
 void Experiment::evaluate(const std::vector<std::string>& only, const std::vector<std::string>& variants) {
+  for (const auto& name : only) row(name);
   for (const auto& name : variants) {
     bool known = false;
     for (const auto& v : config_.variants) known = known || v.name == name;

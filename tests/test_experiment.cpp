@@ -134,6 +134,12 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   REQUIRE(more.train({"pixel_supports"}));
   CHECK(more.finished(pixel_run));
   CHECK_THROWS_WITH(again.evaluate({}, {"nope"}), Catch::Contains("no variant 'nope'"));
+  // A misspelt row or a seed no selected row lists fails before anything runs, instead of doing nothing.
+  CHECK_THROWS_WITH(again.train({"ful"}), Catch::Contains("no row 'ful'"));
+  CHECK_THROWS_WITH(again.evaluate({"ful"}), Catch::Contains("no row 'ful'"));
+  CHECK_THROWS_WITH(again.train({"pixel_supports"}, {1}), Catch::Contains("--seeds selects no run"));
+  CHECK(again.train({"full", "pixel_supports"}, {1}));  // full lists seed 1 (already trained: skipped)
+  CHECK(again.train({"base_gaussians"}));               // reuses full's runs: nothing to train, and no error
   // A row reusing an unknown row is a clear error.
   ExperimentConfig bad = c;
   bad.rows[2].from = "nope";
