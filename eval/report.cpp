@@ -46,6 +46,11 @@ std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& p
   return front;
 }
 
+std::pair<int, int> family_style(size_t k) {
+  static constexpr int kColors[] = {0, 1, 2, 3, 4, 5, 6, 8, 9};  // tab10 without the front's grey
+  return {kColors[k % 9], static_cast<int>(k % 4)};
+}
+
 static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& rows) {
   std::vector<std::string> datasets;
   for (const auto& r : rows)
@@ -69,7 +74,8 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
       c.log_x = true;
       auto xval = [&](const ReportRow* r) { return axis == 0 ? r->infer_ms + r->render_ms : r->gaussians; };
       for (size_t k = 0; k < families.size(); ++k) {
-        ChartSeries s{families[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
+        const auto [color, marker] = family_style(k);
+        ChartSeries s{families[k], {}, {}, true, marker, color};
         std::vector<const ReportRow*> mine;
         for (const auto* r : pts)
           if (method_family(r->method) == families[k] && xval(r) > 0) mine.push_back(r);
@@ -80,7 +86,7 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
       std::vector<std::pair<double, double>> xy;
       for (const auto* r : pts)
         xy.push_back({xval(r) > 0 ? xval(r) : std::numeric_limits<double>::quiet_NaN(), r->psnr});
-      ChartSeries front{"Pareto front", {}, {}, true, 3, 7};
+      ChartSeries front{"Pareto front", {}, {}, true, kParetoMarker, kParetoColor};
       for (size_t i : pareto_front(xy)) front.x.push_back(xy[i].first), front.y.push_back(xy[i].second);
       c.series.push_back(front);
       charts.push_back(c);

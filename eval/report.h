@@ -76,6 +76,11 @@ std::string method_family(const std::string& method);
 // The swept value in "full~depth_noise0.02" (0.02) or "full@px0.5" (0.5); NaN when there is none.
 double sweep_value(const std::string& method);
 
+// Palette index (tab10) and marker of the k-th method family on the speed/quality charts. The Pareto front is
+// grey crosses; no family gets grey, so the front never looks like a method's series.
+constexpr int kParetoColor = 7, kParetoMarker = 3;
+std::pair<int, int> family_style(size_t k);
+
 // Indices of the points (x = cost, y = quality) not dominated by a cheaper-or-equal, better one, by cost.
 std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& points);
 

@@ -211,6 +211,9 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   // Cheaper and better points form the front; dominated ones do not.
   const std::vector<std::pair<double, double>> pts = {{10, 20}, {5, 21}, {20, 22}, {30, 21.5}, {20, 19}, {1, 15}};
   CHECK(pareto_front(pts) == std::vector<size_t>{5, 1, 2});
+  // No method family is drawn like the front (the eighth family used to get its grey crosses).
+  for (size_t k = 0; k < 40; ++k) CHECK(family_style(k).first != kParetoColor);
+  CHECK(family_style(0) != family_style(1));
   // Paired differences: a method 1 dB better on every shared pair, with half the Gaussians.
   std::map<std::string, std::vector<PairResult>> res;
   for (int64_t i = 0; i < 20; ++i) {
