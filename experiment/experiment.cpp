@@ -185,9 +185,10 @@ bool Experiment::finished(const ExperimentRun& run, int64_t steps) const {
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
   for (const auto& name : only) row(name);  // a misspelt --rows entry fails instead of training nothing
-  int64_t selected = 0;
+  int64_t trainable = 0, selected = 0;
   for (const auto& r : config_.rows) {
     if (!r.from.empty() || !wanted(only, r.name)) continue;
+    ++trainable;
     int64_t picked = 0;
     for (const auto& run : runs(r)) picked += seeds.empty() || std::count(seeds.begin(), seeds.end(), run.seed) > 0;
     if (picked == 0)
@@ -195,9 +196,8 @@ bool Experiment::train(const std::vector<std::string>& only, const std::vector<i
                "; add the seed to the row's seeds in the config)");
     selected += picked;
   }
-  ISPLAT_CHECK(seeds.empty() || selected > 0,
-               "experiment: --seeds selects no run to train (a seed must be listed in the row's seeds; rows that "
-               "reuse another row's runs with `from` are not trained)");
+  ISPLAT_CHECK(seeds.empty() || trainable == 0 || selected > 0,
+               "experiment: --seeds selects no run to train (a seed must be listed in the row's seeds)");
   for (const auto& r : config_.rows) {
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     for (const auto& run : runs(r)) {

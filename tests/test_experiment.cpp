@@ -139,7 +139,7 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   CHECK_THROWS_WITH(again.evaluate({"ful"}), Catch::Contains("no row 'ful'"));
   CHECK_THROWS_WITH(again.train({"pixel_supports"}, {1}), Catch::Contains("--seeds selects no run"));
   CHECK(again.train({"full", "pixel_supports"}, {1}));  // full lists seed 1 (already trained: skipped)
-  CHECK(again.train({"base_gaussians"}));               // reuses full's runs: nothing to train, and no error
+  CHECK(again.train({"base_gaussians"}, {1}));          // reuses full's runs: nothing to train, and no error
   // A row reusing an unknown row is a clear error.
   ExperimentConfig bad = c;
   bad.rows[2].from = "nope";
