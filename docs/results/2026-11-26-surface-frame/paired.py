@@ -10,7 +10,10 @@ def load_one(s, m):
 def load(s, spec):
     runs = [load_one(s, m) for m in spec.split('+')]
     keys = [k for k in runs[0] if all(k in r for r in runs)]  # file order, as the single-method results
-    return {k: dict(runs[0][k], **{f: sum(r[k][f] for r in runs) / len(runs) for f, _ in FIELDS}) for k in keys}
+    def avg(k, f):  # None where a method has no such measure (identity: no holes or cracks)
+        v = [r[k].get(f) for r in runs]
+        return None if None in v else sum(v) / len(v)
+    return {k: dict(runs[0][k], **{f: avg(k, f) for f, _ in FIELDS}) for k in keys}
 sets = sorted(d for d in os.listdir(root) if os.path.exists(f"{root}/{d}/results_{a.split('+')[0]}.jsonl"))
 for s in sets:
     A, B = load(s, a), load(s, b)
@@ -18,12 +21,15 @@ for s in sets:
         keys = [k for k in A if k in B and (bn == 'all' or A[k]['bin'] == int(bn))]
         out = []
         for f, sc in FIELDS:
-            d = [sc * (A[k][f] - B[k][f]) for k in keys]
+            ks = [k for k in keys if A[k][f] is not None and B[k][f] is not None]
+            if not ks:
+                continue
+            d = [sc * (A[k][f] - B[k][f]) for k in ks]
             m = sum(d) / len(d)
             rng = random.Random(0); bs = []
             for _ in range(2000):
                 x = [d[rng.randrange(len(d))] for _ in d]; bs.append(sum(x) / len(x))
             bs.sort()
-            va = sum(sc * A[k][f] for k in keys) / len(keys)
+            va = sum(sc * A[k][f] for k in ks) / len(ks)
             out.append(f"{f} {va:.2f} {m:+.2f} [{bs[50]:+.2f}, {bs[1949]:+.2f}]" if f != 'lpips_squeeze' else f"lpips {m:+.3f}")
         print(s, bn, len(keys), ' | '.join(out))
