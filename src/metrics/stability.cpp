@@ -61,16 +61,19 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
   const auto r = plane(ref_depth, H, W, "reference depth"), m = plane(mask, H, W, "mask");
   const double *pd = ds.data_ptr<double>(), *pa = a.data_ptr<double>(), *pr = r.data_ptr<double>(),
                *pm = m.data_ptr<double>();
-  auto in_mask = [&](int64_t p) { return pm[p] != 0 && std::isfinite(pr[p]) && pr[p] > 0; };
   auto hole = [&](int64_t p) { return pa[p] < o.hole_alpha; };
+  // A pixel takes part if it is masked with valid reference depth, and (unless holes break pairs) is no hole.
+  auto counted = [&](int64_t p) {
+    return pm[p] != 0 && std::isfinite(pr[p]) && pr[p] > 0 && (o.holes_break || !hole(p));
+  };
   const std::vector<uint8_t> near_edge = near_reference_edge(pr, H, W, o.crack_jump, o.edge_margin);
   int64_t pairs = 0, cracks = 0;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
       const int64_t p = i * W + j;
-      if (!in_mask(p) || (hole(p) && !o.holes_break)) continue;
+      if (!counted(p)) continue;
       for (const int64_t q : {j + 1 < W ? p + 1 : -1, i + 1 < H ? p + W : -1}) {
-        if (q < 0 || !in_mask(q) || (hole(q) && !o.holes_break)) continue;
+        if (q < 0 || !counted(q)) continue;
         const double zr = 0.5 * (pr[p] + pr[q]);
         if (std::abs(pr[p] - pr[q]) >= o.smooth_jump * zr) continue;  // the reference itself has an edge
         if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
