@@ -185,34 +185,32 @@ bool Experiment::finished(const ExperimentRun& run, int64_t steps) const {
 
 bool Experiment::train(const std::vector<std::string>& only, const std::vector<int64_t>& seeds) {
   for (const auto& name : only) row(name);  // a misspelt --rows entry fails instead of training nothing
-  int64_t trainable = 0, selected = 0;
+  // The runs to train, in row order; a --seeds value no selected row lists fails before anything trains.
+  std::vector<ExperimentRun> todo;
+  int64_t trainable = 0;
   for (const auto& r : config_.rows) {
     if (!r.from.empty() || !wanted(only, r.name)) continue;
     ++trainable;
-    int64_t picked = 0;
-    for (const auto& run : runs(r)) picked += seeds.empty() || std::count(seeds.begin(), seeds.end(), run.seed) > 0;
-    if (picked == 0)
+    const size_t before = todo.size();
+    for (const auto& run : runs(r))
+      if (seeds.empty() || std::find(seeds.begin(), seeds.end(), run.seed) != seeds.end()) todo.push_back(run);
+    if (todo.size() == before)
       log_warn("experiment: --seeds selects no run of row '", r.name, "' (its seeds: ", join_seeds(r),
                "; add the seed to the row's seeds in the config)");
-    selected += picked;
   }
-  ISPLAT_CHECK(seeds.empty() || trainable == 0 || selected > 0,
+  ISPLAT_CHECK(seeds.empty() || trainable == 0 || !todo.empty(),
                "experiment: --seeds selects no run to train (a seed must be listed in the row's seeds)");
-  for (const auto& r : config_.rows) {
-    if (!r.from.empty() || !wanted(only, r.name)) continue;
-    for (const auto& run : runs(r)) {
-      if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), run.seed) == seeds.end()) continue;
-      const TrainConfig tc = run_config(run);
-      check_config(run, tc);
-      if (finished(run, tc.train.steps)) {
-        log_info("experiment: ", r.name, " seed ", run.seed, " is trained (", run.dir, "); skipped");
-        continue;
-      }
-      log_info("experiment: training ", r.name, " seed ", run.seed, " -> ", run.dir);
-      Trainer trainer(tc);
-      trainer.resume("auto");
-      if (trainer.run() == 130) return false;
+  for (const auto& run : todo) {
+    const TrainConfig tc = run_config(run);
+    check_config(run, tc);
+    if (finished(run, tc.train.steps)) {
+      log_info("experiment: ", run.row, " seed ", run.seed, " is trained (", run.dir, "); skipped");
+      continue;
     }
+    log_info("experiment: training ", run.row, " seed ", run.seed, " -> ", run.dir);
+    Trainer trainer(tc);
+    trainer.resume("auto");
+    if (trainer.run() == 130) return false;
   }
   return true;
 }
