@@ -81,8 +81,10 @@ Trainer::Trainer(const TrainConfig& config)
                                                   static_cast<uint64_t>(config.runtime.seed));
   try {
     auto val_seqs = read_split(config.data.hypersim, config.data.val_split);
+    TupleOptions val_tuples = config.data.tuples;
+    val_tuples.augment = AugmentOptions{};  // validation scores the data as it is
     if (!val_seqs.empty())
-      val_sampler_ = std::make_unique<TupleSampler>(std::move(val_seqs), config.data.tuples,
+      val_sampler_ = std::make_unique<TupleSampler>(std::move(val_seqs), val_tuples,
                                                     static_cast<uint64_t>(config.runtime.seed) + 1);
   } catch (const Error& e) {
     log_warn("train: no validation set (", e.what(), "); validation is skipped");

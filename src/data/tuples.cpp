@@ -23,6 +23,7 @@ void TupleOptions::visit(ConfigVisitor& v) {
   v.field("min_overlap", min_overlap, "minimum frustum overlap between context and each target", Range::unit());
   v.field("min_valid_depth", min_valid_depth, "resample contexts whose valid-depth fraction is lower", Range::unit());
   v.field("max_attempts", max_attempts, "draws per tuple before giving up with an error", Range::at_least(1));
+  v.section("augment", "training-time augmentation (off by default; never applied to validation tuples)", augment);
 }
 
 uint64_t mix_seed(uint64_t seed, uint64_t index) {
@@ -189,6 +190,7 @@ TupleSample TupleSampler::sample(int64_t index) const {
       count_skip(cat("skipping unreadable frame: ", e.what()));
       continue;
     }
+    augment_tuple(out, options_.augment, mix_seed(seed_ ^ 0xA5A5A5A5A5A5A5A5ull, static_cast<uint64_t>(index)));
     return out;
   }
   fail("tuple sampler: ", options_.max_attempts, " draws for tuple ", index,

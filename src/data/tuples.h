@@ -9,6 +9,7 @@
 
 #include <torch/types.h>
 
+#include "data/augment.h"
 #include "data/sequence.h"
 #include "geometry/camera_torch.h"
 
@@ -23,6 +24,7 @@ struct TupleOptions {
   double min_overlap = 0.3;      // minimum frustum overlap of the context with each target
   double min_valid_depth = 0.5;  // contexts with less valid depth are resampled
   int64_t max_attempts = 32;
+  AugmentOptions augment;  // training tuples only: the trainer turns it off for validation
   void visit(ConfigVisitor& v);
 };
 
