@@ -1,8 +1,9 @@
-// Tuple augmentation: off changes nothing, a seed fixes the result, the mirror keeps every view's geometry
-// consistent, zoom moves the intrinsics with the pixels, and the photometric jitter is shared by all views.
+// Tuple augmentation: determinism, a consistent mirror, zoom with its intrinsics, and one shared colour jitter.
 #include <catch2/catch.hpp>
 
 #include <torch/torch.h>
+
+#include <cmath>
 
 #include "data/augment.h"
 #include "data/hypersim.h"
@@ -15,27 +16,36 @@ using namespace isplat;
 namespace {
 constexpr int64_t kW = 40, kH = 30;
 
-// A view whose image encodes each pixel's ray: R = 0.5 + x/z / 2, G = 0.5 + y/z / 2 (linear in the pixel).
-ViewTensors ray_view(double tx, const std::string& name) {
+// A pose with a rotation (about y, then x) and a translation.
+torch::Tensor pose(double yaw, double pitch, double tx) {
+  const double cy = std::cos(yaw), sy = std::sin(yaw), cx = std::cos(pitch), sx = std::sin(pitch);
+  return torch::tensor(
+      {{cy, sy * sx, sy * cx, tx}, {0.0, cx, -sx, 0.1}, {-sy, cy * sx, cy * cx, 0.05}, {0.0, 0.0, 0.0, 1.0}},
+      torch::kFloat32);
+}
+
+// A view whose image encodes each pixel's ray: R = 0.5 + x/z / 2, G = 0.5 + y/z / 2 (linear in the pixel), with
+// depth on a slanted plane and an invalid block (depth 0, valid 0).
+ViewTensors ray_view(double yaw, double tx, const std::string& name) {
   ViewTensors v;
-  v.camera.K = make_K(30.0, 30.0, 19.0, 16.0);
-  v.camera.T_cw = torch::eye(4);
-  v.camera.T_cw[0][3] = tx;
-  v.camera.T_cw[1][3] = 0.1;
+  v.camera.K = make_K(30.0, 28.0, 19.0, 16.0);
+  v.camera.T_cw = pose(yaw, -0.5 * yaw, tx);
   v.camera.width = kW, v.camera.height = kH;
   const auto uv = pixel_centers(kH, kW);
-  const auto x = (uv.select(2, 0) - 19.0) / 30.0, y = (uv.select(2, 1) - 16.0) / 30.0;
+  const auto x = (uv.select(2, 0) - 19.0) / 30.0, y = (uv.select(2, 1) - 16.0) / 28.0;
   v.image = torch::stack({0.5 + x / 2, 0.5 + y / 2, torch::full({kH, kW}, 0.25)});
-  v.depth = 2.0 + 0.05 * uv.select(2, 0) + 0.02 * uv.select(2, 1);  // a slanted plane, all valid
   v.valid = torch::ones({kH, kW});
+  v.valid.slice(0, 11, 17).slice(1, 15, 23).zero_();  // central: every zoom window keeps part of it
+  v.depth = (2.0 + 0.05 * uv.select(2, 0) + 0.02 * uv.select(2, 1)) * v.valid;
   v.name = name;
   return v;
 }
 
 TupleSample ray_tuple() {
   TupleSample s;
-  s.context = ray_view(0.0, "ctx");
-  s.targets = {ray_view(0.3, "t0"), ray_view(-0.2, "t1")};
+  s.context = ray_view(0.0, 0.0, "ctx");
+  s.targets = {ray_view(0.15, 0.3, "t0"), ray_view(-0.1, -0.2, "t1")};
+  s.targets[1].camera.K[0][1] = 0.4;  // a skewed camera: the mirror must flip the skew's sign
   s.baselines = {0.3, 0.2};
   s.overlaps = {0.9, 0.9};
   return s;
@@ -102,6 +112,9 @@ TEST_CASE("augment: the mirror keeps every view of the tuple consistent", "[data
   const auto s = ray_tuple();
   CHECK(torch::equal(m.context.image, s.context.image.flip({2})));
   CHECK(torch::equal(m.context.depth, s.context.depth.flip({1})));
+  CHECK(torch::equal(m.context.valid, s.context.valid.flip({1})));
+  CHECK(torch::equal(m.targets[1].valid, s.targets[1].valid.flip({1})));
+  CHECK(m.targets[1].camera.K[0][1].item<float>() == Approx(-0.4f));
   // A context pixel and its mirror image land on mirrored pixels of every target, at the same depth.
   for (size_t t = 0; t < s.targets.size(); ++t) {
     const auto before = reproject(s, s.targets[t], 7.5, 11.5, 2.5);
@@ -117,31 +130,49 @@ TEST_CASE("augment: the mirror keeps every view of the tuple consistent", "[data
 TEST_CASE("augment: zoom scales the focal length and keeps each pixel on its ray", "[data][augment]") {
   AugmentOptions o;
   o.zoom = 0.5;
-  auto z = ray_tuple();
-  augment_tuple(z, o, 9);
   const auto K0 = ray_tuple().context.camera.K;
-  for (const auto* v : {&z.context, &z.targets[0]}) {
-    const auto K = v->camera.K;
-    const double s = K[0][0].item<double>() / K0[0][0].item<double>();
-    CHECK(s >= 1.0);
-    CHECK(s <= 1.5 * 1.05);  // the crop is rounded to whole pixels
-    // The image encodes each pixel's ray through the original K; read back, it must match the new K's ray.
+  const double fx0 = K0[0][0].item<double>(), fy0 = K0[1][1].item<double>();
+  const double cx0 = K0[0][2].item<double>(), cy0 = K0[1][2].item<double>();
+  bool zoomed = false;
+  for (uint64_t seed = 0; seed < 6; ++seed) {
+    auto z = ray_tuple();
+    // Depth along one image axis per view, so each depth reads back the source pixel's column or row.
     const auto uv = pixel_centers(kH, kW);
-    const auto x = (uv.select(2, 0) - K[0][2]) / K[0][0];
-    const auto interior = torch::indexing::Slice(2, -2);
-    const auto read = (v->image[0] - 0.5) * 2;
-    CHECK(torch::allclose(read.index({interior, interior}), x.index({interior, interior}), 0, 2e-3));
-    CHECK(((v->depth > 0) == (v->valid > 0.5)).all().item<bool>());
+    z.context.depth = (2.0 + 0.05 * uv.select(2, 0)) * z.context.valid;
+    z.targets[0].depth = (2.0 + 0.05 * uv.select(2, 1)) * z.targets[0].valid;
+    augment_tuple(z, o, seed);
+    for (int view = 0; view < 2; ++view) {
+      const ViewTensors& v = view == 0 ? z.context : z.targets[0];
+      const auto K = v.camera.K.to(torch::kFloat64);
+      const double sx = K[0][0].item<double>() / fx0, sy = K[1][1].item<double>() / fy0;
+      CHECK(sx >= 1.0);
+      CHECK(sx <= 1.5 * 1.05);  // the window is rounded to whole pixels
+      zoomed = zoomed || sx > 1.05;
+      // The image encodes each pixel's ray through the original K; read back, it must be the new K's ray.
+      const auto uvd = uv.to(torch::kFloat64);
+      const auto x = (uvd.select(2, 0) - K[0][2]) / K[0][0], y = (uvd.select(2, 1) - K[1][2]) / K[1][1];
+      const auto in = torch::indexing::Slice(2, -2);
+      CHECK(torch::allclose(((v.image[0] - 0.5) * 2).to(torch::kFloat64).index({in, in}), x.index({in, in}), 0, 2e-3));
+      CHECK(torch::allclose(((v.image[1] - 0.5) * 2).to(torch::kFloat64).index({in, in}), y.index({in, in}), 0, 2e-3));
+      // Each valid pixel's depth comes from the source pixel whose centre is nearest where its own centre maps.
+      const double x0 = cx0 - K[0][2].item<double>() / sx, y0 = cy0 - K[1][2].item<double>() / sy;
+      const auto source = view == 0 ? x0 + uvd.select(2, 0) / sx : y0 + uvd.select(2, 1) / sy;
+      const auto read = (v.depth.to(torch::kFloat64) - 2.0) / 0.05;  // the source pixel's centre coordinate
+      const auto ok = v.valid > 0.5;
+      CHECK(((read - source).abs().masked_select(ok).max().item<double>() <= 0.5 + 1e-3));
+      CHECK(((v.depth > 0) == ok).all().item<bool>());
+      CHECK(ok.logical_not().any().item<bool>());  // the invalid block survives (as invalid, not as depth)
+    }
   }
+  CHECK(zoomed);
 }
 
 TEST_CASE("augment: one photometric jitter is shared by every view", "[data][augment]") {
   AugmentOptions o;
   o.brightness = 0.4, o.contrast = 0.3, o.saturation = 0.5, o.gamma = 0.3, o.channel_shuffle = 1.0;
   auto s = ray_tuple();
-  s.targets[0].image = s.context.image.clone();  // identical pictures stay identical
   augment_tuple(s, o, 21);
-  CHECK(torch::equal(s.context.image, s.targets[0].image));
+  CHECK(torch::equal(s.context.image, s.targets[0].image));  // identical pictures stay identical
   CHECK_FALSE(torch::equal(s.context.image, ray_tuple().context.image));
   CHECK(torch::equal(s.context.depth, ray_tuple().context.depth));  // geometry untouched
 

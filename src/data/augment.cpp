@@ -12,11 +12,9 @@
 #include "geometry/camera_torch.h"
 
 namespace isplat {
-namespace F = torch::nn::functional;
-
 bool AugmentOptions::any() const {
-  return flip > 0 || zoom > 0 || brightness > 0 || contrast > 0 || saturation > 0 || gamma > 0 ||
-         channel_shuffle > 0 || gray > 0;
+  return flip > 0 || zoom > 0 || brightness > 0 || contrast > 0 || saturation > 0 || gamma > 0 || channel_shuffle > 0 ||
+         gray > 0;
 }
 
 void AugmentOptions::visit(ConfigVisitor& v) {
@@ -46,14 +44,17 @@ double log_uniform(double a, std::mt19937_64& rng) {
   return std::exp(std::uniform_real_distribution<double>(-r, r)(rng));
 }
 
-bool chance(double p, std::mt19937_64& rng) { return p > 0 && std::uniform_real_distribution<double>(0, 1)(rng) < p; }
+bool chance(double p, std::mt19937_64& rng) {
+  return p > 0 && std::uniform_real_distribution<double>(0, 1)(rng) < p;
+}
 
 struct Photometric {
   double gain = 1, contrast = 1, saturation = 1, gamma = 1;
   bool gray = false;
   std::vector<int64_t> order = {0, 1, 2};
   bool identity() const {
-    return gain == 1 && contrast == 1 && saturation == 1 && gamma == 1 && !gray && order == std::vector<int64_t>{0, 1, 2};
+    return gain == 1 && contrast == 1 && saturation == 1 && gamma == 1 && !gray &&
+           order == std::vector<int64_t>{0, 1, 2};
   }
 };
 
@@ -74,23 +75,32 @@ torch::Tensor apply_photometric(torch::Tensor image, const Photometric& p) {
   return image.clamp(0, 1).contiguous();
 }
 
-torch::Tensor resize_nearest(const torch::Tensor& map, int64_t height, int64_t width) {  // [H,W]
-  return F::interpolate(map.unsqueeze(0).unsqueeze(0),
-                        F::InterpolateFuncOptions().size(std::vector<int64_t>{height, width}).mode(torch::kNearest))
-      .squeeze(0)
-      .squeeze(0);
+// Depth and validity [2,h,w] resized to [2,H,W] by taking the source pixel under each output pixel's centre
+// (nearest-exact), the rule the bilinear image resize and K follow; plain nearest sits half a pixel off.
+torch::Tensor resize_nearest(const torch::Tensor& maps, int64_t height, int64_t width) {
+  auto source = [](int64_t out, int64_t in) {
+    return ((torch::arange(out, torch::kFloat64) + 0.5) * (static_cast<double>(in) / out))
+        .floor()
+        .clamp_max(in - 1)
+        .to(torch::kLong);
+  };
+  return maps.index_select(1, source(height, maps.size(1))).index_select(2, source(width, maps.size(2)));
 }
 
-void zoom_view(ViewTensors& view, double z, double fx, double fy) {
+// ax, ay in [0, 1]: where the window sits between the image's left/top and right/bottom edges.
+void zoom_view(ViewTensors& view, double z, double ax, double ay) {
   const int64_t H = view.image.size(1), W = view.image.size(2);
   const int64_t cw = std::max<int64_t>(1, std::lround(W / z)), ch = std::max<int64_t>(1, std::lround(H / z));
-  const int64_t x0 = std::lround(fx * (W - cw)), y0 = std::lround(fy * (H - ch));
-  auto [cropped, K] = crop_with_K(view.image, view.camera.K, x0, y0, cw, ch);
-  std::tie(view.image, view.camera.K) = resize_with_K(cropped, K, H, W);
+  const int64_t x0 = std::lround(ax * (W - cw)), y0 = std::lround(ay * (H - ch));
+  const auto K = view.camera.K;
+  auto [cropped, K_crop] = crop_with_K(view.image, K, x0, y0, cw, ch);
+  std::tie(view.image, view.camera.K) = resize_with_K(cropped, K_crop, H, W);
   view.image = view.image.clamp(0, 1).contiguous();
   if (view.depth.defined() && view.depth.numel() > 0) {
-    view.depth = resize_nearest(view.depth.narrow(0, y0, ch).narrow(1, x0, cw), H, W).contiguous();
-    view.valid = resize_nearest(view.valid.narrow(0, y0, ch).narrow(1, x0, cw), H, W).contiguous();
+    const auto maps = crop_with_K(torch::stack({view.depth, view.valid}), K, x0, y0, cw, ch).first;
+    const auto resized = resize_nearest(maps, H, W);
+    view.depth = resized[0].contiguous();
+    view.valid = resized[1].contiguous();
   }
 }
 
@@ -115,23 +125,27 @@ void mirror_view(ViewTensors& view) {
 
 void augment_tuple(TupleSample& sample, const AugmentOptions& o, uint64_t seed) {
   if (!o.any()) return;
-  std::mt19937_64 rng(seed);
-  // Draw every decision up front in a fixed order, so a tuple's augmentation depends only on the seed.
+  // One stream per decision, so switching one option on leaves the others' draws for a tuple unchanged.
+  enum Stream : uint64_t { kGamma, kGain, kContrast, kSaturation, kShuffle, kGray, kMirror, kZoom };
+  auto stream = [seed](Stream s) { return std::mt19937_64(mix_seed(seed, s)); };
   Photometric p;
-  p.gamma = log_uniform(o.gamma, rng);
-  p.gain = log_uniform(o.brightness, rng);
-  p.contrast = log_uniform(o.contrast, rng);
-  p.saturation = log_uniform(o.saturation, rng);
-  if (chance(o.channel_shuffle, rng)) std::shuffle(p.order.begin(), p.order.end(), rng);
-  p.gray = chance(o.gray, rng);
-  const bool mirror = chance(o.flip, rng);
+  auto r_gamma = stream(kGamma), r_gain = stream(kGain), r_contrast = stream(kContrast), r_sat = stream(kSaturation);
+  p.gamma = log_uniform(o.gamma, r_gamma);
+  p.gain = log_uniform(o.brightness, r_gain);
+  p.contrast = log_uniform(o.contrast, r_contrast);
+  p.saturation = log_uniform(o.saturation, r_sat);
+  auto r_shuffle = stream(kShuffle), r_gray = stream(kGray), r_mirror = stream(kMirror), r_zoom = stream(kZoom);
+  if (chance(o.channel_shuffle, r_shuffle)) std::shuffle(p.order.begin(), p.order.end(), r_shuffle);
+  p.gray = chance(o.gray, r_gray);
+  const bool mirror = chance(o.flip, r_mirror);
   std::vector<ViewTensors*> views = {&sample.context};
   for (auto& t : sample.targets) views.push_back(&t);
+  std::uniform_real_distribution<double> u(0, 1);
   for (ViewTensors* v : views) {
     if (o.zoom > 0) {
-      std::uniform_real_distribution<double> u(0, 1);
-      const double z = 1 + o.zoom * u(rng), fx = u(rng), fy = u(rng);
-      zoom_view(*v, z, fx, fy);
+      const double z = 1 + o.zoom * u(r_zoom);
+      const double ax = u(r_zoom), ay = u(r_zoom);
+      zoom_view(*v, z, ax, ay);
     }
     if (!p.identity()) v->image = apply_photometric(v->image, p);
     if (mirror) mirror_view(*v);

@@ -1,6 +1,4 @@
-// Training-time augmentation of a tuple, deterministic from a seed: one photometric jitter shared by every view
-// (so views still agree on colour), a zoom per view with its intrinsics, and a left-right mirror of the whole
-// tuple (images, depth, intrinsics and poses, so the geometry stays consistent).
+// Training-time augmentation of a tuple, deterministic from a seed: shared colour jitter, per-view zoom, mirror.
 #pragma once
 #include <cstdint>
 
@@ -22,7 +20,9 @@ struct AugmentOptions {
   void visit(ConfigVisitor& v);
 };
 
-// Applies `options` to every view of `sample` in place. Same seed -> same result; all-zero options change
+// Applies `options` to every view of `sample` in place. The colour jitter is the same for every view, so views
+// still agree on colour; each view's zoom moves its intrinsics; the mirror flips images, depth, intrinsics and
+// poses together, so the tuple's geometry stays consistent. Same seed -> same result; all-zero options change
 // nothing and draw nothing.
 void augment_tuple(TupleSample& sample, const AugmentOptions& options, uint64_t seed);
 

@@ -41,7 +41,7 @@ struct TupleSample {
   ViewTensors context;
   std::vector<ViewTensors> targets;
   std::vector<double> baselines;  // metres, context -> each target
-  std::vector<double> overlaps;
+  std::vector<double> overlaps;   // measured before augmentation (a zoom crops each view on its own)
 };
 
 // A collated batch of B tuples (all with T targets).
