@@ -8,8 +8,10 @@
 # the old rooms-only prior on the held-out rooms and the two other-style sets (AbsRel, delta < 1.25 per depth
 # range, scale and shape apart), with and without the camera-height scale, and on the wide data's
 # validation scenes (the development set: choices are made there, never on the evaluation sets).
-# 15-25 minutes per prior on 2 cores, except the wide one.
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|eval ...]   (default: all six)
+# 15-25 minutes per prior on 2 cores, except the wide one. Optional stages, not in the default list: the wide
+# prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64).
+# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|eval ...]
+#        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -30,9 +32,9 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
-    wide)
+    wide|wide_aug|wide_w64)
       data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat-train" --config configs/depth_prior/squeeze_wide.json --resume auto ;;
+      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
@@ -42,7 +44,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | eval)" >&2
        exit 2 ;;
   esac
 done

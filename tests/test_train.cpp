@@ -103,6 +103,21 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
   CHECK((l[25] + l[26] + l[27] + l[28] + l[29]) < 0.8 * (l[0] + l[1] + l[2] + l[3] + l[4]));
 }
 
+TEST_CASE("train: augmentation changes training tuples, never validation", "[train][augment]") {
+  test::QuietLogs quiet;
+  const auto data = test::make_tiny_dataset("train_augment", 8);
+  auto plain = test::tiny_train_config(data, test::temp_dir("train_augment_plain"), 2);
+  plain.task = "depth";
+  plain.model.prior.learned_width = 8;
+  auto aug = plain;
+  aug.train.out = test::temp_dir("train_augment_aug");
+  aug.data.tuples.augment.flip = 1.0;
+  aug.data.tuples.augment.brightness = 0.5;
+  Trainer a(plain), b(aug);
+  CHECK(a.validate(false) == b.validate(false));  // same weights, same validation tuples
+  CHECK(a.train_step().losses.at("total") != b.train_step().losses.at("total"));
+}
+
 TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoints, and --resume auto continues",
           "[train]") {
   test::QuietLogs quiet;
