@@ -9,8 +9,10 @@
 # range, scale and shape apart), with and without the camera-height scale, and on the wide data's
 # validation scenes (the development set: choices are made there, never on the evaluation sets).
 # 15-25 minutes per prior on 2 cores, except the wide one. Optional stages, not in the default list: the wide
-# prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64).
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|eval ...]
+# prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64); the held-out-style
+# check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage).
+# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
+#                                      loso_hall_aug|loso_eval|eval ...]
 #        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -32,9 +34,12 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
-    wide|wide_aug|wide_w64)
+    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+    loso_eval)
+      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_hall.json
+      "$bin/infinisplat-eval" --config configs/experiments/eval_prior_loso_hall.json ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
@@ -44,7 +49,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | eval)" >&2
        exit 2 ;;
   esac
 done
