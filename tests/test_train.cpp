@@ -28,6 +28,14 @@ std::map<std::string, torch::Tensor> weights(Trainer& t) {
   return w;
 }
 
+// A tiny configuration of the depth task (the learned prior at width 8).
+TrainConfig tiny_depth_config(const GenerateOptions& data, const std::string& out, int64_t steps) {
+  auto cfg = test::tiny_train_config(data, out, steps);
+  cfg.task = "depth";
+  cfg.model.prior.learned_width = 8;
+  return cfg;
+}
+
 }  // namespace
 
 TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
@@ -92,9 +100,7 @@ TEST_CASE("train: repeated non-finite losses stop training with a clear message"
 TEST_CASE("train: the depth task trains the learned prior", "[train]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_depth", 8);
-  auto cfg = test::tiny_train_config(data, test::temp_dir("train_depth_run"), 30);
-  cfg.task = "depth";
-  cfg.model.prior.learned_width = 8;
+  auto cfg = tiny_depth_config(data, test::temp_dir("train_depth_run"), 30);
   cfg.data.batch_size = 2;
   cfg.optim.lr = 5e-3;
   Trainer trainer(cfg);
@@ -106,9 +112,7 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
 TEST_CASE("train: augmentation changes training tuples, never validation", "[train][augment]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_augment", 8);
-  auto plain = test::tiny_train_config(data, test::temp_dir("train_augment_plain"), 2);
-  plain.task = "depth";
-  plain.model.prior.learned_width = 8;
+  const auto plain = tiny_depth_config(data, test::temp_dir("train_augment_plain"), 2);
   auto aug = plain;
   aug.train.out = test::temp_dir("train_augment_aug");
   aug.data.tuples.augment.flip = 1.0;
