@@ -7,7 +7,8 @@
 # prior: 120 scenes of the four styles, 3000 steps (about 40 minutes on 2 cores); then score them against
 # the old rooms-only prior on the held-out rooms and the two other-style sets (AbsRel, delta < 1.25 per depth
 # range, scale and shape apart), with and without the camera-height scale, and on the wide data's
-# validation scenes (the development set: choices are made there, never on the evaluation sets).
+# validation scenes. Choices between priors go through the held-out-style check (loso_* stages), never the
+# evaluation sets.
 # 15-25 minutes per prior on 2 cores, except the wide one. Optional stages, not in the default list: the wide
 # prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64); the held-out-style
 # check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage).
@@ -38,6 +39,8 @@ for stage in "${stages[@]}"; do
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
     loso_eval)
+      # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
+      data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_hall.json
       "$bin/infinisplat-eval" --config configs/experiments/eval_prior_loso_hall.json ;;
     eval)

@@ -30,7 +30,8 @@ void AugmentOptions::visit(ConfigVisitor& v) {
           Range::between(0, 3));
   v.field("saturation", saturation, "saturation factor log-uniform in [1/(1+s), 1+s] (0 = off)", Range::between(0, 3));
   v.field("gamma", gamma, "gamma exponent log-uniform in [1/(1+g), 1+g] (0 = off)", Range::between(0, 3));
-  v.field("channel_shuffle", channel_shuffle, "probability of permuting R, G and B (the same for every view)",
+  v.field("channel_shuffle", channel_shuffle,
+          "probability of shuffling R, G and B, the same for every view (one shuffle in six keeps the order)",
           Range::unit());
   v.field("gray", gray, "probability of turning the whole tuple greyscale", Range::unit());
 }
