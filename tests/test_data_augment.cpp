@@ -79,7 +79,7 @@ AugmentOptions all_on() {
 }
 }  // namespace
 
-TEST_CASE("augment: all-zero options change nothing; a seed fixes the result", "[data][augment]") {
+TEST_CASE("augment: all-zero options change nothing, and a seed fixes the result", "[data][augment]") {
   auto s = ray_tuple();
   augment_tuple(s, AugmentOptions{}, 5);
   CHECK(same_tuple(s, ray_tuple()));
