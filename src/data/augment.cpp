@@ -53,10 +53,8 @@ struct Photometric {
   double gain = 1, contrast = 1, saturation = 1, gamma = 1;
   bool gray = false;
   std::vector<int64_t> order = {0, 1, 2};
-  bool identity() const {
-    return gain == 1 && contrast == 1 && saturation == 1 && gamma == 1 && !gray &&
-           order == std::vector<int64_t>{0, 1, 2};
-  }
+  bool shuffled() const { return order != std::vector<int64_t>{0, 1, 2}; }
+  bool identity() const { return gain == 1 && contrast == 1 && saturation == 1 && gamma == 1 && !gray && !shuffled(); }
 };
 
 torch::Tensor luma(const torch::Tensor& image) {  // [3,H,W] -> [1,H,W], Rec. 601 weights
@@ -71,7 +69,7 @@ torch::Tensor apply_photometric(torch::Tensor image, const Photometric& p) {
     const auto y = luma(image);
     image = y + (image - y) * p.saturation;
   }
-  if (p.order != std::vector<int64_t>{0, 1, 2}) image = image.index_select(0, torch::tensor(p.order));
+  if (p.shuffled()) image = image.index_select(0, torch::tensor(p.order));
   if (p.gray) image = luma(image).expand({3, -1, -1});
   return image.clamp(0, 1).contiguous();
 }
