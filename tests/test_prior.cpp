@@ -280,6 +280,33 @@ TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)"
   CHECK(torch::equal(cut.depth, torch::where(sky, torch::zeros_like(all.depth), all.depth)));
 }
 
+TEST_CASE("prior: learned_flip_average is the geometric mean of the photo's and its mirror's depth", "[prior]") {
+  test::QuietLogs quiet;
+  const int64_t H = 32, W = 48;
+  PriorOptions o;
+  o.type = "learned";
+  o.learned_width = 8;
+  o.learned_focal = true;
+  PriorInput in, mirrored;
+  in.image = torch::rand({3, H, W});
+  in.K = make_K(40.0, 40.0, 20.0, 15.0, torch::kFloat32);
+  mirrored.image = in.image.flip({2});
+  mirrored.K = make_K(40.0, 40.0, W - 20.0, 15.0, torch::kFloat32);
+  torch::manual_seed(5);
+  auto plain = make_depth_prior(o);
+  o.learned_flip_average = true;
+  torch::manual_seed(5);  // the same untrained weights
+  auto averaged = make_depth_prior(o);
+  CHECK_THAT(averaged->describe(), Catch::Contains("flip-averaged"));
+  const torch::Tensor a = plain->predict(in).depth, b = plain->predict(mirrored).depth.flip({1});
+  REQUIRE_FALSE(torch::allclose(a, b, 1e-3, 0));  // the net is not mirror-symmetric, so averaging changes depth
+  const PriorOutput out = averaged->predict(in);
+  CHECK(torch::allclose(out.depth, torch::sqrt(a * b), 1e-5, 1e-6));
+  CHECK(torch::equal(out.valid > 0, out.depth > 0));
+  // Mirror-equivariant: the mirrored photo gets the mirrored depth.
+  CHECK(torch::allclose(averaged->predict(mirrored).depth, out.depth.flip({1}), 1e-5, 1e-6));
+}
+
 TEST_CASE("prior: focal normalization scales depth with the focal length, exactly", "[prior]") {
   LearnedDepthNet net(LearnedDepthOptions{"unet", 8, true});
   torch::NoGradGuard g;

@@ -68,6 +68,9 @@ void PriorOptions::visit(ConfigVisitor& v) {
           "learned depth at or beyond this many metres is sky and marked invalid (no supports); 0 = never. For nets "
           "trained with loss.depth_sky, set it below loss.depth_sky_m",
           Range::at_least(0));
+  v.field("learned_flip_average", learned_flip_average,
+          "learned prior: also predict from the left-right mirrored photo (with its mirrored intrinsics) and take the "
+          "geometric mean of the two depths, pixel by pixel; twice the prior's time");
   v.field("camera_height_m", camera_height_m,
           "learned and torchscript priors: set the metric scale from the camera's height above the ground (find "
           "the floor in the lower image, rescale so it lies this many metres below); frames without a visible floor "
@@ -232,12 +235,23 @@ class LearnedPrior final : public DepthPrior {
     check_image(in);
     torch::NoGradGuard g;
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
-    auto d = net_->forward(in.image.unsqueeze(0).to(torch::kFloat32), K.to(torch::kFloat32).unsqueeze(0))[0][0];
+    const torch::Tensor image = in.image.unsqueeze(0).to(torch::kFloat32), K1 = K.to(torch::kFloat32).unsqueeze(0);
+    torch::Tensor d = net_->forward(image, K1)[0][0];
+    if (o_.learned_flip_average) {
+      // The mirrored photo is another view of the same scene: cx -> W - cx, skew negated. Averaging in log depth
+      // keeps the result metric and cancels errors the net makes differently on the two.
+      torch::Tensor Km = K1.clone();
+      Km.index_put_({0, 0, 2}, static_cast<double>(in.image.size(2)) - K1.index({0, 0, 2}));
+      Km.index_put_({0, 0, 1}, -K1.index({0, 0, 1}));
+      const torch::Tensor dm = net_->forward(image.flip({3}), Km)[0][0].flip({1});
+      d = torch::exp(0.5 * (torch::log(d) + torch::log(dm)));
+    }
     if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
     return finish_monocular(d, K, o_, in);
   }
   std::string describe() const override {
-    const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "");
+    const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "",
+                                 o_.learned_flip_average ? ", flip-averaged" : "");
     return source_.empty() ? kind + ", untrained)" : kind + ", " + source_ + ")";
   }
   const torch::nn::Module* embeddable_weights() const override { return source_.empty() ? nullptr : net_.get(); }
