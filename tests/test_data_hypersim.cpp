@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "data/hypersim.h"
+#include "data/synth/builder.h"
 #include "io/csv.h"
 #include "io/hdf5_io.h"
 #include "support/consistency.h"
@@ -146,6 +147,42 @@ TEST_CASE("hypersim: desk, street and hall scenes with varied fields of view rea
   CHECK(max_depth[2] < 50.0);                   // ... and closed
   CHECK(fx[0] != Approx(fx[1]).epsilon(0.01));  // fields of view differ per scene
   // Depth agrees across views for the new styles too.
+  const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);
+  CHECK(c.agree > 0.8);
+}
+
+TEST_CASE("hypersim: clutter scenes span scales from a desk to a street and read back through the reader",
+          "[data][hypersim]") {
+  // The builder: deterministic per seed, and its scene scale (the ground's width, 12 x scale) varies widely.
+  double smallest = 1e9, largest = 0;
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    const synth::Scene s = synth::build_clutter(seed);
+    CHECK(s.style == "clutter");
+    CHECK(s.prims.size() >= 26);  // the ground and at least 25 objects
+    const double width = s.prims.at(0).e1.norm();
+    smallest = std::min(smallest, width), largest = std::max(largest, width);
+  }
+  CHECK(smallest < 12.0 * 0.8);  // scale below 0.8: desk-sized
+  CHECK(largest > 12.0 * 3.0);   // scale above 3: street-sized
+  CHECK(synth::build_clutter(7).prims.at(9).p0 == synth::build_clutter(7).prims.at(9).p0);
+  // The generator writes them in the release layout; depth is valid, finite and agrees across views.
+  test::QuietLogs quiet;
+  auto g = test::tiny_dataset_options(test::temp_dir("hs_clutter"), 6);
+  g.train_scenes = 2;
+  g.val_scenes = 0;
+  g.test_scenes = 0;
+  g.tilt_shift_every = 0;
+  g.train_styles = {"clutter"};
+  g.eval_datasets = {};
+  generate_datasets(g);
+  const auto index = read_hypersim(reader_options(g, "train"));
+  REQUIRE(index.sequences.size() == 2);
+  for (const Sequence& seq : index.sequences) {
+    const LoadedFrame fr = load_frame(seq, 0);
+    REQUIRE(fr.has_depth());
+    CHECK(cv::countNonZero(fr.depth.valid) > 0);
+    CHECK(cv::checkRange(fr.depth.depth));
+  }
   const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);
   CHECK(c.agree > 0.8);
 }

@@ -550,6 +550,81 @@ Scene build_hall(uint64_t seed) {
   return s;
 }
 
+Scene build_clutter(uint64_t seed) {
+  // Domain randomization: primitives of random shape, size, pose and material (some floating, some tilted) over
+  // a ground plane, enclosed by walls or open to the sky, at a scene scale drawn from a desk's to a street's. No
+  // layout repeats, so a depth net cannot learn "rooms look like this"; it has to read shading, texture
+  // gradients, occlusion and size.
+  Rng rng(seed);
+  Scene s;
+  s.style = "clutter";
+  const double S = std::exp(rng.uniform(std::log(0.4), std::log(6.0)));  // scene scale: 1 = a room
+  s.step_scale = S;
+  const double W = 12.0 * S, D = 24.0 * S;
+  const std::vector<Pattern> all = {Pattern::Solid, Pattern::Checker, Pattern::Stripes, Pattern::Noise, Pattern::Bricks,
+                                    Pattern::Wood,  Pattern::Tiles,   Pattern::Marble,  Pattern::Dots,  Pattern::Grid};
+  auto random_material = [&](double size) {
+    return s.add_material(mat(rng, rng.pick(all), size * rng.uniform(0.05, 0.6), 0.05, 0.95, rng.uniform(0.0, 0.5)));
+  };
+  s.add(quad(Vec3(-W / 2, -4.0 * S, 0), Vec3(W, 0, 0), Vec3(0, D + 4.0 * S, 0), random_material(4.0 * S)));
+  const double enclosure = rng.uniform(0, 1), H = S * rng.uniform(2.5, 6.0);
+  if (enclosure < 0.4) {  // closed: four walls and a ceiling
+    const int wall = random_material(2.0 * S);
+    s.add(quad(Vec3(-W / 2, -4.0 * S, 0), Vec3(0, D + 4.0 * S, 0), Vec3(0, 0, H), wall));
+    s.add(quad(Vec3(W / 2, -4.0 * S, 0), Vec3(0, 0, H), Vec3(0, D + 4.0 * S, 0), wall));
+    s.add(quad(Vec3(-W / 2, D, 0), Vec3(W, 0, 0), Vec3(0, 0, H), wall));
+    s.add(quad(Vec3(-W / 2, -4.0 * S, 0), Vec3(0, 0, H), Vec3(W, 0, 0), wall));
+    s.add(quad(Vec3(-W / 2, -4.0 * S, H), Vec3(0, D + 4.0 * S, 0), Vec3(W, 0, 0), random_material(2.0 * S)));
+  } else if (enclosure < 0.7) {  // a far wall, sky above it
+    s.add(quad(Vec3(-W / 2, D, 0), Vec3(W, 0, 0), Vec3(0, 0, H), random_material(2.0 * S)));
+  }
+  // Cameras stand in the first eighth of the floor; objects fill the rest, the nearest a few decimetres away.
+  s.walk_min = Vec3(-W / 8, -S, 1.0 * std::clamp(S, 0.6, 1.5));
+  s.walk_max = Vec3(W / 8, 2.0 * S, 1.9 * std::clamp(S, 0.6, 1.5));
+  for (int k = 0, n = rng.integer(25, 60); k < n; ++k) {
+    const double size = S * std::exp(rng.uniform(std::log(0.08), std::log(1.5)));
+    const Vec3 c(rng.uniform(-W / 2, W / 2), rng.uniform(s.walk_max.y() + size + 0.3, D - size),
+                 rng.chance(0.6) ? 0.0 : rng.uniform(0.3 * S, 3.0 * S));  // resting or floating
+    const int m = random_material(size);
+    switch (rng.integer(0, 2)) {
+      case 0: {
+        Primitive b = box(Vec3::Zero(), size * Vec3(rng.uniform(0.2, 1), rng.uniform(0.2, 1), rng.uniform(0.2, 1)),
+                          rng.uniform(0, kPi), m);
+        if (rng.chance(0.4))  // tilted
+          b.R = (b.R * Eigen::AngleAxisd(rng.uniform(-0.8, 0.8), Vec3::UnitX()).toRotationMatrix()).eval();
+        b.p0 = c + Vec3(0, 0, (b.R.cwiseAbs() * b.half).z());
+        s.add(b);
+        break;
+      }
+      case 1: {
+        const double r = size * rng.uniform(0.3, 1.0);
+        s.add(sphere(c + Vec3(0, 0, r), r, m));
+        break;
+      }
+      default: {
+        const Vec3 axis = rng.chance(0.5)
+                              ? Vec3::UnitZ()
+                              : Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.1, 1)).normalized();
+        s.add(cylinder(c, axis, size * rng.uniform(0.05, 0.5), size * rng.uniform(0.5, 2.5), m));
+      }
+    }
+  }
+  if (enclosure < 0.4) {
+    for (int k = 0, n = rng.integer(1, 4); k < n; ++k)
+      s.lights.push_back(
+          {Vec3(rng.uniform(-W / 3, W / 3), rng.uniform(0, D), H - 0.2 * S), rng.color(20.0, 60.0) * S * S});
+  } else {
+    s.sun_dir = Vec3(rng.uniform(-0.7, 0.7), rng.uniform(-0.7, 0.7), rng.uniform(0.2, 0.9)).normalized();
+    s.sun_radiance = Vec3(2.8, 2.6, 2.3) * rng.uniform(0.5, 1.2);
+    s.sky_zenith = Vec3(rng.uniform(0.15, 0.45), rng.uniform(0.3, 0.6), rng.uniform(0.6, 0.95));
+  }
+  s.ambient = Vec3::Constant(rng.uniform(0.06, 0.25));
+  s.focus_a = Vec3(rng.uniform(-W / 4, W / 4), D * rng.uniform(0.4, 0.9), rng.uniform(0.0, 1.5 * S));
+  s.focus_b = Vec3(rng.uniform(-W / 3, W / 3), D * rng.uniform(0.2, 0.5), rng.uniform(0.0, 1.0 * S));
+  s.build();
+  return s;
+}
+
 Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "room") return build_room(seed);
   if (style == "courtyard") return build_courtyard(seed);
@@ -557,7 +632,8 @@ Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "desk") return build_desk(seed);
   if (style == "street") return build_street(seed);
   if (style == "hall") return build_hall(seed);
-  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street | hall)");
+  if (style == "clutter") return build_clutter(seed);
+  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street | hall | clutter)");
 }
 
 Mat3 look_rotation(const Vec3& center, const Vec3& target) {

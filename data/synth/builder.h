@@ -1,5 +1,5 @@
-// Random scene layouts (rooms, desks and streets for training; courtyards and atria for evaluation) and camera
-// trajectories that walk through them with baselines from centimetres to metres.
+// Random scene layouts (rooms, desks, streets, halls and random clutter for training; courtyards and atria for
+// evaluation) and camera trajectories that walk through them with baselines from centimetres to metres.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -13,6 +13,7 @@ Scene build_courtyard(uint64_t seed);  // outdoor yard: facades, arcades, trees,
 Scene build_atrium(uint64_t seed);     // tall hall: marble, balconies with railings, columns, skylight
 Scene build_desk(uint64_t seed);       // a tabletop from close by: 0.3-3 m, small and thin objects
 Scene build_street(uint64_t seed);     // an urban street canyon: facades, cars, poles, sky; 2 m to beyond 60 m
+Scene build_clutter(uint64_t seed);    // domain randomization: random primitives at a random scale, 0.3 m to 150 m
 Scene build_scene(const std::string& style, uint64_t seed);
 
 struct CameraPose {
