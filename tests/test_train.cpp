@@ -109,6 +109,34 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
   CHECK((l[25] + l[26] + l[27] + l[28] + l[29]) < 0.8 * (l[0] + l[1] + l[2] + l[3] + l[4]));
 }
 
+TEST_CASE("train: data.extra_roots trains on a second release folder too, and a missing one is named", "[train]") {
+  test::QuietLogs quiet;
+  const auto rooms = test::make_tiny_dataset("train_roots_rooms", 6);
+  auto clutter = test::tiny_dataset_options(test::temp_dir("train_roots_clutter"), 6);
+  clutter.train_styles = {"clutter"};
+  clutter.train_scenes = 2;
+  clutter.val_scenes = 0;
+  clutter.test_scenes = 0;
+  clutter.eval_datasets = {};
+  generate_datasets(clutter);
+  auto cfg = test::tiny_train_config(rooms, test::temp_dir("train_roots_run"), 2);
+  const auto alone = read_training_sequences(cfg.data, "train");
+  const auto alone_val = read_training_sequences(cfg.data, "val");
+  REQUIRE_FALSE(alone.empty());
+  cfg.data.extra_roots = {generated_hypersim_root(clutter.out)};
+  const auto both = read_training_sequences(cfg.data, "train");
+  REQUIRE(both.size() == alone.size() + 2);  // two clutter scenes, one camera each
+  for (size_t i = 0; i < alone.size(); ++i) CHECK(both[i].frames.at(0).image_path == alone[i].frames.at(0).image_path);
+  for (size_t i = alone.size(); i < both.size(); ++i)
+    CHECK(both[i].frames.at(0).image_path.rfind(generated_hypersim_root(clutter.out), 0) == 0);
+  CHECK(read_training_sequences(cfg.data, "val").size() == alone_val.size());  // the extra folder has no val scenes
+  Trainer trainer(cfg);                                                        // trains on both
+  CHECK(std::isfinite(trainer.train_step().losses.at("total")));
+  cfg.data.extra_roots = {clutter.out + "/nope"};
+  CHECK_THROWS_WITH(read_training_sequences(cfg.data, "train"),
+                    Catch::Contains("nope: no such folder (config key data.extra_roots)"));
+}
+
 TEST_CASE("train: augmentation changes training tuples, never validation", "[train][augment]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_augment", 8);

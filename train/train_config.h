@@ -1,6 +1,7 @@
 // The training configuration: data, model, losses, renderer, optimizer and the loop, as one typed schema.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/runtime.h"
 #include "data/hypersim.h"
@@ -16,6 +17,7 @@ class ConfigVisitor;
 
 struct DataOptions {
   HypersimOptions hypersim;
+  std::vector<std::string> extra_roots;  // more release folders, read like hypersim.root
   TupleOptions tuples;
   std::string val_split = "val";
   int64_t batch_size = 1;

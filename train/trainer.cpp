@@ -27,16 +27,23 @@
 namespace isplat {
 namespace fs = std::filesystem;
 
+std::vector<Sequence> read_training_sequences(const DataOptions& data, const std::string& split) {
+  HypersimOptions h = data.hypersim;
+  h.split = split;
+  std::vector<Sequence> out = read_hypersim(h).sequences;
+  for (const std::string& root : data.extra_roots) {
+    ISPLAT_CHECK(fs::is_directory(root), root, ": no such folder (config key data.extra_roots)");
+    h.root = root;
+    auto more = read_hypersim(h).sequences;
+    out.insert(out.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
+  }
+  return out;
+}
+
 namespace {
 std::atomic<bool> g_stop{false};
 
 using Clock = std::chrono::steady_clock;
-
-std::vector<Sequence> read_split(const HypersimOptions& base, const std::string& split) {
-  HypersimOptions h = base;
-  h.split = split;
-  return read_hypersim(h).sequences;
-}
 
 double process_cpu_seconds() {
   timespec ts;
@@ -74,13 +81,13 @@ Trainer::Trainer(const TrainConfig& config)
     write_file_atomic((fs::path(run_dir_) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
   }
 
-  auto train_seqs = read_split(config.data.hypersim, config.data.hypersim.split);
+  auto train_seqs = read_training_sequences(config.data, config.data.hypersim.split);
   ISPLAT_CHECK(!train_seqs.empty(), "train: no usable trajectories in ", config.data.hypersim.root, " split '",
                config.data.hypersim.split, "' (config key data.hypersim)");
   train_sampler_ = std::make_unique<TupleSampler>(std::move(train_seqs), config.data.tuples,
                                                   static_cast<uint64_t>(config.runtime.seed));
   try {
-    auto val_seqs = read_split(config.data.hypersim, config.data.val_split);
+    auto val_seqs = read_training_sequences(config.data, config.data.val_split);
     TupleOptions val_tuples = config.data.tuples;
     val_tuples.augment = AugmentOptions{};  // validation scores the data as it is
     if (!val_seqs.empty())

@@ -18,6 +18,9 @@
 
 namespace isplat {
 
+// The sequences of one split under data.hypersim.root and every data.extra_roots folder, in that order.
+std::vector<Sequence> read_training_sequences(const DataOptions& data, const std::string& split);
+
 class Trainer {
  public:
   explicit Trainer(const TrainConfig& config);
