@@ -28,8 +28,8 @@ stamp "3. the learned depth prior for the RGB variant (configs/experiments/depth
 
 # Variants whose prior is not trained here (wide2, wide_w64, ...) are skipped with a warning until
 # scripts/train_depth_prior.sh trains it.
-stamp "3b. the mixed-style depth priors of the rgb_mixed, rgb_sky, rgb_wide* (not wide2 or w64) and rgb_wide_aug_height variants (scripts/train_depth_prior.sh)"
-scripts/train_depth_prior.sh squeeze squeeze_sky wide wide_aug
+stamp "3b. the mixed-style depth priors of the rgb_mixed, rgb_sky, rgb_wide* (not wide2 or w64), rgb_wide_aug* and rgb_wide_aug_clutter* variants (scripts/train_depth_prior.sh)"
+scripts/train_depth_prior.sh squeeze squeeze_sky wide wide_aug wide_aug_clutter
 
 stamp "4. rows: train, score, report ($config)"
 "$bin/infinisplat-experiment" --config "$config" "$@"

@@ -11,9 +11,12 @@
 # evaluation sets.
 # 15-25 minutes per prior on 2 cores, except the wide one. Optional stages, not in the default list: the wide
 # prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64); the held-out-style
-# check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage).
+# check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage);
+# the mirrored-photo average scored by that check (loso_eval_flip); 40 domain-randomized "clutter" scenes added to
+# the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter).
 # Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
-#                                      loso_hall_aug|loso_eval|eval ...]
+#                                      loso_hall_aug|loso_eval|loso_eval_flip|wide_aug_clutter|
+#                                      loso_hall_aug_clutter|loso_eval_clutter|eval ...]
 #        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -38,6 +41,14 @@ for stage in "${stages[@]}"; do
     wide|wide_aug|wide_w64|loso_hall|loso_hall_aug)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+    wide_aug_clutter|loso_hall_aug_clutter)
+      data data_wide out/depth_prior/data_wide
+      data data_clutter out/depth_prior/data_clutter
+      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+    loso_eval_flip|loso_eval_clutter)
+      data data_wide out/depth_prior/data_wide
+      "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall_${stage#loso_eval_}.json"
+      "$bin/infinisplat-eval" --config "configs/experiments/eval_prior_loso_hall_${stage#loso_eval_}.json" ;;
     loso_eval)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
@@ -52,7 +63,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | eval)" >&2
        exit 2 ;;
   esac
 done
