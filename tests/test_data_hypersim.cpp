@@ -117,14 +117,8 @@ TEST_CASE("hypersim: missing files are skipped and malformed metadata names the 
 TEST_CASE("hypersim: desk, street and hall scenes with varied fields of view read back through the reader",
           "[data][hypersim]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("hs_styles"), 8);
-  g.train_scenes = 3;
-  g.val_scenes = 0;
-  g.test_scenes = 0;
-  g.tilt_shift_every = 0;
-  g.train_styles = {"desk", "street", "hall"};
+  auto g = test::style_dataset_options(test::temp_dir("hs_styles"), 8, {"desk", "street", "hall"}, 3);
   g.hfov_deg = {40, 90};
-  g.eval_datasets = {};
   generate_datasets(g);
   const auto index = read_hypersim(reader_options(g, "train"));
   REQUIRE(index.sequences.size() == 3);
@@ -155,25 +149,27 @@ TEST_CASE("hypersim: clutter scenes span scales from a desk to a street and read
           "[data][hypersim]") {
   // The builder: deterministic per seed, and its scene scale (the ground's width, 12 x scale) varies widely.
   double smallest = 1e9, largest = 0;
-  for (uint64_t seed = 0; seed < 20; ++seed) {
+  for (uint64_t seed = 0; seed < 200; ++seed) {
     const synth::Scene s = synth::build_clutter(seed);
     CHECK(s.style == "clutter");
     CHECK(s.prims.size() >= 26);  // the ground and at least 25 objects
     const double width = s.prims.at(0).e1.norm();
     smallest = std::min(smallest, width), largest = std::max(largest, width);
+    int in_walk_box = 0, low_ceilings = 0;  // no object reaches back over the cameras; no ceiling sits on them
+    for (const synth::Primitive& p : s.prims) {
+      if (p.shape != synth::Shape::Quad) in_walk_box += p.bmin.y() < s.walk_max.y();
+      const bool ceiling = p.shape == synth::Shape::Quad && p.e1.z() == 0 && p.e2.z() == 0 && p.p0.z() > 0;
+      low_ceilings += ceiling && p.p0.z() < s.walk_max.z() + 0.5;
+    }
+    CHECK(in_walk_box == 0);
+    CHECK(low_ceilings == 0);
   }
   CHECK(smallest < 12.0 * 0.8);  // scale below 0.8: desk-sized
   CHECK(largest > 12.0 * 3.0);   // scale above 3: street-sized
   CHECK(synth::build_clutter(7).prims.at(9).p0 == synth::build_clutter(7).prims.at(9).p0);
   // The generator writes them in the release layout; depth is valid, finite and agrees across views.
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("hs_clutter"), 6);
-  g.train_scenes = 2;
-  g.val_scenes = 0;
-  g.test_scenes = 0;
-  g.tilt_shift_every = 0;
-  g.train_styles = {"clutter"};
-  g.eval_datasets = {};
+  const auto g = test::style_dataset_options(test::temp_dir("hs_clutter"), 6, {"clutter"}, 2);
   generate_datasets(g);
   const auto index = read_hypersim(reader_options(g, "train"));
   REQUIRE(index.sequences.size() == 2);

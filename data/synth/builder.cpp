@@ -567,7 +567,10 @@ Scene build_clutter(uint64_t seed) {
     return s.add_material(mat(rng, rng.pick(all), size * rng.uniform(0.05, 0.6), 0.05, 0.95, rng.uniform(0.0, 0.5)));
   };
   s.add(quad(Vec3(-W / 2, -4.0 * S, 0), Vec3(W, 0, 0), Vec3(0, D + 4.0 * S, 0), random_material(4.0 * S)));
-  const double enclosure = rng.uniform(0, 1), H = S * rng.uniform(2.5, 6.0);
+  // Cameras stand in the first eighth of the floor; objects fill the rest, the nearest a few decimetres away.
+  s.walk_min = Vec3(-W / 8, -S, 1.0 * std::clamp(S, 0.6, 1.5));
+  s.walk_max = Vec3(W / 8, 2.0 * S, 1.9 * std::clamp(S, 0.6, 1.5));
+  const double enclosure = rng.uniform(0, 1), H = std::max(S * rng.uniform(2.5, 6.0), s.walk_max.z() + 0.5);
   if (enclosure < 0.4) {  // closed: four walls and a ceiling
     const int wall = random_material(2.0 * S);
     s.add(quad(Vec3(-W / 2, -4.0 * S, 0), Vec3(0, D + 4.0 * S, 0), Vec3(0, 0, H), wall));
@@ -578,9 +581,12 @@ Scene build_clutter(uint64_t seed) {
   } else if (enclosure < 0.7) {  // a far wall, sky above it
     s.add(quad(Vec3(-W / 2, D, 0), Vec3(W, 0, 0), Vec3(0, 0, H), random_material(2.0 * S)));
   }
-  // Cameras stand in the first eighth of the floor; objects fill the rest, the nearest a few decimetres away.
-  s.walk_min = Vec3(-W / 8, -S, 1.0 * std::clamp(S, 0.6, 1.5));
-  s.walk_max = Vec3(W / 8, 2.0 * S, 1.9 * std::clamp(S, 0.6, 1.5));
+  // An object reaching back into the walk box (a long tilted cylinder, a rotated box) is pushed out of it.
+  auto place = [&](Primitive p) {
+    p.finalize();
+    p.p0.y() += std::max(0.0, s.walk_max.y() + 0.2 * S - p.bmin.y());
+    s.add(p);
+  };
   for (int k = 0, n = rng.integer(25, 60); k < n; ++k) {
     const double size = S * std::exp(rng.uniform(std::log(0.08), std::log(1.5)));
     const Vec3 c(rng.uniform(-W / 2, W / 2), rng.uniform(s.walk_max.y() + size + 0.3, D - size),
@@ -593,19 +599,19 @@ Scene build_clutter(uint64_t seed) {
         if (rng.chance(0.4))  // tilted
           b.R = (b.R * Eigen::AngleAxisd(rng.uniform(-0.8, 0.8), Vec3::UnitX()).toRotationMatrix()).eval();
         b.p0 = c + Vec3(0, 0, (b.R.cwiseAbs() * b.half).z());
-        s.add(b);
+        place(b);
         break;
       }
       case 1: {
         const double r = size * rng.uniform(0.3, 1.0);
-        s.add(sphere(c + Vec3(0, 0, r), r, m));
+        place(sphere(c + Vec3(0, 0, r), r, m));
         break;
       }
       default: {
         const Vec3 axis = rng.chance(0.5)
                               ? Vec3::UnitZ()
                               : Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.1, 1)).normalized();
-        s.add(cylinder(c, axis, size * rng.uniform(0.05, 0.5), size * rng.uniform(0.5, 2.5), m));
+        place(cylinder(c, axis, size * rng.uniform(0.05, 0.5), size * rng.uniform(0.5, 2.5), m));
       }
     }
   }
