@@ -112,12 +112,7 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
 TEST_CASE("train: data.extra_roots trains on a second release folder too, and a missing one is named", "[train]") {
   test::QuietLogs quiet;
   const auto rooms = test::make_tiny_dataset("train_roots_rooms", 6);
-  auto clutter = test::tiny_dataset_options(test::temp_dir("train_roots_clutter"), 6);
-  clutter.train_styles = {"clutter"};
-  clutter.train_scenes = 2;
-  clutter.val_scenes = 0;
-  clutter.test_scenes = 0;
-  clutter.eval_datasets = {};
+  const auto clutter = test::style_dataset_options(test::temp_dir("train_roots_clutter"), 6, {"clutter"}, 2);
   generate_datasets(clutter);
   auto cfg = test::tiny_train_config(rooms, test::temp_dir("train_roots_run"), 2);
   const auto alone = read_training_sequences(cfg.data, "train");

@@ -12,7 +12,8 @@ void DataOptions::visit(ConfigVisitor& v) {
   v.field("extra_roots", extra_roots,
           "more folders in the Hypersim release layout, each with its own metadata CSVs, read with the same split, "
           "colour and scene lists as hypersim.root and trained on together (e.g. the real release plus generated "
-          "scenes)");
+          "scenes). hypersim.scenes and hypersim.scene_blacklist apply to every folder, and generated scene names "
+          "repeat across folders");
   v.section("tuples", "context/target tuples", tuples);
   v.field("val_split", val_split, "split used for validation renders", {"train", "val", "test", "all"});
   v.field("batch_size", batch_size, "tuples per optimizer step", Range::at_least(1));

@@ -25,6 +25,18 @@ GenerateOptions tiny_dataset_options(const std::string& out, int frames) {
   return o;
 }
 
+GenerateOptions style_dataset_options(const std::string& out, int frames, const std::vector<std::string>& styles,
+                                      int scenes) {
+  GenerateOptions o = tiny_dataset_options(out, frames);
+  o.train_scenes = scenes;
+  o.val_scenes = 0;
+  o.test_scenes = 0;
+  o.tilt_shift_every = 0;
+  o.train_styles = styles;
+  o.eval_datasets = {};
+  return o;
+}
+
 GenerateOptions make_tiny_dataset(const std::string& tag, int frames) {
   GenerateOptions o = tiny_dataset_options(temp_dir(tag), frames);
   QuietLogs quiet;
