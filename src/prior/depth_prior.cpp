@@ -236,16 +236,16 @@ class LearnedPrior final : public DepthPrior {
     torch::NoGradGuard g;
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
     const torch::Tensor image = in.image.unsqueeze(0).to(torch::kFloat32), K1 = K.to(torch::kFloat32).unsqueeze(0);
-    torch::Tensor d = net_->forward(image, K1)[0][0];
+    torch::Tensor log_d = net_->forward_log(image, K1);
     if (o_.learned_flip_average) {
       // The mirrored photo is another view of the same scene: cx -> W - cx, skew negated. Averaging in log depth
       // keeps the result metric and cancels errors the net makes differently on the two.
       torch::Tensor Km = K1.clone();
       Km.index_put_({0, 0, 2}, static_cast<double>(in.image.size(2)) - K1.index({0, 0, 2}));
       Km.index_put_({0, 0, 1}, -K1.index({0, 0, 1}));
-      const torch::Tensor dm = net_->forward(image.flip({3}), Km)[0][0].flip({1});
-      d = torch::exp(0.5 * (torch::log(d) + torch::log(dm)));
+      log_d = 0.5 * (log_d + net_->forward_log(image.flip({3}), Km).flip({3}));
     }
+    torch::Tensor d = torch::exp(log_d)[0][0];
     if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
     return finish_monocular(d, K, o_, in);
   }
