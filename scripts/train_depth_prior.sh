@@ -45,15 +45,11 @@ for stage in "${stages[@]}"; do
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
-    loso_eval_flip|loso_eval_clutter)
-      data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall_${stage#loso_eval_}.json"
-      "$bin/infinisplat-eval" --config "configs/experiments/eval_prior_loso_hall_${stage#loso_eval_}.json" ;;
-    loso_eval)
+    loso_eval|loso_eval_flip|loso_eval_clutter)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_hall.json
-      "$bin/infinisplat-eval" --config configs/experiments/eval_prior_loso_hall.json ;;
+      "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
+      "$bin/infinisplat-eval" --config "configs/experiments/eval_prior_loso_hall${stage#loso_eval}.json" ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
