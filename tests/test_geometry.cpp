@@ -192,6 +192,22 @@ TEST_CASE("geometry: resizing and cropping keep projections consistent", "[geome
   CHECK_THROWS_WITH(crop_with_K(img, make_K(1, 1, 0, 0), 60, 0, 16, 10), Catch::Contains("outside"));
 }
 
+TEST_CASE("mirror_K: a mirrored point projects to the mirrored pixel, skew included, batched or not", "[geometry]") {
+  auto K = make_K(300, 280, 20.5, 14, torch::kFloat64);
+  K[0][1] = 7.0;  // skew, which mirroring negates
+  const int64_t W = 48;
+  const auto points = torch::tensor({{0.3, -0.2, 2.0}, {-1.1, 0.4, 3.5}, {0.0, 0.0, 1.0}}, torch::kFloat64);
+  const auto mirrored = points * torch::tensor({-1.0, 1.0, 1.0}, torch::kFloat64);
+  const auto uv = project_points(points, K), uv_m = project_points(mirrored, mirror_K(K, W));
+  CHECK(torch::allclose(uv_m.select(1, 0), W - uv.select(1, 0)));
+  CHECK(torch::allclose(uv_m.select(1, 1), uv.select(1, 1)));
+  CHECK(torch::equal(mirror_K(mirror_K(K, W), W), K));  // an involution
+  const auto batched = mirror_K(torch::stack({K, K}), W);
+  CHECK(torch::equal(batched[1], mirror_K(K, W)));
+  CHECK(K[0][2].item<double>() == 20.5);  // the input is not modified
+  CHECK_THROWS_WITH(mirror_K(torch::eye(2), W), Catch::Contains("mirror_K"));
+}
+
 TEST_CASE("pixel mask: square dilation grows a pixel to a (2r+1)^2 block, clipped at the border", "[geometry]") {
   const int64_t H = 6, W = 7;
   std::vector<uint8_t> m(H * W, 0);

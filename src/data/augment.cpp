@@ -112,10 +112,7 @@ void mirror_view(ViewTensors& view) {
     view.depth = view.depth.flip({1}).contiguous();
     view.valid = view.valid.flip({1}).contiguous();
   }
-  auto K = view.camera.K.clone();
-  K[0][2] = static_cast<double>(W) - K[0][2];
-  K[0][1] = -K[0][1];
-  view.camera.K = K;
+  view.camera.K = mirror_K(view.camera.K, W);
   const auto M = torch::diag(torch::tensor({-1.0, 1.0, 1.0, 1.0}, view.camera.T_cw.options()));
   view.camera.T_cw = torch::matmul(torch::matmul(M, view.camera.T_cw), M);
 }

@@ -130,6 +130,15 @@ std::pair<torch::Tensor, torch::Tensor> resize_with_K(const torch::Tensor& image
   return {out, torch::matmul(S, K)};
 }
 
+torch::Tensor mirror_K(const torch::Tensor& K, int64_t width) {
+  ISPLAT_CHECK(K.dim() >= 2 && K.size(-1) == 3 && K.size(-2) == 3, "mirror_K: K must be [..., 3, 3], got ", K.sizes());
+  ISPLAT_CHECK(width > 0, "mirror_K: width must be positive, got ", width);
+  auto out = K.clone();
+  out.select(-2, 0).select(-1, 2).copy_(static_cast<double>(width) - K.select(-2, 0).select(-1, 2));
+  out.select(-2, 0).select(-1, 1).neg_();
+  return out;
+}
+
 std::pair<torch::Tensor, torch::Tensor> crop_with_K(const torch::Tensor& image, const torch::Tensor& K, int64_t x0,
                                                     int64_t y0, int64_t crop_width, int64_t crop_height) {
   ISPLAT_CHECK(image.dim() == 3, "crop_with_K: image must be [C, H, W], got ", image.sizes());

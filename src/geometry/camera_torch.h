@@ -42,6 +42,9 @@ torch::Tensor resize_bilinear(const torch::Tensor& x, int64_t height, int64_t wi
 // Image [C, H, W] resized with its intrinsics K [3, 3] (bilinear with antialiasing when shrinking).
 std::pair<torch::Tensor, torch::Tensor> resize_with_K(const torch::Tensor& image, const torch::Tensor& K,
                                                       int64_t new_height, int64_t new_width);
+// Intrinsics [..., 3, 3] of the left-right mirrored image of this width: cx -> W - cx (pixel centres at j + 0.5),
+// skew negated; fx, fy and cy are unchanged.
+torch::Tensor mirror_K(const torch::Tensor& K, int64_t width);
 // Crop [C, H, W] at top-left (x0, y0) with its intrinsics.
 std::pair<torch::Tensor, torch::Tensor> crop_with_K(const torch::Tensor& image, const torch::Tensor& K, int64_t x0,
                                                     int64_t y0, int64_t crop_width, int64_t crop_height);

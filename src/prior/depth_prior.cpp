@@ -238,11 +238,9 @@ class LearnedPrior final : public DepthPrior {
     const torch::Tensor image = in.image.unsqueeze(0).to(torch::kFloat32), K1 = K.to(torch::kFloat32).unsqueeze(0);
     torch::Tensor log_d = net_->forward_log(image, K1);
     if (o_.learned_flip_average) {
-      // The mirrored photo is another view of the same scene: cx -> W - cx, skew negated. Averaging in log depth
-      // keeps the result metric and cancels errors the net makes differently on the two.
-      torch::Tensor Km = K1.clone();
-      Km.index_put_({0, 0, 2}, static_cast<double>(in.image.size(2)) - K1.index({0, 0, 2}));
-      Km.index_put_({0, 0, 1}, -K1.index({0, 0, 1}));
+      // The mirrored photo is another view of the same scene. Averaging in log depth keeps the result metric and
+      // cancels errors the net makes differently on the two.
+      const torch::Tensor Km = mirror_K(K1, in.image.size(2));
       log_d = 0.5 * (log_d + net_->forward_log(image.flip({3}), Km).flip({3}));
     }
     torch::Tensor d = torch::exp(log_d)[0][0];
