@@ -13,10 +13,12 @@
 # prior with training-time augmentation (wide_aug) and with a decoder twice as wide (wide_w64); the held-out-style
 # check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage);
 # the mirrored-photo average scored by that check (loso_eval_flip); 40 domain-randomized "clutter" scenes added to
-# the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter).
+# the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter); the same
+# check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long).
 # Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
 #                                      loso_hall_aug|loso_eval|loso_eval_flip|wide_aug_clutter|
-#                                      loso_hall_aug_clutter|loso_eval_clutter|eval ...]
+#                                      loso_hall_aug_clutter|loso_eval_clutter|loso_hall_aug_clutter_long|
+#                                      loso_eval_long|eval ...]
 #        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -41,11 +43,11 @@ for stage in "${stages[@]}"; do
     wide|wide_aug|wide_w64|loso_hall|loso_hall_aug)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
-    wide_aug_clutter|loso_hall_aug_clutter)
+    wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long)
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
-    loso_eval|loso_eval_flip|loso_eval_clutter)
+    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
@@ -59,7 +61,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | eval)" >&2
        exit 2 ;;
   esac
 done
