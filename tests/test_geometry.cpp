@@ -205,6 +205,7 @@ TEST_CASE("mirror_K: a mirrored point projects to the mirrored pixel, skew inclu
   const auto batched = mirror_K(torch::stack({K, K}), W);
   CHECK(torch::equal(batched[1], mirror_K(K, W)));
   CHECK(K[0][2].item<double>() == 20.5);  // the input is not modified
+  CHECK(K[0][1].item<double>() == 7.0);
   CHECK_THROWS_WITH(mirror_K(torch::eye(2), W), Catch::Contains("mirror_K"));
 }
 

@@ -1,4 +1,5 @@
-# Footprint (largest scale x fx / depth, in pixels), opacity and colour saturation of a predicted PLY's Gaussians.
+# Footprint (largest and middle scale x fx / depth, in pixels) and opacity quantiles of a predicted PLY's Gaussians
+# (infinisplat predict writes them in the source camera's frame). Usage: python3 footprint.py FX scene.ply [more.ply]
 import struct, sys, math, json
 for path in sys.argv[2:]:
     fx = float(sys.argv[1])
@@ -14,6 +15,7 @@ for path in sys.argv[2:]:
         v = struct.unpack(fmt, f.read(sz))
         s = sorted(math.exp(v[idx['scale_%d' % a]]) for a in range(3))
         z = v[idx['z']]
+        if z <= 0: continue  # behind the camera: no footprint
         fp.append(s[2] * fx / max(z, 1e-6)); mn.append(s[1] * fx / max(z, 1e-6))
         op.append(1 / (1 + math.exp(-v[idx['opacity']])))
     q = lambda a, p: sorted(a)[int(p * (len(a) - 1))]
