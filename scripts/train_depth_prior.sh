@@ -14,11 +14,14 @@
 # check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage);
 # the mirrored-photo average scored by that check (loso_eval_flip); 40 domain-randomized "clutter" scenes added to
 # the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter); the same
-# check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long).
+# check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long); clutter scenes
+# with large objects just ahead of the cameras instead (wide_aug_clutter_near; loso_hall_aug_clutter_near, scored
+# by loso_eval_clutter_near).
 # Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
 #                                      loso_hall_aug|loso_eval|loso_eval_flip|wide_aug_clutter|
 #                                      loso_hall_aug_clutter|loso_eval_clutter|loso_hall_aug_clutter_long|
-#                                      loso_eval_long|eval ...]
+#                                      loso_eval_long|wide_aug_clutter_near|loso_hall_aug_clutter_near|
+#                                      loso_eval_clutter_near|eval ...]
 #        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -47,7 +50,11 @@ for stage in "${stages[@]}"; do
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
-    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long)
+    wide_aug_clutter_near|loso_hall_aug_clutter_near)
+      data data_wide out/depth_prior/data_wide
+      data data_clutter_near out/depth_prior/data_clutter_near
+      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
@@ -61,7 +68,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | wide_aug_clutter_near | loso_hall_aug_clutter_near | loso_eval_clutter_near | eval)" >&2
        exit 2 ;;
   esac
 done

@@ -182,3 +182,57 @@ TEST_CASE("hypersim: clutter scenes span scales from a desk to a street and read
   const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);
   CHECK(c.agree > 0.8);
 }
+
+TEST_CASE("hypersim: clutter_near adds large objects just ahead of the cameras to the clutter scene of its seed",
+          "[data][hypersim]") {
+  int scenes_with_near = 0;
+  double nearer_share = 0;
+  for (uint64_t seed = 0; seed < 100; ++seed) {
+    const synth::Scene plain = synth::build_clutter(seed), near = synth::build_clutter(seed, true);
+    CHECK(near.style == "clutter_near");
+    CHECK(synth::build_scene("clutter_near", seed).prims.size() == near.prims.size());
+    REQUIRE(near.prims.size() >= plain.prims.size() + 2);
+    CHECK(near.prims.size() <= plain.prims.size() + 4);
+    int moved = 0;  // the rest of the scene is the plain one
+    for (size_t i = 0; i < plain.prims.size(); ++i) moved += near.prims[i].p0 != plain.prims[i].p0;
+    CHECK(moved == 0);
+    const double scale = plain.prims.at(0).e1.norm() / 12.0;
+    for (size_t i = plain.prims.size(); i < near.prims.size(); ++i) {
+      const synth::Primitive& p = near.prims[i];
+      CHECK(p.bmin.y() >= near.walk_max.y());                // never over the cameras ...
+      CHECK(p.bmin.y() <= near.walk_max.y() + 2.5 * scale);  // ... but just ahead of them
+      CHECK(p.bmax.x() - p.bmin.x() >= 0.3 * scale);         // and large
+    }
+    // Seen from the middle of the walk box towards a focus point (60 degree field of view), the new objects only
+    // occlude: no ray hits farther, and in most scenes some hit much nearer.
+    const synth::Vec3 eye = (near.walk_min + near.walk_max) / 2;
+    const synth::Mat3 R = synth::look_rotation(eye, near.focus_a);
+    int farther = 0, nearer = 0;
+    for (int v = 0; v < 24; ++v)
+      for (int u = 0; u < 32; ++u) {
+        const synth::Vec3 d = (R * synth::Vec3((u - 15.5) / 16 * 0.577, (v - 11.5) / 16 * 0.577, 1.0)).normalized();
+        synth::Hit a, b;
+        const bool hit_a = plain.intersect(eye, d, 1e4, a), hit_b = near.intersect(eye, d, 1e4, b);
+        farther += hit_a && (!hit_b || b.t > a.t * 1.000001);
+        nearer += hit_b && (!hit_a || b.t < a.t * 0.7);
+      }
+    CHECK(farther == 0);
+    nearer_share += nearer / (32.0 * 24.0) / 100;
+    scenes_with_near += nearer > 0;
+  }
+  INFO("mean share of the view the new objects bring nearer: " << nearer_share);
+  CHECK(scenes_with_near >= 60);
+  CHECK(nearer_share > 0.1);
+  // Written in the release layout and read back: depth valid and finite.
+  test::QuietLogs quiet;
+  const auto g = test::style_dataset_options(test::temp_dir("hs_clutter_near"), 4, {"clutter_near"}, 2);
+  generate_datasets(g);
+  const auto index = read_hypersim(reader_options(g, "train"));
+  REQUIRE(index.sequences.size() == 2);
+  for (const Sequence& seq : index.sequences) {
+    const LoadedFrame fr = load_frame(seq, 0);
+    REQUIRE(fr.has_depth());
+    CHECK(cv::countNonZero(fr.depth.valid) > 0);
+    CHECK(cv::checkRange(fr.depth.depth));
+  }
+}
