@@ -30,6 +30,7 @@
 #include "io/ply.h"
 #include "io/safetensors.h"
 #include "model/model_io.h"
+#include "prior/learned_depth.h"
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
 #include "support/tiny_model.h"
@@ -332,6 +333,33 @@ TEST_CASE("reliability: NaN weights and a stored config far larger than the weig
   ck.metadata["config"] = config.dump();
   CHECK_THAT(error_of([&] { load_pipeline(ck, "huge.safetensors"); }),
              Catch::Contains("huge.safetensors") && Catch::Contains("does not match the weights"));
+}
+
+TEST_CASE("reliability: an explicit prior.learned_weights override wins over the prior embedded in a checkpoint",
+          "[reliability][model]") {
+  test::QuietLogs quiet;
+  const auto data = test::make_tiny_dataset("rel_prior_override", 8);
+  const std::string run = test::temp_dir("rel_prior_override_run");
+  {
+    Trainer t(test::tiny_train_config(data, run, 1));
+    t.save(run + "/ck.safetensors");
+  }
+  Checkpoint ck = load_checkpoint(run + "/ck.safetensors");
+  torch::manual_seed(1);
+  LearnedDepthNet embedded(8), other(8);
+  std::map<std::string, torch::Tensor> other_weights;
+  for (const auto& p : embedded->named_parameters(true)) ck.tensors["prior/" + p.key()] = p.value().detach();
+  for (const auto& p : other->named_parameters(true)) other_weights[p.key()] = p.value().detach();
+  write_safetensors(run + "/other.safetensors", other_weights);
+  const std::vector<std::string> learned = {"prior.type=learned", "prior.learned_width=8"};
+  auto with = learned;
+  with.push_back("prior.learned_weights=" + run + "/other.safetensors");
+  // Without the override the checkpoint is self-contained; with it, the named file is the prior.
+  CHECK_THAT(load_pipeline(ck, "ck.safetensors", learned)->prior().describe(),
+             Catch::Contains("embedded in the checkpoint"));
+  const std::string described = load_pipeline(ck, "ck.safetensors", with)->prior().describe();
+  CHECK_THAT(described, Catch::Contains(run + "/other.safetensors"));
+  CHECK_THAT(described, !Catch::Contains("embedded"));
 }
 
 TEST_CASE("reliability: COLMAP and nerfstudio cameras with focal 0, NaN or a singular applied_transform",

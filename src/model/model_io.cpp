@@ -3,6 +3,8 @@
 
 #include <torch/torch.h>
 
+#include <algorithm>
+
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -50,7 +52,15 @@ std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string&
   check_model_size(ck, options, path);
   options.encoder.vit.weights.clear();  // the checkpoint already holds the ViT weights
   options.encoder.initial_weights_matter = false;
-  auto pipeline = std::make_unique<Pipeline>(options, &ck.tensors);
+  // An explicit prior.learned_weights override names the prior the caller wants (e.g. a decoder scored with
+  // another prior's depth); otherwise the checkpoint's embedded prior keeps it self-contained.
+  const bool prior_overridden = std::any_of(overrides.begin(), overrides.end(), [](const std::string& o) {
+    return o.rfind("prior.learned_weights=", 0) == 0;
+  });
+  if (prior_overridden && ck.tensors.count("prior/stem.weight"))
+    log_info("model: prior.learned_weights=", options.prior.learned_weights,
+             " replaces the depth-net weights embedded in ", path);
+  auto pipeline = std::make_unique<Pipeline>(options, prior_overridden ? nullptr : &ck.tensors);
   load_module(ck, *pipeline->model(), path);
   // NaN weights predict nothing: the scene would be written with 0 Gaussians and exit 0.
   for (const auto& p : pipeline->model()->named_parameters(true))

@@ -14,7 +14,8 @@ namespace isplat {
 ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::string& source,
                                            const std::vector<std::string>& overrides = {});
 
-// A pipeline (prior + model) with the checkpoint's weights, in eval mode.
+// A pipeline (prior + model) with the checkpoint's weights, in eval mode. A learned prior's weights embedded in the
+// checkpoint are used unless the overrides set prior.learned_weights, which then wins.
 std::unique_ptr<Pipeline> load_pipeline(const std::string& checkpoint_path,
                                         const std::vector<std::string>& overrides = {});
 // The same from a checkpoint already in memory; `path` names it in messages.
