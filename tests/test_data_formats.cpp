@@ -107,6 +107,27 @@ TEST_CASE("colmap: every camera model id has its parameter count, distortion is 
   CHECK_THROWS_WITH(colmap_intrinsics(wrong, dist), Catch::Contains("PINHOLE needs 4 parameters, got 3"));
 }
 
+TEST_CASE("colmap: a hall evaluation set is written in the evaluation format, and unknown styles are refused",
+          "[data][colmap]") {
+  test::QuietLogs quiet;
+  auto g = test::tiny_dataset_options(test::temp_dir("colmap_hall"), 4);
+  g.train_scenes = 0;
+  g.val_scenes = 0;
+  g.eval_datasets = {"hall_colmap"};
+  generate_datasets(g);
+  const Sequence seq =
+      colmap_sequence(generated_eval_root(g.out, "hall_colmap") + "/scene_0", "hall", ColmapSceneLayout{});
+  REQUIRE(seq.frames.size() == 4);
+  const LoadedFrame fr = load_frame(seq, 0);
+  REQUIRE(fr.has_depth());
+  CHECK(fr.image.cols == g.eval_width);
+  double deepest = 0;
+  cv::minMaxLoc(fr.depth.depth, nullptr, &deepest, nullptr, nullptr, fr.depth.valid);
+  CHECK(deepest > 10.0);  // a hall, not a room (at most 11 m deep, seen from inside)
+  g.eval_datasets = {"desk_colmap"};
+  CHECK_THROWS_WITH(generate_datasets(g), Catch::Contains("'desk_colmap' must be <courtyard|atrium|room|hall>"));
+}
+
 TEST_CASE("colmap: generated scene reads as a consistent sequence with EXR depth", "[data][colmap]") {
   const auto g = test::make_tiny_dataset("colmap_seq");
   const Sequence seq = colmap_sequence(colmap_scene(g), "courtyard", ColmapSceneLayout{});

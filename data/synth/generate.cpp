@@ -58,8 +58,8 @@ void GenerateOptions::visit(ConfigVisitor& v) {
           Range::at_least(0));
   v.field("hdf5_color", hdf5_color, "also write linear HDR final_hdf5 colour (float16) besides tonemap JPGs");
   v.field("eval_datasets", eval_datasets,
-          "evaluation sets: <style>_<layout>, style courtyard|atrium|room, "
-          "layout colmap|nerfstudio");
+          "evaluation sets: <style>_<layout>, style courtyard|atrium|room|hall (hall: a training style of the depth "
+          "prior, for held-out-style checks in the evaluation sets' format), layout colmap|nerfstudio");
   v.field("eval_scenes", eval_scenes, "scenes per evaluation set", Range::at_least(0));
   v.field("eval_frames", eval_frames, "frames per evaluation sequence", Range::at_least(2));
   v.field("eval_width", eval_width, "evaluation image width", Range::at_least(16));
@@ -354,9 +354,9 @@ void generate_datasets(const GenerateOptions& o) {
   for (const auto& d : o.eval_datasets) {
     const auto us = d.find('_');
     const std::string style = d.substr(0, us), layout = us == std::string::npos ? "" : d.substr(us + 1);
-    if ((style != "courtyard" && style != "atrium" && style != "room") ||
+    if ((style != "courtyard" && style != "atrium" && style != "room" && style != "hall") ||
         (layout != "colmap" && layout != "nerfstudio"))
-      fail("generate.eval_datasets: '", d, "' must be <courtyard|atrium|room>_<colmap|nerfstudio>");
+      fail("generate.eval_datasets: '", d, "' must be <courtyard|atrium|room|hall>_<colmap|nerfstudio>");
     eval_sets.push_back({d, style, layout});
   }
   const int64_t train_frames = (o.train_scenes + o.val_scenes + o.test_scenes) * o.cameras_per_scene * o.frames;
