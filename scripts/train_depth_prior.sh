@@ -16,12 +16,14 @@
 # the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter); the same
 # check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long); clutter scenes
 # with large objects just ahead of the cameras instead (wide_aug_clutter_near; loso_hall_aug_clutter_near, scored
-# by loso_eval_clutter_near).
+# by loso_eval_clutter_near); priors trained without the streets (loso_street_aug, loso_street_aug_clutter) and the
+# check of decoders trained on held-out priors' depth (loso_trained_eval).
 # Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
 #                                      loso_hall_aug|loso_eval|loso_eval_flip|wide_aug_clutter|
 #                                      loso_hall_aug_clutter|loso_eval_clutter|loso_hall_aug_clutter_long|
 #                                      loso_eval_long|wide_aug_clutter_near|loso_hall_aug_clutter_near|
-#                                      loso_eval_clutter_near|eval ...]
+#                                      loso_eval_clutter_near|loso_street_aug|loso_street_aug_clutter|
+#                                      loso_trained_eval|eval ...]
 #        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -43,10 +45,10 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
-    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug)
+    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
-    wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long)
+    wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long|loso_street_aug_clutter)
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
@@ -54,6 +56,20 @@ for stage in "${stages[@]}"; do
       data data_wide out/depth_prior/data_wide
       data data_clutter_near out/depth_prior/data_clutter_near
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+    loso_trained_eval)
+      # decoders trained on the held-out priors' depth (needs loso_hall_aug, loso_hall_aug_clutter, loso_street_aug
+      # and loso_street_aug_clutter), scored on the held-out halls and streets and in the evaluation sets' format
+      [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
+        "$bin/infinisplat" generate --config configs/experiments/data.json
+      [ -d out/experiments/data_heldout_format/eval/hall_colmap ] ||
+        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format.json
+      for row in prior_trained_loso_aug_height prior_trained_loso_aug_clutter_height \
+                 prior_trained_loso_street_aug_height prior_trained_loso_street_aug_clutter_height; do
+        "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train --rows "$row" --seeds 0
+      done
+      for c in eval_prior_loso_hall_trained eval_heldout_format eval_prior_loso_street_trained; do
+        "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
+      done ;;
     loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
@@ -68,7 +84,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | wide_aug_clutter_near | loso_hall_aug_clutter_near | loso_eval_clutter_near | eval)" >&2
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | wide_aug_clutter_near | loso_hall_aug_clutter_near | loso_eval_clutter_near | loso_street_aug | loso_street_aug_clutter | loso_trained_eval | eval)" >&2
        exit 2 ;;
   esac
 done
