@@ -67,6 +67,7 @@ for stage in "${stages[@]}"; do
                  prior_trained_loso_street_aug_height prior_trained_loso_street_aug_clutter_height; do
         "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train --rows "$row" --seeds 0
       done
+      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_street.json
       for c in eval_prior_loso_hall_trained eval_heldout_format eval_prior_loso_street_trained; do
         "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
       done ;;
