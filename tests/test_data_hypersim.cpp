@@ -23,6 +23,22 @@ HypersimOptions reader_options(const GenerateOptions& g, const std::string& spli
   h.split = split;
   return h;
 }
+
+// Two scenes of one style, generated and read back through the reader: each first frame has valid, finite depth.
+HypersimIndex written_and_read_back(const std::string& style, int frames) {
+  test::QuietLogs quiet;
+  const auto g = test::style_dataset_options(test::temp_dir("hs_" + style), frames, {style}, 2);
+  generate_datasets(g);
+  HypersimIndex index = read_hypersim(reader_options(g, "train"));
+  REQUIRE(index.sequences.size() == 2);
+  for (const Sequence& seq : index.sequences) {
+    const LoadedFrame fr = load_frame(seq, 0);
+    REQUIRE(fr.has_depth());
+    CHECK(cv::countNonZero(fr.depth.valid) > 0);
+    CHECK(cv::checkRange(fr.depth.depth));
+  }
+  return index;
+}
 }  // namespace
 
 TEST_CASE("hypersim: the reader finds the generated split and counts what it skips", "[data][hypersim]") {
@@ -168,17 +184,7 @@ TEST_CASE("hypersim: clutter scenes span scales from a desk to a street and read
   CHECK(largest > 12.0 * 3.0);   // scale above 3: street-sized
   CHECK(synth::build_clutter(7).prims.at(9).p0 == synth::build_clutter(7).prims.at(9).p0);
   // The generator writes them in the release layout; depth is valid, finite and agrees across views.
-  test::QuietLogs quiet;
-  const auto g = test::style_dataset_options(test::temp_dir("hs_clutter"), 6, {"clutter"}, 2);
-  generate_datasets(g);
-  const auto index = read_hypersim(reader_options(g, "train"));
-  REQUIRE(index.sequences.size() == 2);
-  for (const Sequence& seq : index.sequences) {
-    const LoadedFrame fr = load_frame(seq, 0);
-    REQUIRE(fr.has_depth());
-    CHECK(cv::countNonZero(fr.depth.valid) > 0);
-    CHECK(cv::checkRange(fr.depth.depth));
-  }
+  const HypersimIndex index = written_and_read_back("clutter", 6);
   const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);
   CHECK(c.agree > 0.8);
 }
@@ -223,16 +229,5 @@ TEST_CASE("hypersim: clutter_near adds large objects just ahead of the cameras t
   INFO("mean share of the view the new objects bring nearer: " << nearer_share);
   CHECK(scenes_with_near >= 60);
   CHECK(nearer_share > 0.1);
-  // Written in the release layout and read back: depth valid and finite.
-  test::QuietLogs quiet;
-  const auto g = test::style_dataset_options(test::temp_dir("hs_clutter_near"), 4, {"clutter_near"}, 2);
-  generate_datasets(g);
-  const auto index = read_hypersim(reader_options(g, "train"));
-  REQUIRE(index.sequences.size() == 2);
-  for (const Sequence& seq : index.sequences) {
-    const LoadedFrame fr = load_frame(seq, 0);
-    REQUIRE(fr.has_depth());
-    CHECK(cv::countNonZero(fr.depth.valid) > 0);
-    CHECK(cv::checkRange(fr.depth.depth));
-  }
+  written_and_read_back("clutter_near", 4);  // in the release layout, depth valid and finite
 }

@@ -43,6 +43,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The checkpoint of a tiny model trained for one step (dataset depth, so no prior is embedded).
+Checkpoint one_step_checkpoint(const std::string& tag) {
+  const auto data = test::make_tiny_dataset(tag, 8);
+  const std::string run = test::temp_dir(tag + "_run");
+  {
+    Trainer t(test::tiny_train_config(data, run, 1));
+    t.save(run + "/ck.safetensors");
+  }
+  return load_checkpoint(run + "/ck.safetensors");
+}
+
 // A safetensors file from a hand-written header (the writer never produces these).
 void write_safetensors_raw(const std::string& path, const std::string& header, const std::string& data) {
   std::string bytes(8, '\0');
@@ -313,13 +324,7 @@ TEST_CASE("reliability: one trainer per run folder, unwritable folders and damag
 TEST_CASE("reliability: NaN weights and a stored config far larger than the weights are refused before use",
           "[reliability][model]") {
   test::QuietLogs quiet;
-  const auto data = test::make_tiny_dataset("rel_model", 8);
-  const std::string run = test::temp_dir("rel_model_run");
-  {
-    Trainer t(test::tiny_train_config(data, run, 1));
-    t.save(run + "/ck.safetensors");
-  }
-  Checkpoint ck = load_checkpoint(run + "/ck.safetensors");
+  Checkpoint ck = one_step_checkpoint("rel_model");
   Checkpoint nan = ck;
   for (auto& [name, t] : nan.tensors)
     if (name.rfind("model/", 0) == 0 && t.is_floating_point()) t = torch::full_like(t, std::nan(""));
@@ -338,13 +343,8 @@ TEST_CASE("reliability: NaN weights and a stored config far larger than the weig
 TEST_CASE("reliability: an explicit prior.learned_weights override wins over the prior embedded in a checkpoint",
           "[reliability][model]") {
   test::QuietLogs quiet;
-  const auto data = test::make_tiny_dataset("rel_prior_override", 8);
-  const std::string run = test::temp_dir("rel_prior_override_run");
-  {
-    Trainer t(test::tiny_train_config(data, run, 1));
-    t.save(run + "/ck.safetensors");
-  }
-  Checkpoint ck = load_checkpoint(run + "/ck.safetensors");
+  Checkpoint ck = one_step_checkpoint("rel_prior_override");
+  const std::string run = test::temp_dir("rel_prior_override_weights");
   torch::manual_seed(1);
   LearnedDepthNet embedded(8), other(8);
   std::map<std::string, torch::Tensor> other_weights;
