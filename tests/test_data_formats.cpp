@@ -110,10 +110,7 @@ TEST_CASE("colmap: every camera model id has its parameter count, distortion is 
 TEST_CASE("colmap: a hall evaluation set is written in the evaluation format, and unknown styles are refused",
           "[data][colmap]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("colmap_hall"), 4);
-  g.train_scenes = 0;
-  g.val_scenes = 0;
-  g.eval_datasets = {"hall_colmap"};
+  auto g = test::eval_dataset_options(test::temp_dir("colmap_hall"), 4, {"hall_colmap"});
   generate_datasets(g);
   const Sequence seq =
       colmap_sequence(generated_eval_root(g.out, "hall_colmap") + "/scene_0", "hall", ColmapSceneLayout{});

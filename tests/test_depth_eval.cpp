@@ -46,10 +46,7 @@ TEST_CASE("depth eval: AbsRel and delta1 on hand-built maps", "[eval][depth]") {
 
 TEST_CASE("depth eval: the oracle scores perfectly, an untrained net does not, per range", "[eval][depth]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("depth_eval_data"), 8);
-  g.train_scenes = 0;
-  g.val_scenes = 0;
-  g.eval_datasets = {"courtyard_colmap"};
+  auto g = test::eval_dataset_options(test::temp_dir("depth_eval_data"), 8, {"courtyard_colmap"});
   generate_datasets(g);
   DepthEvalConfig c;
   EvalDatasetOptions ds;

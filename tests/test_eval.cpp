@@ -42,11 +42,8 @@ EvalDatasetOptions colmap_set(const GenerateOptions& g) {
 
 TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("pairs_data"), 24);
+  auto g = test::eval_dataset_options(test::temp_dir("pairs_data"), 24, {"courtyard_colmap"});
   g.eval_scenes = 2;
-  g.train_scenes = 0;
-  g.val_scenes = 0;
-  g.eval_datasets = {"courtyard_colmap"};
   generate_datasets(g);
   const auto seqs = load_eval_dataset(colmap_set(g));
   REQUIRE(seqs.size() == 2);
@@ -98,10 +95,8 @@ TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
 
 TEST_CASE("pairs: a generated trajectory of the default length populates all four bins", "[eval][pairs]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("pairs_bins"), 40);  // 40 frames: the default eval length
-  g.train_scenes = 0;
-  g.val_scenes = 0;
-  g.eval_datasets = {"courtyard_colmap"};
+  auto g = test::eval_dataset_options(test::temp_dir("pairs_bins"), 40,
+                                      {"courtyard_colmap"});  // 40 frames: the default eval length
   generate_datasets(g);
   const Manifest m = draw_manifest("courtyard", load_eval_dataset(colmap_set(g)), ProtocolOptions{});
   for (size_t b = 0; b < 4; ++b) {
@@ -644,10 +639,7 @@ TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D an
 TEST_CASE("pairs: a nerfstudio capture without depth uses the cameras, and an empty bin names its cause",
           "[eval][pairs]") {
   test::QuietLogs quiet;
-  auto g = test::tiny_dataset_options(test::temp_dir("pairs_ns_nodepth"), 16);
-  g.train_scenes = 0;
-  g.val_scenes = 0;
-  g.eval_datasets = {"atrium_nerfstudio"};
+  auto g = test::eval_dataset_options(test::temp_dir("pairs_ns_nodepth"), 16, {"atrium_nerfstudio"});
   generate_datasets(g);
   const std::string scene_root = generated_eval_root(g.out, "atrium_nerfstudio");
   std::string scene;

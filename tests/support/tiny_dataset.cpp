@@ -37,6 +37,14 @@ GenerateOptions style_dataset_options(const std::string& out, int frames, const 
   return o;
 }
 
+GenerateOptions eval_dataset_options(const std::string& out, int frames, const std::vector<std::string>& datasets) {
+  GenerateOptions o = tiny_dataset_options(out, frames);
+  o.train_scenes = 0;
+  o.val_scenes = 0;
+  o.eval_datasets = datasets;
+  return o;
+}
+
 GenerateOptions make_tiny_dataset(const std::string& tag, int frames) {
   GenerateOptions o = tiny_dataset_options(temp_dir(tag), frames);
   QuietLogs quiet;

@@ -14,6 +14,8 @@ GenerateOptions tiny_dataset_options(const std::string& out, int frames = 8);
 // scenes, no tilt-shift camera.
 GenerateOptions style_dataset_options(const std::string& out, int frames, const std::vector<std::string>& styles,
                                       int scenes);
+// Options for evaluation sets only (e.g. {"courtyard_colmap"}): no train or val scenes, one scene per set.
+GenerateOptions eval_dataset_options(const std::string& out, int frames, const std::vector<std::string>& datasets);
 // Generates into a fresh temp folder and returns GenerateOptions used (options.out is the folder).
 GenerateOptions make_tiny_dataset(const std::string& tag, int frames = 8);
 
