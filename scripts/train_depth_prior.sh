@@ -17,20 +17,27 @@
 # check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long); clutter scenes
 # with large objects just ahead of the cameras instead (wide_aug_clutter_near; loso_hall_aug_clutter_near, scored
 # by loso_eval_clutter_near); priors trained without the streets (loso_street_aug, loso_street_aug_clutter) and the
-# check of decoders trained on held-out priors' depth (loso_trained_eval).
-# Usage: scripts/train_depth_prior.sh [unet|squeeze|squeeze_hall|squeeze_sky|wide|wide_aug|wide_w64|loso_hall|
-#                                      loso_hall_aug|loso_eval|loso_eval_flip|wide_aug_clutter|
-#                                      loso_hall_aug_clutter|loso_eval_clutter|loso_hall_aug_clutter_long|
-#                                      loso_eval_long|wide_aug_clutter_near|loso_hall_aug_clutter_near|
-#                                      loso_eval_clutter_near|loso_street_aug|loso_street_aug_clutter|
-#                                      loso_trained_eval|eval ...]
-#        (default: unet squeeze squeeze_hall squeeze_sky wide eval)
+# check of decoders trained on held-out priors' depth (loso_trained_eval); the augmented prior with its pretrained
+# encoder fine-tuned at a tenth of the learning rate (wide_aug_tuned; loso_hall_aug_tuned, scored by loso_eval_tuned).
+# Usage: scripts/train_depth_prior.sh [STAGE ...]   (the stages are listed in `known` below;
+#        default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 bin="${BUILD_DIR:-$root/build}"
+known=(unet squeeze squeeze_hall squeeze_sky wide wide_aug wide_w64 loso_hall loso_hall_aug loso_eval loso_eval_flip
+       wide_aug_clutter loso_hall_aug_clutter loso_eval_clutter loso_hall_aug_clutter_long loso_eval_long
+       wide_aug_clutter_near loso_hall_aug_clutter_near loso_eval_clutter_near loso_street_aug loso_street_aug_clutter
+       loso_trained_eval wide_aug_tuned loso_hall_aug_tuned loso_eval_tuned eval)
 stages=("$@")
 [ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky wide eval)
+for stage in "${stages[@]}"; do  # a typo fails before the set-up and the build
+  case " ${known[*]} " in
+    *" $stage "*) ;;
+    *) echo "train_depth_prior.sh: unknown stage '$stage' (one of: ${known[*]})" >&2
+       exit 2 ;;
+  esac
+done
 scripts/setup.sh
 scripts/build.sh
 data() {  # $1: data config name under configs/depth_prior, $2: its output folder
@@ -45,7 +52,7 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
-    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug)
+    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug|wide_aug_tuned|loso_hall_aug_tuned)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
     wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long|loso_street_aug_clutter)
@@ -71,7 +78,7 @@ for stage in "${stages[@]}"; do
       for c in eval_prior_loso_hall_trained eval_heldout_format eval_prior_loso_street_trained; do
         "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
       done ;;
-    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near)
+    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near|loso_eval_tuned)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
@@ -85,7 +92,7 @@ for stage in "${stages[@]}"; do
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
-    *) echo "train_depth_prior.sh: unknown stage '$stage' (unet | squeeze | squeeze_hall | squeeze_sky | wide | wide_aug | wide_w64 | loso_hall | loso_hall_aug | loso_eval | loso_eval_flip | wide_aug_clutter | loso_hall_aug_clutter | loso_eval_clutter | loso_hall_aug_clutter_long | loso_eval_long | wide_aug_clutter_near | loso_hall_aug_clutter_near | loso_eval_clutter_near | loso_street_aug | loso_street_aug_clutter | loso_trained_eval | eval)" >&2
+    *) echo "train_depth_prior.sh: stage '$stage' is listed but has no recipe" >&2
        exit 2 ;;
   esac
 done

@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
+#include "io/safetensors.h"
 #include "prior/depth_prior.h"
 #include "prior/learned_depth.h"
 #include "support/test_util.h"
@@ -329,6 +330,46 @@ TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained enc
   const auto loss = net->forward_log(x).mean();
   loss.backward();
   CHECK(net->head->weight.grad().abs().sum().item<double>() > 0);
+}
+
+TEST_CASE("prior: a fine-tuned encoder trains, ships in the net's weights file, and loading detects it", "[prior]") {
+  const std::string backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, backbone});
+  const int64_t frozen_count = net->parameters().size();
+  net->tune_backbone();
+  net->tune_backbone();  // idempotent
+  CHECK(net->parameters().size() == frozen_count + net->backbone_parameters().size());
+  REQUIRE(net->backbone_parameters().size() == 50);  // SqueezeNet-1.1: 1 conv + 8 fires of 3 convs, weight + bias
+  const auto x = torch::rand({1, 3, 48, 64});
+  net->forward_log(x).mean().backward();
+  CHECK(net->named_parameters()["backbone.3_squeeze_weight"].grad().abs().sum().item<double>() > 0);
+  {
+    torch::NoGradGuard g;  // a step of fine-tuning, so the file differs from the shipped encoder
+    for (auto& p : net->backbone_parameters()) p.add_(0.01 * torch::randn_like(p));
+  }
+  std::map<std::string, torch::Tensor> file;
+  for (const auto& p : net->named_parameters(true)) file[p.key()] = p.value().detach();
+  CHECK(has_tuned_backbone(file));
+  const std::string path = test::temp_dir("prior_tuned") + "/depth_net.safetensors";
+  write_safetensors(path, file);
+
+  PriorOptions o;
+  o.type = "learned";
+  o.learned_arch = "squeeze";
+  o.learned_width = 8;
+  o.learned_backbone = backbone;
+  o.learned_weights = path;
+  PriorInput in;
+  in.image = x[0];
+  in.K = estimate_K(64, 48, 60.0);
+  torch::NoGradGuard g;
+  const auto expected = net->forward(x)[0][0];
+  CHECK(torch::allclose(make_depth_prior(o)->predict(in).depth, expected, 1e-5, 1e-6));
+  // The same decoder on the shipped (frozen) encoder predicts something else: the tuned weights were used.
+  file.erase(file.lower_bound("backbone."), file.lower_bound("backbone/"));
+  CHECK_FALSE(has_tuned_backbone(file));
+  write_safetensors(path, file);
+  CHECK_FALSE(torch::allclose(make_depth_prior(o)->predict(in).depth, expected, 1e-3, 0));
 }
 
 TEST_CASE("prior: floor_height_scale recovers the metric scale from the camera height", "[prior]") {

@@ -33,10 +33,18 @@ struct RenderedViews {
   torch::Tensor mask;    // [T,H,W], 1 = scored
 };
 
+// Weights trained at lr_scale x the scheduled learning rate (e.g. a fine-tuned pretrained encoder at 0.1).
+struct ParamGroup {
+  std::vector<torch::Tensor> params;
+  double lr_scale = 1.0;
+};
+
 class TrainTask {
  public:
   virtual ~TrainTask() = default;
   virtual torch::nn::Module& module() = 0;  // the trainable weights
+  // How the optimizer splits module()'s parameters; every parameter in exactly one group.
+  virtual std::vector<ParamGroup> param_groups() { return {{module().parameters(), 1.0}}; }
   virtual std::string describe() const = 0;
   // Loss terms including "total" (NaN when the prediction is non-finite) for a batch whose first tuple has
   // the global index `first_sample` (it seeds prompt draws); adds timings and support counts to `stats`.

@@ -1,6 +1,7 @@
 // The two training tasks: Gaussians through the renderer, and the learned depth prior.
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -125,12 +126,30 @@ class GaussianTask final : public TrainTask {
 
 class DepthTask final : public TrainTask {
  public:
-  explicit DepthTask(const TrainConfig& config) : net_(learned_depth_options(config.model.prior)), loss_(config.loss) {}
+  explicit DepthTask(const TrainConfig& config)
+      : net_(learned_depth_options(config.model.prior)),
+        loss_(config.loss),
+        backbone_lr_(config.model.prior.learned_backbone_lr) {
+    if (backbone_lr_ > 0) net_->tune_backbone();
+  }
 
   torch::nn::Module& module() override { return *net_; }
+  std::vector<ParamGroup> param_groups() override {
+    if (!net_->backbone_tuned()) return TrainTask::param_groups();
+    const auto encoder = net_->backbone_parameters();
+    std::vector<torch::Tensor> decoder;
+    for (const auto& p : net_->parameters()) {
+      const bool in_encoder =
+          std::any_of(encoder.begin(), encoder.end(), [&](const torch::Tensor& e) { return e.is_same(p); });
+      if (!in_encoder) decoder.push_back(p);
+    }
+    return {{decoder, 1.0}, {encoder, backbone_lr_}};
+  }
   std::string describe() const override {
-    return cat("learned depth prior (", net_->options.arch, net_->options.focal_normalized ? ", focal-normalized" : "",
-               "; l1_log x ", loss_.depth_l1, " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
+    return cat("learned depth prior (", net_->options.arch,
+               net_->backbone_tuned() ? cat(", encoder fine-tuned at ", backbone_lr_, " x lr") : "",
+               net_->options.focal_normalized ? ", focal-normalized" : "", "; l1_log x ", loss_.depth_l1,
+               " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
                loss_.depth_sky > 0 ? cat(" + sky x ", loss_.depth_sky, " beyond ", loss_.depth_sky_m, " m") : "", ")");
   }
 
@@ -140,7 +159,7 @@ class DepthTask final : public TrainTask {
   }
 
   void finish(const std::string& run_dir) const override {
-    // The frozen prior's weights, under the net's own names.
+    // The prior's weights, under the net's own names (with "backbone." when the encoder was fine-tuned).
     std::map<std::string, torch::Tensor> w;
     for (const auto& p : net_->named_parameters(true)) w[p.key()] = p.value().detach();
     write_safetensors((std::filesystem::path(run_dir) / "depth_net.safetensors").string(), w);
@@ -149,6 +168,7 @@ class DepthTask final : public TrainTask {
  private:
   LearnedDepthNet net_;
   LossOptions loss_;
+  double backbone_lr_;
 };
 }  // namespace
 

@@ -106,9 +106,24 @@ Trainer::Trainer(const TrainConfig& config)
   log_info("train: task ", config.task, ", ", count, " trainable parameters, ", config.train.steps, " steps, batch ",
            config.data.batch_size, " x (1 context + ", config.data.tuples.targets, " targets) at ",
            config.data.tuples.width, "x", config.data.tuples.height);
-  optimizer_ = std::make_unique<torch::optim::AdamW>(params, torch::optim::AdamWOptions(config.optim.lr)
-                                                                 .betas({config.optim.beta1, config.optim.beta2})
-                                                                 .weight_decay(config.optim.weight_decay));
+  const auto adamw = [&](double lr) {
+    return torch::optim::AdamWOptions(lr)
+        .betas({config.optim.beta1, config.optim.beta2})
+        .weight_decay(config.optim.weight_decay);
+  };
+  std::vector<torch::optim::OptimizerParamGroup> groups;
+  int64_t grouped = 0;
+  for (auto& g : task_->param_groups()) {
+    for (const auto& p : g.params) grouped += p.numel();
+    lr_scales_.push_back(g.lr_scale);
+    if (g.lr_scale != 1.0)
+      log_info("train: ", g.params.size(), " parameter tensors at ", g.lr_scale, " x the learning rate");
+    groups.emplace_back(std::move(g.params),
+                        std::make_unique<torch::optim::AdamWOptions>(adamw(config.optim.lr * g.lr_scale)));
+  }
+  ISPLAT_CHECK(grouped == count, "train: the optimizer's parameter groups hold ", grouped, " weights, the task has ",
+               count);
+  optimizer_ = std::make_unique<torch::optim::AdamW>(std::move(groups), adamw(config.optim.lr));
   if (dp_) {  // every rank starts from rank 0's weights (and buffers)
     std::vector<torch::Tensor> state = params;
     for (const auto& b : task_->module().buffers()) state.push_back(b);
@@ -154,7 +169,9 @@ StepStats Trainer::train_step() {
   const Batch batch = loader_->next();
   s.timings_ms["data"] = ms_since(t0);
   s.lr = scheduled_lr(config_.optim, step_, config_.train.steps);
-  for (auto& g : optimizer_->param_groups()) static_cast<torch::optim::AdamWOptions&>(g.options()).lr(s.lr);
+  auto& groups = optimizer_->param_groups();
+  for (size_t i = 0; i < groups.size(); ++i)
+    static_cast<torch::optim::AdamWOptions&>(groups[i].options()).lr(s.lr * lr_scales_[i]);
   trainable().train();
   optimizer_->zero_grad();
   // Global sample index of this rank's first tuple: rank r of W takes tuples r*B .. r*B+B-1 of each global batch.

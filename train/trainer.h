@@ -54,6 +54,7 @@ class Trainer {
   std::unique_ptr<TupleSampler> train_sampler_, val_sampler_;
   std::unique_ptr<BatchLoader> loader_;
   std::unique_ptr<torch::optim::AdamW> optimizer_;
+  std::vector<double> lr_scales_;  // per optimizer parameter group
   int64_t step_ = 0;
   int64_t bad_steps_ = 0;
   double best_val_ = std::numeric_limits<double>::infinity();

@@ -36,6 +36,9 @@ class FeatureNet {
   const std::vector<Layer>& layers() const { return layers_; }
   const std::vector<int>& taps() const { return taps_; }
   const torch::Tensor& param(const std::string& name) const { return params_.at(name); }  // "<index>.weight", ...
+  // Every weight by name. The tensors are the ones forward() reads, so an owner that fine-tunes them (the learned
+  // depth prior) registers these handles as its own parameters.
+  const std::map<std::string, torch::Tensor>& params() const { return params_; }
 
  private:
   std::string arch_;

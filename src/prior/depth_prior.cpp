@@ -64,6 +64,12 @@ void PriorOptions::visit(ConfigVisitor& v) {
   v.field("learned_focal", learned_focal,
           "focal-normalized learned depth: predict for a canonical 60-degree camera, scale by the image's fx/W");
   v.field("learned_backbone", learned_backbone, "squeeze arch: SqueezeNet-1.1 features (torchvision names)");
+  v.field("learned_backbone_lr", learned_backbone_lr,
+          "task: depth, squeeze arch: > 0 fine-tunes the pretrained encoder at this multiple of optim.lr, and the "
+          "net's weights file then carries it (loading detects that, so scoring needs no option); 0 = frozen",
+          Range::at_least(0));
+  v.require("learned_backbone_lr", learned_backbone_lr == 0 || learned_arch == "squeeze",
+            "fine-tunes the pretrained encoder, which only prior.learned_arch = squeeze has");
   v.field("learned_sky_m", learned_sky_m,
           "learned depth at or beyond this many metres is sky and marked invalid (no supports); 0 = never. For nets "
           "trained with loss.depth_sky, set it below loss.depth_sky_m",
@@ -218,6 +224,7 @@ class LearnedPrior final : public DepthPrior {
   explicit LearnedPrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded = nullptr)
       : o_(o), net_(learned_depth_options(o)) {
     if (embedded && embedded->count("prior/stem.weight")) {
+      if (has_tuned_backbone(*embedded, "prior/")) net_->tune_backbone();
       load_named_tensors(*net_, *embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
       source_ = "weights embedded in the checkpoint";
     } else if (o.learned_weights.empty()) {
@@ -225,7 +232,9 @@ class LearnedPrior final : public DepthPrior {
           "depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
           "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
     } else {
-      load_named_tensors(*net_, read_safetensors(o.learned_weights).tensors, "",
+      const SafeTensors weights = read_safetensors(o.learned_weights);
+      if (has_tuned_backbone(weights.tensors)) net_->tune_backbone();  // a fine-tuned encoder ships in the file
+      load_named_tensors(*net_, weights.tensors, "",
                          o.learned_weights + ": does not fit the learned depth net (prior.learned_width must match)");
       source_ = o.learned_weights;
     }

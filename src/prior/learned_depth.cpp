@@ -1,9 +1,10 @@
-// Learned depth: a U-Net or a decoder on frozen SqueezeNet taps, predicting log depth; instance norm keeps
-// it stable at batch size 1.
+// Learned depth: a U-Net or a decoder on (frozen or fine-tuned) SqueezeNet taps, predicting log depth; instance norm
+// keeps it stable at batch size 1.
 #include "prior/learned_depth.h"
 
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -20,7 +21,29 @@ namespace {
 // SqueezeNet-1.1 `features` taps at strides 2, 4, 8 and 16, and their channels.
 const std::vector<int> kSqueezeTaps = {1, 4, 7, 12};
 const int64_t kSqueezeChannels[4] = {64, 128, 256, 512};
+// Module parameter names cannot contain dots: torchvision's "3.squeeze.weight" is kept as "3_squeeze_weight".
+std::string tuned_name(std::string name) {
+  std::replace(name.begin(), name.end(), '.', '_');
+  return name;
+}
 }  // namespace
+
+bool has_tuned_backbone(const std::map<std::string, torch::Tensor>& tensors, const std::string& prefix) {
+  return tensors.count(prefix + "backbone.0_weight") > 0;
+}
+
+void LearnedDepthNetImpl::tune_backbone() {
+  ISPLAT_CHECK(options.arch == "squeeze", "learned depth net: only the squeeze arch has a pretrained encoder to tune (",
+               "prior.learned_arch is '", options.arch, "')");
+  if (tuned_backbone_) return;
+  tuned_backbone_ = std::make_shared<torch::nn::Module>();
+  for (const auto& [name, w] : backbone->params()) tuned_backbone_->register_parameter(tuned_name(name), w);
+  register_module("backbone", tuned_backbone_);
+}
+
+std::vector<torch::Tensor> LearnedDepthNetImpl::backbone_parameters() const {
+  return tuned_backbone_ ? tuned_backbone_->parameters() : std::vector<torch::Tensor>{};
+}
 
 LearnedDepthNetImpl::LearnedDepthNetImpl(const LearnedDepthOptions& o) : options(o) {
   const int64_t w = o.width;
@@ -68,7 +91,9 @@ torch::Tensor LearnedDepthNetImpl::forward_log(const torch::Tensor& image, const
     }
   } else {
     std::vector<torch::Tensor> taps;
-    {
+    if (tuned_backbone_) {
+      taps = backbone->forward(imagenet_normalize(image));
+    } else {
       torch::NoGradGuard frozen;  // the pretrained encoder is not trained
       taps = backbone->forward(imagenet_normalize(image));
     }
