@@ -281,6 +281,41 @@ TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)"
   CHECK(torch::equal(cut.depth, torch::where(sky, torch::zeros_like(all.depth), all.depth)));
 }
 
+TEST_CASE("prior: learned_input_width runs the net at that width with scaled intrinsics, at the photo's size",
+          "[prior]") {
+  test::QuietLogs quiet;
+  const int64_t H = 48, W = 72;
+  PriorOptions o;
+  o.type = "learned";
+  o.learned_width = 8;
+  o.learned_focal = true;
+  PriorInput in;
+  in.image = torch::rand({3, H, W});
+  in.K = make_K(60.0, 60.0, 36.0, 24.0, torch::kFloat32);
+  torch::manual_seed(5);
+  const torch::Tensor native = make_depth_prior(o)->predict(in).depth;
+  o.learned_input_width = W;  // the photo's own width: nothing changes
+  torch::manual_seed(5);
+  CHECK(torch::equal(make_depth_prior(o)->predict(in).depth, native));
+  o.learned_input_width = 48;
+  torch::manual_seed(5);  // the same untrained weights
+  auto prior = make_depth_prior(o);
+  CHECK_THAT(prior->describe(), Catch::Contains("48 px wide"));
+  const PriorOutput small = prior->predict(in);
+  REQUIRE(small.depth.sizes() == torch::IntArrayRef({H, W}));
+  CHECK(torch::equal(small.valid > 0, small.depth > 0));
+  // The net reads a 48 x 32 photo with its intrinsics scaled (the focal normalization sees the same fx / width),
+  // and its log depth comes back bilinearly.
+  torch::manual_seed(5);
+  LearnedDepthNet net(learned_depth_options(o));
+  torch::NoGradGuard g;
+  const auto [photo, K] = resize_with_K(in.image, in.K, 32, 48);
+  const auto expected = torch::exp(resize_bilinear(net->forward_log(photo.unsqueeze(0), K.unsqueeze(0)), H, W))[0][0];
+  CHECK(torch::allclose(small.depth, expected, 1e-5, 1e-6));
+  CHECK_FALSE(torch::allclose(small.depth, native, 1e-3, 0));
+  CHECK_THROWS_WITH(load_config<PriorOptions>("", {"learned_input_width=8"}), Catch::Contains("learned_input_width"));
+}
+
 TEST_CASE("prior: learned_flip_average is the geometric mean of the photo's and its mirror's depth", "[prior]") {
   test::QuietLogs quiet;
   const int64_t H = 32, W = 48;

@@ -77,6 +77,14 @@ void PriorOptions::visit(ConfigVisitor& v) {
   v.field("learned_flip_average", learned_flip_average,
           "learned prior: also predict from the left-right mirrored photo (with its mirrored intrinsics) and take the "
           "geometric mean of the two depths, pixel by pixel; twice the prior's time");
+  v.field("learned_input_width", learned_input_width,
+          "learned prior: run the net on the photo resized to this many pixels wide (the height keeps the aspect; K "
+          "is scaled with it, so a focal-normalized net reads the same metric scale), and bring the log depth back "
+          "to the photo's size. A net sees objects at the pixel size it was trained at (e.g. the tuples' width); "
+          "0 = the photo's own size",
+          Range::between(0, 8192));
+  v.require("learned_input_width", learned_input_width == 0 || learned_input_width >= 16,
+            "is 0 (the photo's own size) or at least 16 pixels");
   v.field("camera_height_m", camera_height_m,
           "learned and torchscript priors: set the metric scale from the camera's height above the ground (find "
           "the floor in the lower image, rescale so it lies this many metres below); frames without a visible floor "
@@ -244,21 +252,31 @@ class LearnedPrior final : public DepthPrior {
     check_image(in);
     torch::NoGradGuard g;
     const torch::Tensor K = intrinsics_for(in, o_.hfov_deg);
-    const torch::Tensor image = in.image.unsqueeze(0).to(torch::kFloat32), K1 = K.to(torch::kFloat32).unsqueeze(0);
+    const int64_t H = in.image.size(1), W = in.image.size(2);
+    torch::Tensor net_image = in.image.to(torch::kFloat32), net_K = K.to(torch::kFloat32);
+    const bool resized = o_.learned_input_width > 0 && o_.learned_input_width != W;
+    if (resized) {
+      const int64_t w = o_.learned_input_width,
+                    h = std::max<int64_t>(16, std::llround(static_cast<double>(H) * w / static_cast<double>(W)));
+      std::tie(net_image, net_K) = resize_with_K(net_image, net_K, h, w);
+    }
+    const torch::Tensor image = net_image.unsqueeze(0), K1 = net_K.unsqueeze(0);
     torch::Tensor log_d = net_->forward_log(image, K1);
     if (o_.learned_flip_average) {
       // The mirrored photo is another view of the same scene. Averaging in log depth keeps the result metric and
       // cancels errors the net makes differently on the two.
-      const torch::Tensor Km = mirror_K(K1, in.image.size(2));
+      const torch::Tensor Km = mirror_K(K1, image.size(3));
       log_d = 0.5 * (log_d + net_->forward_log(image.flip({3}), Km).flip({3}));
     }
+    if (resized) log_d = resize_bilinear(log_d, H, W);
     torch::Tensor d = torch::exp(log_d)[0][0];
     if (o_.learned_sky_m > 0) d = torch::where(d >= o_.learned_sky_m, torch::zeros_like(d), d);  // sky: invalid
     return finish_monocular(d, K, o_, in);
   }
   std::string describe() const override {
     const std::string kind = cat("learned depth net (", o_.learned_arch, o_.learned_focal ? ", focal-normalized" : "",
-                                 o_.learned_flip_average ? ", flip-averaged" : "");
+                                 o_.learned_flip_average ? ", flip-averaged" : "",
+                                 o_.learned_input_width > 0 ? cat(", run ", o_.learned_input_width, " px wide") : "");
     return source_.empty() ? kind + ", untrained)" : kind + ", " + source_ + ")";
   }
   const torch::nn::Module* embeddable_weights() const override { return source_.empty() ? nullptr : net_.get(); }

@@ -36,6 +36,7 @@ struct PriorOptions {
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
   double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
   bool learned_flip_average = false;  // also read the mirrored photo; average the two in log depth
+  int64_t learned_input_width = 0;    // run the net on the photo resized to this width (0 = its own size)
   double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
   std::string floor_rule = "best";    // camera_height_m: best-supported plane | nearest the net's own scale
   bool reference_scale = false;       // diagnostic: monocular depth scaled to the frame's own depth (median)
