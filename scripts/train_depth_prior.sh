@@ -18,8 +18,9 @@
 # with large objects just ahead of the cameras instead (wide_aug_clutter_near; loso_hall_aug_clutter_near, scored
 # by loso_eval_clutter_near); priors trained without the streets (loso_street_aug, loso_street_aug_clutter) and the
 # check of decoders trained on held-out priors' depth (loso_trained_eval); the augmented prior with its pretrained
-# encoder fine-tuned at a tenth of the learning rate (wide_aug_tuned; loso_hall_aug_tuned, scored by loso_eval_tuned;
-# tuned_eval scores wide_aug_tuned on the evaluation sets, depth and end to end with the experiments' rows).
+# encoder fine-tuned at a tenth of the learning rate (wide_aug_tuned; loso_hall_aug_tuned, scored by loso_eval_tuned,
+# which rejected it: docs/results/2026-11-26-prior-tuned.md); the augmented prior run at the tuples' width on
+# 384x256 photos of the held-out style, scored in the evaluation sets' format (format_eval_width; also rejected).
 # Usage: scripts/train_depth_prior.sh [STAGE ...]   (the stages are listed in `known` below;
 #        default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
@@ -29,7 +30,7 @@ bin="${BUILD_DIR:-$root/build}"
 known=(unet squeeze squeeze_hall squeeze_sky wide wide_aug wide_w64 loso_hall loso_hall_aug loso_eval loso_eval_flip
        wide_aug_clutter loso_hall_aug_clutter loso_eval_clutter loso_hall_aug_clutter_long loso_eval_long
        wide_aug_clutter_near loso_hall_aug_clutter_near loso_eval_clutter_near loso_street_aug loso_street_aug_clutter
-       loso_trained_eval wide_aug_tuned loso_hall_aug_tuned loso_eval_tuned tuned_eval eval)
+       loso_trained_eval wide_aug_tuned loso_hall_aug_tuned loso_eval_tuned format_eval_width eval)
 stages=("$@")
 [ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky wide eval)
 for stage in "${stages[@]}"; do  # a typo fails before the set-up and the build
@@ -84,13 +85,18 @@ for stage in "${stages[@]}"; do
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
       "$bin/infinisplat-eval" --config "configs/experiments/eval_prior_loso_hall${stage#loso_eval}.json" ;;
-    tuned_eval)
-      # needs wide_aug_tuned, and the experiments' rows full and base_gaussians (scripts/experiments.sh)
-      [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data.json
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_tuned.json
-      "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage eval --rows full,base_gaussians \
-        --variants rgb_wide_aug_tuned_height,rgb_wide_aug_tuned_flip_height ;;
+    format_eval_width)
+      # needs loso_hall_aug and the decoders full (seed 0) and prior_trained_loso_aug_height (loso_trained_eval)
+      [ -d out/experiments/data_heldout_format/eval/hall_colmap ] ||
+        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format.json
+      [ -d out/experiments/data_heldout_format_halls/eval/hall_colmap ] ||
+        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format_halls.json
+      for c in heldout_format_width heldout_format_halls_width; do
+        "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_$c.json"
+      done
+      for c in eval_heldout_format_width eval_heldout_format_halls; do
+        "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
+      done ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/experiments/data.json
