@@ -43,6 +43,14 @@ std::string save_module(const std::string& dir, const std::string& name, const s
   m.save(path);
   return path;
 }
+// A tiny learned prior (width 8), untrained: seed torch before make_depth_prior to fix its weights.
+PriorOptions tiny_learned(bool focal_normalized) {
+  PriorOptions o;
+  o.type = "learned";
+  o.learned_width = 8;
+  o.learned_focal = focal_normalized;
+  return o;
+}
 }  // namespace
 
 TEST_CASE("prior: dataset depth passes through with its mask and an estimated K", "[prior]") {
@@ -263,9 +271,7 @@ TEST_CASE("prior: every learned-net option keeps the contract (shape, metric dep
 
 TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)", "[prior]") {
   test::QuietLogs quiet;
-  PriorOptions o;
-  o.type = "learned";
-  o.learned_width = 8;
+  PriorOptions o = tiny_learned(false);
   PriorInput in;
   in.image = torch::rand({3, 32, 48});
   in.K = make_K(40.0, 40.0, 24.0, 16.0, torch::kFloat32);
@@ -285,10 +291,7 @@ TEST_CASE("prior: learned_input_width runs the net at that width with scaled int
           "[prior]") {
   test::QuietLogs quiet;
   const int64_t H = 48, W = 72;
-  PriorOptions o;
-  o.type = "learned";
-  o.learned_width = 8;
-  o.learned_focal = true;
+  PriorOptions o = tiny_learned(true);
   PriorInput in;
   in.image = torch::rand({3, H, W});
   in.K = make_K(60.0, 60.0, 36.0, 24.0, torch::kFloat32);
@@ -319,10 +322,7 @@ TEST_CASE("prior: learned_input_width runs the net at that width with scaled int
 TEST_CASE("prior: learned_flip_average is the geometric mean of the photo's and its mirror's depth", "[prior]") {
   test::QuietLogs quiet;
   const int64_t H = 32, W = 48;
-  PriorOptions o;
-  o.type = "learned";
-  o.learned_width = 8;
-  o.learned_focal = true;
+  PriorOptions o = tiny_learned(true);
   PriorInput in, mirrored;
   in.image = torch::rand({3, H, W});
   in.K = make_K(40.0, 40.0, 20.0, 15.0, torch::kFloat32);
