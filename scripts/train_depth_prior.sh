@@ -76,9 +76,9 @@ for stage in "${stages[@]}"; do
                  prior_trained_loso_street_aug_height prior_trained_loso_street_aug_clutter_height; do
         "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train --rows "$row" --seeds 0
       done
-      # the halls' decoders also with seed 1 (eval_prior_loso_hall_trained_s1)
+      # the clutter-trained halls decoder also with seed 1 (eval_prior_loso_hall_trained_s1)
       "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train \
-        --rows prior_trained_loso_aug_height,prior_trained_loso_aug_clutter_height --seeds 1
+        --rows prior_trained_loso_aug_clutter_height --seeds 1
       "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_street.json
       for c in eval_prior_loso_hall_trained eval_prior_loso_hall_trained_s1 eval_heldout_format \
                eval_prior_loso_street_trained; do
