@@ -231,19 +231,21 @@ class LearnedPrior final : public DepthPrior {
  public:
   explicit LearnedPrior(const PriorOptions& o, const std::map<std::string, torch::Tensor>* embedded = nullptr)
       : o_(o), net_(learned_depth_options(o)) {
+    const auto load = [&](const std::map<std::string, torch::Tensor>& tensors, const std::string& prefix,
+                          const std::string& what) {
+      if (has_tuned_backbone(tensors, prefix)) net_->tune_backbone();  // a fine-tuned encoder ships with the weights
+      load_named_tensors(*net_, tensors, prefix, what);
+    };
     if (embedded && embedded->count("prior/stem.weight")) {
-      if (has_tuned_backbone(*embedded, "prior/")) net_->tune_backbone();
-      load_named_tensors(*net_, *embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
+      load(*embedded, "prior/", "checkpoint: embedded depth-net weights do not fit the net");
       source_ = "weights embedded in the checkpoint";
     } else if (o.learned_weights.empty()) {
       log_warn(
           "depth prior: the learned depth net has no weights (prior.learned_weights is empty); its depth is "
           "untrained. Train it with a `task: depth` config or pass prior.torchscript.");
     } else {
-      const SafeTensors weights = read_safetensors(o.learned_weights);
-      if (has_tuned_backbone(weights.tensors)) net_->tune_backbone();  // a fine-tuned encoder ships in the file
-      load_named_tensors(*net_, weights.tensors, "",
-                         o.learned_weights + ": does not fit the learned depth net (prior.learned_width must match)");
+      load(read_safetensors(o.learned_weights).tensors, "",
+           o.learned_weights + ": does not fit the learned depth net (prior.learned_width must match)");
       source_ = o.learned_weights;
     }
     net_->eval();

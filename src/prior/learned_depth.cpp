@@ -91,10 +91,9 @@ torch::Tensor LearnedDepthNetImpl::forward_log(const torch::Tensor& image, const
     }
   } else {
     std::vector<torch::Tensor> taps;
-    if (tuned_backbone_) {
-      taps = backbone->forward(imagenet_normalize(image));
-    } else {
-      torch::NoGradGuard frozen;  // the pretrained encoder is not trained
+    {
+      // The pretrained encoder is not trained unless tuned (and never where the caller turned gradients off).
+      torch::AutoGradMode encoder_grad(tuned_backbone_ != nullptr && torch::GradMode::is_enabled());
       taps = backbone->forward(imagenet_normalize(image));
     }
     x = torch::relu(instance_norm((*lateral)[3]->as<nn::Conv2d>()->forward(taps[3])));
