@@ -4,9 +4,9 @@
 #include <vector>
 
 #include "core/runtime.h"
+#include "data/perturb.h"
 #include "eval/datasets.h"
 #include "eval/pairs.h"
-#include "eval/perturb.h"
 #include "render/prune.h"
 #include "render/render.h"
 

@@ -11,7 +11,7 @@
 #include "core/paths.h"
 #include "core/progress.h"
 #include "data/colmap.h"
-#include "eval/perturb.h"
+#include "data/perturb.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
 #include "io/panel.h"

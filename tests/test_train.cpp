@@ -181,6 +181,19 @@ TEST_CASE("train: augmentation changes training tuples, never validation", "[tra
   CHECK(a.train_step().losses.at("total") != b.train_step().losses.at("total"));
 }
 
+TEST_CASE("train: train.depth_error changes the depth of training steps, never validation", "[train][augment]") {
+  test::QuietLogs quiet;
+  const auto data = test::make_tiny_dataset("train_depth_error", 8);
+  const auto plain = test::tiny_train_config(data, test::temp_dir("train_depth_error_plain"), 2);
+  auto noisy = plain;
+  noisy.train.out = test::temp_dir("train_depth_error_noisy");
+  noisy.train.depth_error.scale_sigma = 0.3;
+  noisy.train.depth_error.warp_sigma = 0.3;
+  Trainer a(plain), b(noisy);
+  CHECK(a.validate(false) == b.validate(false));  // same weights, same validation tuples and depth
+  CHECK(a.train_step().losses.at("total") != b.train_step().losses.at("total"));
+}
+
 TEST_CASE("train: run() keeps init, last, best and the last K periodic checkpoints, and --resume auto continues",
           "[train]") {
   test::QuietLogs quiet;

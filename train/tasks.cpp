@@ -7,6 +7,7 @@
 
 #include "core/log.h"
 #include "core/progress.h"
+#include "data/perturb.h"
 #include "geometry/camera_torch.h"
 #include "geometry/color.h"
 #include "io/safetensors.h"
@@ -45,7 +46,14 @@ class GaussianTask final : public TrainTask {
       in.depth = batch.context_depth[b];
       in.valid = batch.context_valid[b];
       in.seed = mix_seed(static_cast<uint64_t>(config_.runtime.seed), static_cast<uint64_t>(first_sample + b));
-      Prediction p = pipeline_.run(in, batch.context_T[b], train);
+      std::function<void(PriorOutput&)> depth_error;
+      if (train && config_.train.depth_error.any())
+        depth_error = [&](PriorOutput& po) {
+          const PerturbedDepth d =
+              perturb_depth(po.depth, po.valid, draw_depth_error(config_.train.depth_error, in.seed), in.seed);
+          po.depth = d.depth, po.valid = d.valid;
+        };
+      Prediction p = pipeline_.run(in, batch.context_T[b], train, depth_error);
       for (const auto& [k, v] : p.timings_ms) stats.timings_ms[k] += v;
       stats.supports += p.supports.count();
       // Diverged weights give non-finite Gaussians, which the renderer rejects: report the step as

@@ -1,6 +1,6 @@
-// Perturbations of a source view for the stability suite: depth errors (global scale, multiplicative noise,
-// blur, holes, noise at depth edges, depth on one side only; the sparse prior draws its prompts from this
-// depth) and image changes (exposure, JPEG). Deterministic for a seed.
+// Perturbations of a source view: depth errors (global scale, multiplicative noise, a smooth warp, blur, holes,
+// noise at depth edges, depth on one side only) and image changes (exposure, JPEG), for the stability suite; and
+// random depth errors drawn per tuple for training. Deterministic for a seed.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -14,6 +14,8 @@ class ConfigVisitor;
 struct PerturbOptions {
   double depth_scale = 1.0;        // global scale error: z·s
   double depth_noise = 0.0;        // multiplicative noise sigma on every pixel: z(1 + ε), ε ~ N(0, σ²)
+  double depth_warp = 0.0;         // smooth shape error: z·exp(σ·f), f bilinear between N(0, 1) grid nodes
+  int64_t depth_warp_cells = 3;    // ... with this many grid cells across the width
   double depth_blur_px = 0.0;      // Gaussian blur sigma of the depth map, pixels (valid pixels only)
   double depth_holes = 0.0;        // share of valid depth pixels made invalid
   double depth_hole_size = 8.0;    // ... as blobs of about this radius (pixels); 0 = independent pixels
@@ -43,6 +45,20 @@ torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions
 
 // Applies the options to the source view's image, depth and valid mask (a copy; the input is unchanged).
 ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& options, uint64_t seed);
+
+// Random depth errors for training a decoder that must cope with a wrong depth prior. Each tuple draws a global
+// scale exp(N(0, scale_sigma²)), a smooth warp of sigma warp_sigma and a blur of U(0, blur_px) pixels.
+struct DepthErrorOptions {
+  double scale_sigma = 0.0;
+  double warp_sigma = 0.0;
+  int64_t warp_cells = 3;
+  double blur_px = 0.0;
+  bool any() const { return scale_sigma > 0 || warp_sigma > 0 || blur_px > 0; }
+  void visit(ConfigVisitor& v);
+};
+
+// The perturbation one tuple gets (deterministic for the seed; the warp's field also follows the seed).
+PerturbOptions draw_depth_error(const DepthErrorOptions& options, uint64_t seed);
 
 // Depth edges: valid pixels whose depth differs from a 4-neighbour's by more than `relative` of itself.
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative = 0.05);

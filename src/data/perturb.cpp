@@ -1,5 +1,6 @@
-// Source-view perturbations with a seeded generator: noise, holes and blur on depth, exposure and JPEG on the image.
-#include "eval/perturb.h"
+// Source-view perturbations with a seeded generator: noise, warp, holes and blur on depth, exposure and JPEG on the
+// image; and the per-tuple draw of training's depth errors.
+#include "data/perturb.h"
 
 #include <ATen/CPUGeneratorImpl.h>
 #include <torch/torch.h>
@@ -18,8 +19,8 @@
 namespace isplat {
 
 bool PerturbOptions::any_depth() const {
-  return depth_scale != 1.0 || depth_noise > 0 || depth_blur_px > 0 || depth_holes > 0 || depth_edge_noise > 0 ||
-         depth_side != "all";
+  return depth_scale != 1.0 || depth_noise > 0 || depth_warp > 0 || depth_blur_px > 0 || depth_holes > 0 ||
+         depth_edge_noise > 0 || depth_side != "all";
 }
 
 bool PerturbOptions::any() const {
@@ -31,6 +32,11 @@ void PerturbOptions::visit(ConfigVisitor& v) {
           Range::above(0.0));
   v.field("depth_noise", depth_noise, "multiplicative depth noise sigma on every pixel, z(1 + eps)",
           Range::between(0.0, 1.0));
+  v.field("depth_warp", depth_warp,
+          "smooth shape error of the depth: z x exp(sigma f), f bilinear between N(0, 1) values on a coarse grid",
+          Range::between(0.0, 2.0));
+  v.field("depth_warp_cells", depth_warp_cells, "grid cells of depth_warp across the image width",
+          Range::between(1, 64));
   v.field("depth_blur_px", depth_blur_px, "Gaussian blur sigma of the depth map in pixels", Range::between(0.0, 100.0));
   v.field("depth_holes", depth_holes, "share of valid depth pixels made invalid", Range::between(0.0, 0.99));
   v.field("depth_hole_size", depth_hole_size,
@@ -44,6 +50,27 @@ void PerturbOptions::visit(ConfigVisitor& v) {
   v.field("exposure", exposure, "source image multiplied by this in linear light", Range::above(0.0));
   v.field("jpeg_quality", jpeg_quality, "re-encode the source image as JPEG at this quality (0 = off)",
           Range::between(0, 100));
+}
+
+void DepthErrorOptions::visit(ConfigVisitor& v) {
+  v.field("scale_sigma", scale_sigma, "sigma of the log of a global depth scale drawn per tuple (0 = off)",
+          Range::between(0.0, 2.0));
+  v.field("warp_sigma", warp_sigma,
+          "sigma of a smooth log-depth warp drawn per tuple (the stability suite's depth_warp; 0 = off)",
+          Range::between(0.0, 2.0));
+  v.field("warp_cells", warp_cells, "grid cells of the warp across the image width", Range::between(1, 64));
+  v.field("blur_px", blur_px, "largest depth blur sigma in pixels, drawn uniformly from [0, blur_px] per tuple",
+          Range::between(0.0, 100.0));
+}
+
+PerturbOptions draw_depth_error(const DepthErrorOptions& o, uint64_t seed) {
+  auto gen = at::make_generator<at::CPUGeneratorImpl>(seed * 0x9E3779B97F4A7C15ull + 3);
+  PerturbOptions p;
+  p.depth_scale = std::exp(o.scale_sigma * torch::randn({1}, gen).item<double>());
+  p.depth_warp = o.warp_sigma;
+  p.depth_warp_cells = o.warp_cells;
+  p.depth_blur_px = o.blur_px * torch::rand({1}, gen).item<double>();
+  return p;
 }
 
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
@@ -86,6 +113,16 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
     depth = depth * (1.0 + o.depth_edge_noise * torch::randn({H, W}, gen) * edges);
   }
   if (o.depth_noise > 0) depth = depth * (1.0 + o.depth_noise * torch::randn({H, W}, gen));
+  if (o.depth_warp > 0) {  // unit-variance values on a coarse grid, bilinear in between, as a log-depth offset
+    const int64_t gw = o.depth_warp_cells + 1;
+    const int64_t gh = std::max<int64_t>(2, std::llround(static_cast<double>(o.depth_warp_cells) * H / W) + 1);
+    const auto nodes = torch::randn({1, 1, gh, gw}, gen);
+    const auto field = torch::nn::functional::interpolate(nodes, torch::nn::functional::InterpolateFuncOptions()
+                                                                     .size(std::vector<int64_t>{H, W})
+                                                                     .mode(torch::kBilinear)
+                                                                     .align_corners(true));
+    depth = depth * torch::exp(o.depth_warp * field.view({H, W}));
+  }
   depth = depth * o.depth_scale;
   if (o.depth_holes > 0) {  // exactly round(share · valid) of the valid pixels
     const auto idx = torch::nonzero(valid.view({-1}) > 0).view({-1});
