@@ -147,10 +147,28 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
   return run();
 }
 
+// Adds to a stamp the options it predates: each key it lacks where the config now holds that option's default
+// (results scored before an option existed were scored as its default). True when it added any.
+static bool adopt_new_defaults(nlohmann::json& before, const nlohmann::json& now, const nlohmann::json& defaults) {
+  if (!before.is_object() || !now.is_object() || !defaults.is_object()) return false;
+  bool added = false;
+  for (const auto& [key, value] : now.items()) {
+    if (!defaults.contains(key)) continue;
+    if (!before.contains(key)) {
+      if (value != defaults[key]) continue;
+      before[key] = value;
+      added = true;
+    } else {
+      added = adopt_new_defaults(before[key], value, defaults[key]) || added;
+    }
+  }
+  return added;
+}
+
 // Results are found by method name, so a method whose options or weights changed must not resume from them:
 // the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
-// a fingerprint (older runs) adopts the current checkpoint's.
+// a fingerprint (older runs) adopts the current checkpoint's; a stamp older than an option adopts its default.
 static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring) {
   nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
   now.erase("name");
@@ -162,9 +180,11 @@ static void check_method_stamp(const std::string& results, const MethodOptions& 
   const std::string stamp = results + ".method.json";
   if (fs::exists(stamp)) {
     nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
-    const bool adopt =
+    bool adopt =
         before.is_object() && !before.contains("checkpoint_fingerprint") && now.contains("checkpoint_fingerprint");
     if (adopt) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
+    MethodOptions defaults;
+    adopt = adopt_new_defaults(before, now, nlohmann::json::parse(config_to_json(defaults).dump())) || adopt;
     if (before.is_object() && now.contains("checkpoint_fingerprint") &&
         before.value("checkpoint_fingerprint", "") != now["checkpoint_fingerprint"].get<std::string>() &&
         before.value("checkpoint", "") == mo.checkpoint)

@@ -157,6 +157,19 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   write_file_atomic(stamp, js.dump());
   Evaluator(c).run();
   CHECK(nlohmann::json::parse(test::read_bytes(stamp)).value("checkpoint_fingerprint", "") == file_fingerprint(ck));
+  // A stamp written before an option existed adopts that option's default, and only its default.
+  js = nlohmann::json::parse(test::read_bytes(stamp));
+  REQUIRE(js["perturb"].contains("depth_warp"));
+  js["perturb"].erase("depth_warp");
+  write_file_atomic(stamp, js.dump());
+  Evaluator(c).run();
+  CHECK(nlohmann::json::parse(test::read_bytes(stamp))["perturb"].value("depth_warp", -1.0) == 0.0);
+  js["perturb"].erase("depth_warp");
+  write_file_atomic(stamp, js.dump());
+  EvalConfig warped = c;
+  for (auto& m : warped.methods)
+    if (m.name == "lidar") m.perturb.depth_warp = 0.1;
+  CHECK_THROWS_WITH(Evaluator(warped).run(), Catch::Contains("was scored with other options for method 'lidar'"));
   // Other weights at the same path (a retrained model) never resume the old scores.
   TrainConfig other = test::tiny_train_config(g, test::temp_dir("eval_e2e_run2"), 1);
   other.runtime.seed = 7;
