@@ -49,7 +49,7 @@ TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Run
       {"squeeze_semantic",
        [](ModelOptions& o) {
          o.encoder.semantic = "squeeze";
-         o.encoder.semantic_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+         o.encoder.semantic_backbone = test::squeezenet_weights();
        }},
   };
   for (const auto& v : variants) {

@@ -95,9 +95,8 @@ TEST_CASE("losses: the perceptual term is off, loudly, without weights", "[loss]
 }
 
 TEST_CASE("losses: perceptual + Gram on the real SqueezeNet weights", "[loss]") {
-  const std::string dir = test::project_weights_dir();
   LossOptions o;
-  o.perceptual_weights = dir + "/squeezenet1_1_features.safetensors";
+  o.perceptual_weights = test::squeezenet_weights();
   PerceptualLoss p(o);
   REQUIRE(p.enabled());
   CHECK(p.describe() == "squeezenet1_1 (pretrained)");

@@ -102,7 +102,7 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
       {"frozen SqueezeNet semantic branch",
        [](ModelOptions& o) {
          o.encoder.semantic = "squeeze";
-         o.encoder.semantic_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+         o.encoder.semantic_backbone = test::squeezenet_weights();
        }},
       {"pixel-aligned supports", [](ModelOptions& o) { o.sampler.mode = "pixel"; }},
       {"vertex + face supports", [](ModelOptions& o) { o.sampler.mode = "vertex_face"; }},

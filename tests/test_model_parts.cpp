@@ -52,7 +52,7 @@ TEST_CASE("encoder: the frozen SqueezeNet semantic branch gives maps at 1/16 of 
   EncoderOptions o;
   o.vit = tiny_vit();
   o.semantic = "squeeze";
-  o.semantic_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  o.semantic_backbone = test::squeezenet_weights();
   o.cnn_options.width = 8;
   DualEncoder enc(o);
   CHECK_FALSE(enc->vit);

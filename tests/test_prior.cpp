@@ -254,7 +254,7 @@ TEST_CASE("prior: every learned-net option keeps the contract (shape, metric dep
       o.learned_arch = arch;
       o.learned_focal = focal;
       o.learned_width = 8;
-      o.learned_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+      o.learned_backbone = test::squeezenet_weights();
       auto prior = make_depth_prior(o);
       PriorInput in;
       in.image = torch::rand({3, H, W});
@@ -356,8 +356,7 @@ TEST_CASE("prior: focal normalization scales depth with the focal length, exactl
 }
 
 TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained encoder stays frozen", "[prior]") {
-  LearnedDepthNet net(
-      LearnedDepthOptions{"squeeze", 8, false, test::project_weights_dir() + "/squeezenet1_1_features.safetensors"});
+  LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, test::squeezenet_weights()});
   int64_t count = 0;
   for (const auto& p : net->parameters()) count += p.numel();
   CHECK(count < 200000);  // the decoder only: SqueezeNet's 722k weights are not parameters
@@ -368,7 +367,7 @@ TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained enc
 }
 
 TEST_CASE("prior: a fine-tuned encoder trains, ships in the net's weights file, and loading detects it", "[prior]") {
-  const std::string backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  const std::string backbone = test::squeezenet_weights();
   LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, backbone});
   const int64_t frozen_count = net->parameters().size();
   net->tune_backbone();

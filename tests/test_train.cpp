@@ -115,7 +115,7 @@ TEST_CASE("train: prior.learned_backbone_lr fine-tunes the pretrained encoder at
   const auto data = test::make_tiny_dataset("train_depth_tune", 8);
   auto cfg = tiny_depth_config(data, test::temp_dir("train_depth_tune_run"), 10);
   cfg.model.prior.learned_arch = "squeeze";
-  cfg.model.prior.learned_backbone = test::project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  cfg.model.prior.learned_backbone = test::squeezenet_weights();
   cfg.model.prior.learned_backbone_lr = 0.1;
   cfg.optim.weight_decay = 0;
   Trainer trainer(cfg);

@@ -30,6 +30,10 @@ std::string project_weights_dir() {
   return (fs::path(ISPLAT_SOURCE_DIR) / "weights").string();
 }
 
+std::string squeezenet_weights() {
+  return project_weights_dir() + "/squeezenet1_1_features.safetensors";
+}
+
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));

@@ -20,6 +20,8 @@ struct QuietLogs {
 std::string temp_dir(const std::string& tag);
 // The weights shipped in the repository (<source>/weights).
 std::string project_weights_dir();
+// The shipped SqueezeNet-1.1 ImageNet features (the perceptual loss's, the encoder's and the prior's backbone).
+std::string squeezenet_weights();
 // Writes raw bytes to a file (for crafting corrupt inputs).
 void write_bytes(const std::string& path, const std::string& bytes);
 std::string read_bytes(const std::string& path);
