@@ -165,16 +165,21 @@ static bool adopt_new_defaults(nlohmann::json& before, const nlohmann::json& now
   return added;
 }
 
+// A method's options and the scoring options that change its results: what a stamp records.
+static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOptions& scoring) {
+  nlohmann::json j = nlohmann::json::parse(config_to_json(mo).dump());
+  j.erase("name");
+  j["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
+  j["scoring.crack_holes"] = scoring.crack_holes;
+  return j;
+}
+
 // Results are found by method name, so a method whose options or weights changed must not resume from them:
 // the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
 // a fingerprint (older runs) adopts the current checkpoint's; a stamp older than an option adopts its default.
 static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring) {
-  nlohmann::json now = nlohmann::json::parse(config_to_json(mo).dump());
-  now.erase("name");
-  // Only when set, so folders scored before the option existed keep their stamps.
-  if (scoring.crack_edge_margin > 0) now["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
-  if (scoring.crack_holes) now["scoring.crack_holes"] = true;
+  nlohmann::json now = stamp_options(mo, scoring);
   if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
   const std::string stamp = results + ".method.json";
@@ -183,8 +188,7 @@ static void check_method_stamp(const std::string& results, const MethodOptions& 
     bool adopt =
         before.is_object() && !before.contains("checkpoint_fingerprint") && now.contains("checkpoint_fingerprint");
     if (adopt) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
-    MethodOptions defaults;
-    adopt = adopt_new_defaults(before, now, nlohmann::json::parse(config_to_json(defaults).dump())) || adopt;
+    adopt = adopt_new_defaults(before, now, stamp_options(MethodOptions{}, ScoringOptions{})) || adopt;
     if (before.is_object() && now.contains("checkpoint_fingerprint") &&
         before.value("checkpoint_fingerprint", "") != now["checkpoint_fingerprint"].get<std::string>() &&
         before.value("checkpoint", "") == mo.checkpoint)
