@@ -16,7 +16,7 @@ for dir in "$root"/src/*/; do
     rt=$(rank "$to")
     [ "$rt" -ge 0 ] || continue  # not a src/ folder
     if [ "$rt" -gt "$rf" ]; then
-      echo "check_layers: ${file#$root/} ($from) includes $to, which comes later in the data flow" >&2
+      echo "check_layers: ${file#"$root"/} ($from) includes $to, which comes later in the data flow" >&2
       bad=1
     fi
   done < <(grep -rn '#include "' "$dir" || true)

@@ -1,6 +1,6 @@
 // Renderer: closed-form cases, agreement with the dense per-pixel reference, finite-difference gradients,
 // culling and input errors, batching, options, thread-count determinism and agreement of the SIMD levels; the
-// contribution measure and pruning.
+// contribution measure, pruning and merging.
 #include <catch2/catch.hpp>
 
 #include <ATen/Parallel.h>
@@ -13,6 +13,7 @@
 #include "geometry/camera_torch.h"
 #include "geometry/convert.h"
 #include "render/kernels.h"
+#include "render/merge.h"
 #include "render/prune.h"
 #include "render/render.h"
 #include "support/finite_diff.h"
@@ -652,4 +653,115 @@ TEST_CASE("prune: virtual views move the camera centre along its own axes", "[re
     CHECK(max_abs(moved - axis) < 1e-12);
   }
   CHECK_THROWS_AS(nearby_views(cam, 0.5, 7), Error);
+}
+
+namespace {
+// The covariance R diag(s²) Rᵀ of Gaussian i.
+Tensor covariance_of(const Gaussians& g, int64_t i) {
+  const Tensor q = g.quats[i].to(kF64) / g.quats[i].to(kF64).norm();
+  const double w = q[0].item<double>(), x = q[1].item<double>(), y = q[2].item<double>(), z = q[3].item<double>();
+  const Tensor R = torch::tensor({1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+                                  2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                                  2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)},
+                                 kF64)
+                       .reshape({3, 3});
+  return torch::matmul(torch::matmul(R, torch::diag(g.scales[i].to(kF64).pow(2))), R.t());
+}
+
+// A fronto-parallel plane at depth z with one Gaussian per pixel centre of `cam` (centred_camera), in-plane σ
+// of 0.6 px; colours uniform, or a per-pixel checkerboard when `textured`.
+Gaussians pixel_plane(const Camera& cam, double z, bool textured) {
+  const double f = cam.K[0][0].item<double>(), px = z / f;
+  std::vector<std::array<double, 10>> rows;
+  for (int64_t i = 0; i < cam.height; ++i)
+    for (int64_t j = 0; j < cam.width; ++j) {
+      const double x = (double(j) - 0.5 * double(cam.width)) * px, y = (double(i) - 0.5 * double(cam.height)) * px;
+      const double c = textured && (i + j) % 2 ? 0.8 : 0.3;
+      rows.push_back({x, y, z, 0.6 * px, 0.6 * px, 0.002, 0.95, c, c, c});
+    }
+  return head_on(rows);
+}
+}  // namespace
+
+TEST_CASE("merge: a flat single-coloured cell becomes one Gaussian with its members' moments", "[render]") {
+  const Camera cam = centred_camera(48, 32, 20.0);  // u = 20 x / z + 24.5 px, v = 20 y / z + 16.5 px
+  // Four members at (0.2 ± 0.05, 0.1 ± 0.05, 2): pixels 27.5–29.5 and 17.5–19.5, one 8-px cell.
+  std::vector<std::array<double, 10>> rows;
+  for (double dx : {-0.05, 0.05})
+    for (double dy : {-0.05, 0.05})
+      rows.push_back({0.2 + dx, 0.1 + dy, 2.0, 0.02, 0.03, 0.001, 0.9, 0.3, 0.5, 0.7 + 0.01 * dx / 0.05});
+  const Gaussians cell = head_on(rows);
+  MergeOptions o;
+  o.cell_px = 8;
+  const MergeResult r = merge_gaussians(cell, cam, o);
+  REQUIRE(r.merged.count() == 1);
+  CHECK(r.groups == 1);
+  CHECK(r.members == 4);
+  CHECK(r.removed() == 3);
+  CHECK(max_abs(r.merged.means[0] - torch::tensor({0.2, 0.1, 2.0}, kF64)) < 1e-12);
+  CHECK(max_abs(r.merged.colors[0] - torch::tensor({0.3, 0.5, 0.7}, kF64)) < 1e-12);
+  CHECK(r.merged.opacities[0].item<double>() == Approx(0.9));
+  // Members' covariance plus the spread of their means; here the members do not tile the cell (their area,
+  // 4 x 0.02 x 0.03, is below the moment-matched area), so nothing grows.
+  const Tensor expected = torch::diag(torch::tensor({0.02 * 0.02 + 0.0025, 0.03 * 0.03 + 0.0025, 1e-6}, kF64));
+  CHECK(max_abs(covariance_of(r.merged, 0) - expected) < 1e-12);
+  CHECK(r.merged.opacities.dim() == 1);
+  // Off: the set is returned as it is.
+  CHECK(merge_gaussians(cell, cam, MergeOptions{}).merged.means.is_same(cell.means));
+}
+
+TEST_CASE("merge: other colours, a depth edge and Gaussians behind the camera stay apart", "[render]") {
+  const Camera cam = centred_camera(48, 32, 20.0);
+  MergeOptions o;
+  o.cell_px = 8;
+  o.max_color = 0.03;
+  // Two members side by side; the second at depth z2 (same pixel cell) with thickness t.
+  auto pair = [](double z2, double colour2, double t = 0.001) {
+    return head_on({{0.2, 0.1, 2.0, 0.02, 0.02, t, 0.9, 0.5, 0.5, 0.5},
+                    {0.25 * z2 / 2, 0.1 * z2 / 2, z2, 0.02, 0.02, t, 0.9, colour2, 0.5, 0.5}});
+  };
+  CHECK(merge_gaussians(pair(2.0, 0.54), cam, o).merged.count() == 1);  // within 0.03 of the mean 0.52
+  CHECK(merge_gaussians(pair(2.0, 0.58), cam, o).merged.count() == 2);  // 0.04 from the mean
+  // 0.5 m apart in depth. Flat members: their normals (z) cross the merged plane, which holds the depth step.
+  CHECK(merge_gaussians(pair(2.5, 0.5), cam, o).merged.count() == 2);
+  // Round members have no normal, but the pair is as thick as it is narrow: not flat.
+  CHECK(merge_gaussians(pair(2.5, 0.5, 0.02), cam, o).merged.count() == 2);
+  o.max_flatness = 1.0;
+  CHECK(merge_gaussians(pair(2.5, 0.5, 0.02), cam, o).merged.count() == 1);
+  CHECK(merge_gaussians(pair(2.5, 0.5), cam, o).merged.count() == 2);
+  o.min_normal_cos = 0.0;
+  CHECK(merge_gaussians(pair(2.5, 0.5), cam, o).merged.count() == 1);  // any shape allowed
+  const Gaussians behind = head_on({{0.2, 0.1, -2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5},
+                                    {0.2, 0.1, -2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}});
+  CHECK(merge_gaussians(behind, cam, o).merged.count() == 2);
+}
+
+TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the same, a textured one keeps all",
+          "[render]") {
+  const Camera cam = centred_camera(48, 32, 40.0);
+  MergeOptions o;
+  o.cell_px = 2;
+  const Gaussians plain = pixel_plane(cam, 2.0, false), textured = pixel_plane(cam, 2.0, true);
+  const MergeResult merged = merge_gaussians(plain, cam, o);
+  CHECK(merged.merged.count() == plain.count() / 4);
+  CHECK(merge_gaussians(textured, cam, o).merged.count() == textured.count());
+  // The grown footprints keep the plane closed: inside a 3-px border, colour and alpha stay within a few
+  // hundredths of the unmerged plane's (moment matching alone leaves alpha near 0.86 at pixel centres).
+  const auto inner = [](const Tensor& t, int64_t border = 3) {
+    return t.slice(1, border, -border).slice(2, border, -border);
+  };
+  const RenderOutput before = render(plain, cam), after = render(merged.merged, cam);
+  CHECK(max_abs(inner(after.rgb - before.rgb)) < 0.03);
+  CHECK(inner(after.alpha).min().item<double>() > 0.9);
+  // The same plane seen from a view 4 px to the side renders the same too.
+  const Camera moved = nearby_views(cam, 0.2, 2)[0];
+  CHECK(max_abs(inner(render(merged.merged, moved).rgb - render(plain, moved).rgb, 7)) < 0.03);
+  // Through prune_gaussians, merging follows the drops and is counted.
+  PruneOptions po;
+  po.enabled = true;
+  po.min_contribution = 0;
+  po.merge = o;
+  const PruneResult pr = prune_gaussians(plain, cam, po);
+  CHECK(pr.merged == plain.count() - plain.count() / 4);
+  CHECK(pr.after() == pr.kept.count());
 }

@@ -118,6 +118,19 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const Gaussians g = read_ply(out + "/scene.ply");
   CHECK(g.count() > 1000);
   CHECK(fs::exists(out + "/scene.camera.json"));
+  // Merging writes fewer Gaussians and says how many it merged (an untrained model's Gaussians have random
+  // shapes, hence any shape is allowed).
+  const std::string merge = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
+                            "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 --merge-cell 4 " +
+                            "--merge-color 1 --merge-flatness 1 --merge-normal-cos 0 --out " + out + "/merged.ply > " +
+                            out + "/merged.txt 2>&1";
+  REQUIRE(std::system(merge.c_str()) == 0);
+  const Gaussians merged = read_ply(out + "/merged.ply");
+  CHECK(merged.count() < g.count());
+  const std::string merge_report = test::read_bytes(out + "/merged.txt");
+  CHECK_THAT(merge_report, Catch::Contains("Gaussians    " + std::to_string(merged.count()) + " written of " +
+                                           std::to_string(g.count()) + " decoded"));
+  CHECK_THAT(merge_report, Catch::Contains(std::to_string(g.count() - merged.count()) + " merged into neighbours"));
   const std::string render = tool + " render --ply " + out +
                              "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " + out + "/orbit > " +
                              out + "/render.txt 2>&1";

@@ -22,6 +22,7 @@ void PruneOptions::visit(ConfigVisitor& v) {
           Range::between(0, 6));
   v.field("view_shift", view_shift, "virtual camera offset as a fraction of the median Gaussian depth",
           Range::at_least(0.0));
+  v.section("merge", "after the drops, merge flat single-coloured neighbours into one Gaussian", merge);
 }
 
 torch::Tensor max_contribution(const Gaussians& g, const Camera& camera, const RenderOptions& options) {
@@ -73,9 +74,15 @@ PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const Prun
   }
   const torch::Tensor opaque = g.opacities.detach().reshape({r.before}) >= o.min_opacity;
   r.low_opacity = r.before - opaque.sum().item<int64_t>();
+  auto merge = [&] {
+    const MergeResult m = merge_gaussians(r.kept, source, o.merge);
+    r.kept = m.merged;
+    r.merged = m.removed();
+  };
   if (o.min_contribution <= 0) {  // nothing can fall below it: skip the renders
     r.keep = opaque;
     r.kept = g.index(r.keep);
+    merge();
     return r;
   }
   torch::Tensor best = max_contribution(g, source, render_options);
@@ -91,6 +98,7 @@ PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const Prun
   r.keep = opaque.logical_and(visible);
   r.low_contribution = opaque.sum().item<int64_t>() - r.keep.sum().item<int64_t>();
   r.kept = g.index(r.keep);
+  merge();
   return r;
 }
 

@@ -1,5 +1,6 @@
 // Pruning after decoding: drop Gaussians that are nearly transparent or never contribute a visible weight
-// (α·T) to the source view or to a few nearby virtual views, so a scene keeps only the Gaussians it needs.
+// (α·T) to the source view or to a few nearby virtual views, then optionally merge flat single-coloured
+// neighbours, so a scene keeps only the Gaussians it needs.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -8,6 +9,7 @@
 
 #include "core/gaussians.h"
 #include "geometry/camera_torch.h"
+#include "render/merge.h"
 #include "render/render.h"
 
 namespace isplat {
@@ -20,6 +22,7 @@ struct PruneOptions {
   double min_contribution = 0.01;  // drop Gaussians whose largest α·T over the views stays below this
   int64_t views = 4;               // virtual views besides the source: 0, 2 (±x), 4 (±x, ±y) or 6 (±x, ±y, ±z)
   double view_shift = 0.1;         // virtual camera offset as a fraction of the median Gaussian depth
+  MergeOptions merge;              // after the drops: merge flat single-coloured neighbours (off by default)
   void visit(ConfigVisitor& v);
 };
 
@@ -32,12 +35,13 @@ std::vector<Camera> nearby_views(const Camera& source, double shift, int64_t vie
 
 struct PruneResult {
   Gaussians kept;
-  torch::Tensor keep;  // [N] bool
-  int64_t before = 0, low_opacity = 0, low_contribution = 0;
-  int64_t after() const { return before - low_opacity - low_contribution; }
+  torch::Tensor keep;  // [N] bool: what survived the drops (merging then acts on those)
+  int64_t before = 0, low_opacity = 0, low_contribution = 0, merged = 0;  // merged: Gaussians removed by merging
+  int64_t after() const { return before - low_opacity - low_contribution - merged; }
 };
 
-// Applies the options (when disabled, keeps everything). `source` is the camera the set was predicted in.
+// Applies the options (when disabled, keeps everything): the drops, then merging. `source` is the camera the set was
+// predicted in.
 PruneResult prune_gaussians(const Gaussians& gaussians, const Camera& source, const PruneOptions& options,
                             const RenderOptions& render_options = {});
 

@@ -1,0 +1,188 @@
+// Moment-matched merging of flat, single-coloured groups of Gaussians that share a source-view cell.
+#include "render/merge.h"
+
+#include <torch/torch.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace isplat {
+
+void MergeOptions::visit(ConfigVisitor& v) {
+  v.field("cell_px", cell_px,
+          "merge the Gaussians whose means project into one cell of this many source pixels into one Gaussian "
+          "with their mean and covariance, when they are flat and of one colour (0 = off)",
+          Range::at_least(0.0));
+  v.field("max_color", max_color,
+          "merge a cell only when every member's colour is within this of the cell's mean (linear RGB, any channel)",
+          Range::unit());
+  v.field("max_flatness", max_flatness,
+          "merge a cell only when the merged Gaussian's thickness is at most this fraction of its narrower in-plane "
+          "width, so a cell across a depth edge stays apart",
+          Range::unit());
+  v.field("min_normal_cos", min_normal_cos,
+          "merge a cell only when every flat member's normal is within this cosine of the merged Gaussian's normal",
+          Range::unit());
+}
+
+namespace {
+
+// Cells further than this from the image (in cells) are not grouped: their keys would overflow.
+constexpr int64_t kMaxCell = int64_t{1} << 20;
+
+Eigen::Matrix3d rotation_of(const double* q) {
+  const Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
+  const double norm = quat.norm();
+  return norm > 0 && std::isfinite(norm) ? Eigen::Matrix3d(quat.normalized().toRotationMatrix())
+                                         : Eigen::Matrix3d::Identity();
+}
+
+}  // namespace
+
+MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const MergeOptions& o) {
+  ISPLAT_CHECK(!g.batched() && source.batch() == 0, "merge_gaussians: takes one unbatched set and camera");
+  torch::NoGradGuard no_grad;
+  MergeResult r;
+  r.before = g.count();
+  if (o.cell_px <= 0 || r.before < 2) {
+    r.merged = g;
+    return r;
+  }
+  const int64_t n = r.before;
+  const auto dtype = g.means.scalar_type();
+  auto f64 = [&](const torch::Tensor& t, int64_t cols) {
+    ISPLAT_CHECK(t.defined() && t.numel() == n * cols, "merge_gaussians: a Gaussian tensor ",
+                 t.defined() ? t.sizes() : c10::IntArrayRef{}, " does not match ", n, " means");
+    return t.detach().to(torch::kFloat64).reshape({n, cols}).contiguous();
+  };
+  const torch::Tensor means_t = f64(g.means, 3), scales_t = f64(g.scales, 3), quats_t = f64(g.quats, 4),
+                      colors_t = f64(g.colors, 3), opac_t = f64(g.opacities, 1);
+  const double *means = means_t.data_ptr<double>(), *scales = scales_t.data_ptr<double>(),
+               *quats = quats_t.data_ptr<double>(), *colors = colors_t.data_ptr<double>(),
+               *opac = opac_t.data_ptr<double>();
+  const torch::Tensor K = source.K.to(torch::kFloat64).contiguous(), T = source.T_cw.to(torch::kFloat64).contiguous();
+  const auto k = K.accessor<double, 2>();
+  const auto t = T.accessor<double, 2>();
+
+  // (cell key, index); Gaussians that are not grouped get a key of their own below every cell key.
+  std::vector<std::pair<int64_t, int64_t>> keyed(n);
+  for (int64_t i = 0; i < n; ++i) {
+    const double* m = means + 3 * i;
+    double c[3];
+    for (int a = 0; a < 3; ++a) c[a] = t[a][0] * m[0] + t[a][1] * m[1] + t[a][2] * m[2] + t[a][3];
+    keyed[i] = {-1 - i, i};
+    if (!(c[2] > 0)) continue;
+    const double u = (k[0][0] * c[0] + k[0][1] * c[1]) / c[2] + k[0][2], v = k[1][1] * c[1] / c[2] + k[1][2];
+    const double cu = std::floor(u / o.cell_px), cv = std::floor(v / o.cell_px);
+    if (!(std::abs(cu) < kMaxCell && std::abs(cv) < kMaxCell)) continue;
+    const int64_t key = (static_cast<int64_t>(cv) + kMaxCell) * (2 * kMaxCell) + (static_cast<int64_t>(cu) + kMaxCell);
+    keyed[i] = {key, i};
+  }
+  std::sort(keyed.begin(), keyed.end());
+
+  std::vector<double> out_means, out_scales, out_quats, out_colors, out_opac;
+  for (auto* v : {&out_means, &out_scales, &out_colors}) v->reserve(3 * n);
+  out_quats.reserve(4 * n);
+  out_opac.reserve(n);
+  auto copy = [&](int64_t i) {
+    out_means.insert(out_means.end(), means + 3 * i, means + 3 * i + 3);
+    out_scales.insert(out_scales.end(), scales + 3 * i, scales + 3 * i + 3);
+    out_quats.insert(out_quats.end(), quats + 4 * i, quats + 4 * i + 4);
+    out_colors.insert(out_colors.end(), colors + 3 * i, colors + 3 * i + 3);
+    out_opac.push_back(opac[i]);
+  };
+  // Tries one group; on success appends the merged Gaussian and returns true.
+  auto merge = [&](const std::pair<int64_t, int64_t>* first, int64_t count) {
+    double weight_sum = 0, opacity = 0;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
+    std::vector<double> weights(count);
+    for (int64_t j = 0; j < count; ++j) {
+      const int64_t i = first[j].second;
+      double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
+      std::sort(s, s + 3);
+      const double w = opac[i] * s[1] * s[2];  // opacity x footprint area
+      if (!(w > 0) || !std::isfinite(w)) return false;
+      weights[j] = w;
+      weight_sum += w;
+      mean += w * Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]);
+      color += w * Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]);
+      opacity += w * opac[i];
+    }
+    mean /= weight_sum, color /= weight_sum, opacity /= weight_sum;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int64_t j = 0; j < count; ++j) {
+      const int64_t i = first[j].second;
+      for (int a = 0; a < 3; ++a)
+        if (std::abs(colors[3 * i + a] - color[a]) > o.max_color) return false;
+      const Eigen::Matrix3d R = rotation_of(quats + 4 * i);
+      const Eigen::Vector3d s2(scales[3 * i] * scales[3 * i], scales[3 * i + 1] * scales[3 * i + 1],
+                               scales[3 * i + 2] * scales[3 * i + 2]);
+      const Eigen::Vector3d d = Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]) - mean;
+      cov += weights[j] * (R * s2.asDiagonal() * R.transpose() + d * d.transpose());
+    }
+    cov /= weight_sum;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    if (eig.info() != Eigen::Success) return false;
+    Eigen::Vector3d lambda = eig.eigenvalues().cwiseMax(0.0);  // ascending
+    if (!(lambda[1] > 0) || std::sqrt(lambda[0] / lambda[1]) > o.max_flatness) return false;
+    // Members that tile a patch cover more than their moment-matched Gaussian does (it has one peak where the
+    // patch is flat-topped), so the merged Gaussian's in-plane axes grow until its footprint (opacity x area)
+    // equals the members' total: a plain wall stays closed instead of showing gaps between merged cells.
+    const double area_ratio = weight_sum / opacity / std::sqrt(lambda[1] * lambda[2]);
+    if (area_ratio > 1) lambda[1] *= area_ratio, lambda[2] *= area_ratio;
+    Eigen::Matrix3d axes = eig.eigenvectors();
+    // Flat members must lie in the merged plane: two Gaussians a depth step apart make a thin line, which the
+    // flatness test alone would pass.
+    for (int64_t j = 0; j < count; ++j) {
+      const int64_t i = first[j].second;
+      int shortest = 0;
+      for (int a = 1; a < 3; ++a)
+        if (std::abs(scales[3 * i + a]) < std::abs(scales[3 * i + shortest])) shortest = a;
+      double middle = std::abs(scales[3 * i + (shortest + 1) % 3]);
+      middle = std::min(middle, std::abs(scales[3 * i + (shortest + 2) % 3]));
+      if (std::abs(scales[3 * i + shortest]) > 0.5 * middle) continue;  // not flat: no normal to compare
+      const Eigen::Vector3d normal = rotation_of(quats + 4 * i).col(shortest);
+      if (std::abs(normal.dot(axes.col(0))) < o.min_normal_cos) return false;
+    }
+    if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
+    const Eigen::Quaterniond q(axes);
+    out_means.insert(out_means.end(), {mean[0], mean[1], mean[2]});
+    out_scales.insert(out_scales.end(), {std::sqrt(lambda[0]), std::sqrt(lambda[1]), std::sqrt(lambda[2])});
+    out_quats.insert(out_quats.end(), {q.w(), q.x(), q.y(), q.z()});
+    out_colors.insert(out_colors.end(), {color[0], color[1], color[2]});
+    out_opac.push_back(opacity);
+    return true;
+  };
+  for (int64_t begin = 0; begin < n;) {
+    int64_t end = begin + 1;
+    if (keyed[begin].first >= 0)
+      while (end < n && keyed[end].first == keyed[begin].first) ++end;
+    const int64_t count = end - begin;
+    if (count > 1 && merge(keyed.data() + begin, count)) {
+      ++r.groups;
+      r.members += count;
+    } else {
+      for (int64_t j = begin; j < end; ++j) copy(keyed[j].second);
+    }
+    begin = end;
+  }
+
+  const int64_t m = static_cast<int64_t>(out_opac.size());
+  auto tensor = [&](std::vector<double>& v, std::vector<int64_t> shape) {
+    return torch::from_blob(v.data(), shape, torch::kFloat64).clone().to(dtype);
+  };
+  r.merged.means = tensor(out_means, {m, 3});
+  r.merged.scales = tensor(out_scales, {m, 3});
+  r.merged.quats = tensor(out_quats, {m, 4});
+  r.merged.colors = tensor(out_colors, {m, 3});
+  r.merged.opacities = g.opacities.dim() == 2 ? tensor(out_opac, {m, 1}) : tensor(out_opac, {m});
+  return r;
+}
+
+}  // namespace isplat

@@ -1,0 +1,39 @@
+// Merging after decoding: neighbouring Gaussians that form one flat patch of one colour become one Gaussian
+// with the same first and second moments, so a plain wall keeps fewer Gaussians than a cluttered shelf.
+#pragma once
+#include <cstdint>
+
+#include <torch/types.h>
+
+#include "core/gaussians.h"
+#include "geometry/camera_torch.h"
+
+namespace isplat {
+
+class ConfigVisitor;
+
+struct MergeOptions {
+  double cell_px = 0;           // grouping cell in source pixels (0 = off)
+  double max_color = 0.03;      // largest per-channel distance of a member's colour from the group's mean
+  double max_flatness = 0.25;   // largest thickness / narrower width of the merged Gaussian (keeps depth edges apart)
+  double min_normal_cos = 0.9;  // flat members' normals must agree with the merged normal this well
+  void visit(ConfigVisitor& v);
+};
+
+struct MergeResult {
+  Gaussians merged;
+  int64_t before = 0;
+  int64_t groups = 0;   // cells that became one Gaussian
+  int64_t members = 0;  // Gaussians those cells held
+  int64_t removed() const { return members - groups; }
+};
+
+// Groups an unbatched set by the source-view cell its mean projects into. A cell of two or more Gaussians
+// is replaced by one when every member's colour is within max_color of the mean, the merged Gaussian is flat
+// and every flat member lies in its plane (normals within min_normal_cos). The merged Gaussian has the members'
+// weighted mean, colour, opacity and covariance (each member weighted by opacity times its footprint area), with its
+// two in-plane axes grown (never shrunk) so that its opacity times area equals the members' total. Gaussians behind the
+// camera stay as they are. No gradient. With cell_px = 0 the set is returned unchanged.
+MergeResult merge_gaussians(const Gaussians& gaussians, const Camera& source, const MergeOptions& options);
+
+}  // namespace isplat
