@@ -53,9 +53,8 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
 
 int run_predict(int argc, char** argv) {
   std::string checkpoint, image_path, depth_model, depth_path, prompts_path, out;
-  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0, merge_cell = 0,
-         merge_color = MergeOptions{}.max_color, merge_flatness = MergeOptions{}.max_flatness,
-         merge_normal_cos = MergeOptions{}.min_normal_cos;
+  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
+  MergeOptions merge;  // off unless --merge-cell
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4;
   bool keep_outside = false;
   std::vector<std::string> sets;
@@ -81,11 +80,11 @@ int run_predict(int argc, char** argv) {
               "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
               "--prune-views nearby views stays below this (0 = off; 0.01 is a good start)");
   args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6");
-  args.option("--merge-cell", merge_cell,
+  args.option("--merge-cell", merge.cell_px,
               "merge the flat, single-coloured Gaussians of each cell of this many pixels into one (0 = off)");
-  args.option("--merge-color", merge_color, "largest colour difference within a merged cell (linear RGB)");
-  args.option("--merge-flatness", merge_flatness, "largest thickness / width of a merged Gaussian (1 = any)");
-  args.option("--merge-normal-cos", merge_normal_cos,
+  args.option("--merge-color", merge.max_color, "largest colour difference within a merged cell (linear RGB)");
+  args.option("--merge-flatness", merge.max_flatness, "largest thickness / width of a merged Gaussian (1 = any)");
+  args.option("--merge-normal-cos", merge.min_normal_cos,
               "smallest cosine between a flat member's normal and the merged normal (0 = any)");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
@@ -165,10 +164,7 @@ int run_predict(int argc, char** argv) {
   po.min_opacity = prune_opacity;
   po.min_contribution = prune_contribution;
   po.views = prune_views;
-  po.merge.cell_px = merge_cell;
-  po.merge.max_color = merge_color;
-  po.merge.max_flatness = merge_flatness;
-  po.merge.min_normal_cos = merge_normal_cos;
+  po.merge = merge;
   const auto t_prune = Clock::now();
   const PruneResult pruned = prune_gaussians(g, to_camera(view), po);
   const double prune_ms = ms_since(t_prune);

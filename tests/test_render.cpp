@@ -657,15 +657,12 @@ TEST_CASE("prune: virtual views move the camera centre along its own axes", "[re
 
 namespace {
 // The covariance R diag(s²) Rᵀ of Gaussian i.
-Tensor covariance_of(const Gaussians& g, int64_t i) {
-  const Tensor q = g.quats[i].to(kF64) / g.quats[i].to(kF64).norm();
-  const double w = q[0].item<double>(), x = q[1].item<double>(), y = q[2].item<double>(), z = q[3].item<double>();
-  const Tensor R = torch::tensor({1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-                                  2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                                  2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)},
-                                 kF64)
-                       .reshape({3, 3});
-  return torch::matmul(torch::matmul(R, torch::diag(g.scales[i].to(kF64).pow(2))), R.t());
+Eigen::Matrix3d covariance_of(const Gaussians& g, int64_t i) {
+  const Tensor q = g.quats[i].to(kF64), s = g.scales[i].to(kF64);
+  const Eigen::Matrix3d R = rotation_from_quaternion(
+      Eigen::Vector4d(q[0].item<double>(), q[1].item<double>(), q[2].item<double>(), q[3].item<double>()));
+  const Eigen::Vector3d s2(s[0].item<double>(), s[1].item<double>(), s[2].item<double>());
+  return R * s2.cwiseProduct(s2).asDiagonal() * R.transpose();
 }
 
 // A fronto-parallel plane at depth z with one Gaussian per pixel centre of `cam` (centred_camera), in-plane σ
@@ -703,8 +700,8 @@ TEST_CASE("merge: a flat single-coloured cell becomes one Gaussian with its memb
   CHECK(r.merged.opacities[0].item<double>() == Approx(0.9));
   // Members' covariance plus the spread of their means; here the members do not tile the cell (their area,
   // 4 x 0.02 x 0.03, is below the moment-matched area), so nothing grows.
-  const Tensor expected = torch::diag(torch::tensor({0.02 * 0.02 + 0.0025, 0.03 * 0.03 + 0.0025, 1e-6}, kF64));
-  CHECK(max_abs(covariance_of(r.merged, 0) - expected) < 1e-12);
+  const Eigen::Matrix3d expected = Eigen::Vector3d(0.02 * 0.02 + 0.0025, 0.03 * 0.03 + 0.0025, 1e-6).asDiagonal();
+  CHECK((covariance_of(r.merged, 0) - expected).cwiseAbs().maxCoeff() < 1e-12);
   CHECK(r.merged.opacities.dim() == 1);
   // Off: the set is returned as it is.
   CHECK(merge_gaussians(cell, cam, MergeOptions{}).merged.means.is_same(cell.means));

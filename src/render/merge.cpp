@@ -97,20 +97,31 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
     out_colors.insert(out_colors.end(), colors + 3 * i, colors + 3 * i + 3);
     out_opac.push_back(opac[i]);
   };
+  // What a group needs of each member, read once.
+  struct Member {
+    Eigen::Vector3d mean;
+    Eigen::Matrix3d rotation;
+    double weight;    // opacity x footprint area
+    int normal_axis;  // the local axis of a flat member's normal; -1 when it is not flat (no normal to compare)
+  };
+  std::vector<Member> group;
   // Tries one group; on success appends the merged Gaussian and returns true.
   auto merge = [&](const std::pair<int64_t, int64_t>* first, int64_t count) {
+    group.clear();
     double weight_sum = 0, opacity = 0;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
-    std::vector<double> weights(count);
     for (int64_t j = 0; j < count; ++j) {
       const int64_t i = first[j].second;
-      double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
-      std::sort(s, s + 3);
-      const double w = opac[i] * s[1] * s[2];  // opacity x footprint area
+      const double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
+      int axes[3] = {0, 1, 2};  // by size, ties in axis order
+      std::stable_sort(axes, axes + 3, [&](int x, int y) { return s[x] < s[y]; });
+      const double w = opac[i] * s[axes[1]] * s[axes[2]];
       if (!(w > 0) || !std::isfinite(w)) return false;
-      weights[j] = w;
+      const bool flat = s[axes[0]] <= 0.5 * s[axes[1]];
+      group.push_back({Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]), rotation_of(quats + 4 * i), w,
+                       flat ? axes[0] : -1});
       weight_sum += w;
-      mean += w * Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]);
+      mean += w * group.back().mean;
       color += w * Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]);
       opacity += w * opac[i];
     }
@@ -120,36 +131,28 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
       const int64_t i = first[j].second;
       for (int a = 0; a < 3; ++a)
         if (std::abs(colors[3 * i + a] - color[a]) > o.max_color) return false;
-      const Eigen::Matrix3d R = rotation_of(quats + 4 * i);
+      const Member& m = group[j];
       const Eigen::Vector3d s2(scales[3 * i] * scales[3 * i], scales[3 * i + 1] * scales[3 * i + 1],
                                scales[3 * i + 2] * scales[3 * i + 2]);
-      const Eigen::Vector3d d = Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]) - mean;
-      cov += weights[j] * (R * s2.asDiagonal() * R.transpose() + d * d.transpose());
+      const Eigen::Vector3d d = m.mean - mean;
+      cov += m.weight * (m.rotation * s2.asDiagonal() * m.rotation.transpose() + d * d.transpose());
     }
     cov /= weight_sum;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     if (eig.info() != Eigen::Success) return false;
     Eigen::Vector3d lambda = eig.eigenvalues().cwiseMax(0.0);  // ascending
     if (!(lambda[1] > 0) || std::sqrt(lambda[0] / lambda[1]) > o.max_flatness) return false;
+    Eigen::Matrix3d axes = eig.eigenvectors();
+    // Flat members must lie in the merged plane: two Gaussians a depth step apart make a thin line, which the
+    // flatness test alone would pass.
+    for (const Member& m : group)
+      if (m.normal_axis >= 0 && std::abs(m.rotation.col(m.normal_axis).dot(axes.col(0))) < o.min_normal_cos)
+        return false;
     // Members that tile a patch cover more than their moment-matched Gaussian does (it has one peak where the
     // patch is flat-topped), so the merged Gaussian's in-plane axes grow until its footprint (opacity x area)
     // equals the members' total: a plain wall stays closed instead of showing gaps between merged cells.
     const double area_ratio = weight_sum / opacity / std::sqrt(lambda[1] * lambda[2]);
     if (area_ratio > 1) lambda[1] *= area_ratio, lambda[2] *= area_ratio;
-    Eigen::Matrix3d axes = eig.eigenvectors();
-    // Flat members must lie in the merged plane: two Gaussians a depth step apart make a thin line, which the
-    // flatness test alone would pass.
-    for (int64_t j = 0; j < count; ++j) {
-      const int64_t i = first[j].second;
-      int shortest = 0;
-      for (int a = 1; a < 3; ++a)
-        if (std::abs(scales[3 * i + a]) < std::abs(scales[3 * i + shortest])) shortest = a;
-      double middle = std::abs(scales[3 * i + (shortest + 1) % 3]);
-      middle = std::min(middle, std::abs(scales[3 * i + (shortest + 2) % 3]));
-      if (std::abs(scales[3 * i + shortest]) > 0.5 * middle) continue;  // not flat: no normal to compare
-      const Eigen::Vector3d normal = rotation_of(quats + 4 * i).col(shortest);
-      if (std::abs(normal.dot(axes.col(0))) < o.min_normal_cos) return false;
-    }
     if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
     const Eigen::Quaterniond q(axes);
     out_means.insert(out_means.end(), {mean[0], mean[1], mean[2]});

@@ -62,6 +62,21 @@ std::vector<Camera> nearby_views(const Camera& source, double shift, int64_t vie
   return out;
 }
 
+// Whether each Gaussian reaches min_contribution in the source view or one of the nearby virtual views.
+static torch::Tensor visible_in_views(const Gaussians& g, const Camera& source, const PruneOptions& o,
+                                      const RenderOptions& render_options) {
+  torch::Tensor best = max_contribution(g, source, render_options);
+  if (o.views > 0) {
+    // Median depth of the Gaussians in the source camera sets the scale of the virtual moves.
+    const auto T = source.T_cw.to(g.means.scalar_type());
+    const auto z = torch::matmul(g.means.detach(), T.index({2, torch::indexing::Slice(0, 3)})) + T.index({2, 3});
+    const double shift = o.view_shift * std::max(0.0, z.median().item<double>());
+    for (const Camera& c : nearby_views(source, shift, o.views))
+      best = torch::maximum(best, max_contribution(g, c, render_options));
+  }
+  return best >= o.min_contribution;
+}
+
 PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const PruneOptions& o,
                             const RenderOptions& render_options) {
   torch::NoGradGuard no_grad;
@@ -74,31 +89,16 @@ PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const Prun
   }
   const torch::Tensor opaque = g.opacities.detach().reshape({r.before}) >= o.min_opacity;
   r.low_opacity = r.before - opaque.sum().item<int64_t>();
-  auto merge = [&] {
-    const MergeResult m = merge_gaussians(r.kept, source, o.merge);
-    r.kept = m.merged;
-    r.merged = m.removed();
-  };
   if (o.min_contribution <= 0) {  // nothing can fall below it: skip the renders
     r.keep = opaque;
-    r.kept = g.index(r.keep);
-    merge();
-    return r;
+  } else {
+    r.keep = opaque.logical_and(visible_in_views(g, source, o, render_options));
+    r.low_contribution = opaque.sum().item<int64_t>() - r.keep.sum().item<int64_t>();
   }
-  torch::Tensor best = max_contribution(g, source, render_options);
-  if (o.views > 0) {
-    // Median depth of the Gaussians in the source camera sets the scale of the virtual moves.
-    const auto T = source.T_cw.to(g.means.scalar_type());
-    const auto z = torch::matmul(g.means.detach(), T.index({2, torch::indexing::Slice(0, 3)})) + T.index({2, 3});
-    const double shift = o.view_shift * std::max(0.0, z.median().item<double>());
-    for (const Camera& c : nearby_views(source, shift, o.views))
-      best = torch::maximum(best, max_contribution(g, c, render_options));
-  }
-  const torch::Tensor visible = best >= o.min_contribution;
-  r.keep = opaque.logical_and(visible);
-  r.low_contribution = opaque.sum().item<int64_t>() - r.keep.sum().item<int64_t>();
   r.kept = g.index(r.keep);
-  merge();
+  const MergeResult merged = merge_gaussians(r.kept, source, o.merge);
+  r.kept = merged.merged;
+  r.merged = merged.removed();
   return r;
 }
 
