@@ -86,6 +86,8 @@ int run_predict(int argc, char** argv) {
   args.option("--merge-flatness", merge.max_flatness, "largest thickness / width of a merged Gaussian (1 = any)");
   args.option("--merge-normal-cos", merge.min_normal_cos,
               "smallest cosine between a flat member's normal and the merged normal (0 = any)");
+  args.flag("--merge-split", merge.split, "merge each single-coloured part of a cell that cannot merge whole");
+  args.option("--merge-levels", merge.levels, "merge passes with cells of 1, 2, 4, ... times --merge-cell");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");
@@ -96,6 +98,8 @@ int run_predict(int argc, char** argv) {
                "predict: --checkpoint, --image and --out are required (see --help)");
   ISPLAT_CHECK((depth_model.empty() + depth_path.empty() + prompts_path.empty()) >= 2,
                "predict: give at most one of --depth-model, --depth, --prompts");
+  // The merge flags pass the config schema's bounds, with its error naming the key.
+  merge = config_from_json<MergeOptions>(config_to_json(merge), "predict's --merge-* flags");
   configure_threads(threads);
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
@@ -187,6 +191,9 @@ int run_predict(int argc, char** argv) {
             << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
             << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
             << pruned.merged << " merged into neighbours)\n";
+  if (merge.cell_px > 0)
+    std::cout << "merging      groups refused: " << pruned.merge_refused_color << " by colour, "
+              << pruned.merge_refused_shape << " by flatness, " << pruned.merge_refused_normal << " by normals\n";
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k))

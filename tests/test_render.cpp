@@ -733,6 +733,43 @@ TEST_CASE("merge: other colours, a depth edge and Gaussians behind the camera st
   CHECK(merge_gaussians(behind, cam, o).merged.count() == 2);
 }
 
+TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd member", "[render]") {
+  const Camera cam = centred_camera(48, 32, 20.0);
+  // One 8-px cell: three grey members and one red one, all on the plane z = 2.
+  std::vector<std::array<double, 10>> rows;
+  for (double dx : {-0.05, 0.05})
+    for (double dy : {-0.05, 0.05}) {
+      const bool odd = dx > 0 && dy > 0;
+      rows.push_back({0.2 + dx, 0.1 + dy, 2.0, 0.02, 0.02, 0.001, 0.9, odd ? 0.9 : 0.5, 0.5, 0.5});
+    }
+  const Gaussians cell = head_on(rows);
+  MergeOptions o;
+  o.cell_px = 8;
+  const MergeResult whole = merge_gaussians(cell, cam, o);
+  CHECK(whole.merged.count() == 4);
+  CHECK(whole.refused_color == 1);
+  o.split = true;
+  const MergeResult split = merge_gaussians(cell, cam, o);
+  REQUIRE(split.merged.count() == 2);
+  CHECK(split.groups == 1);
+  CHECK(split.members == 3);
+  // The grey three merge into one grey Gaussian at their mean; the red one is kept as it was.
+  const Tensor red = split.merged.colors.select(1, 0) > 0.7;
+  REQUIRE(red.sum().item<int64_t>() == 1);
+  CHECK(max_abs(split.merged.colors.index({red.logical_not()}) - torch::tensor({{0.5, 0.5, 0.5}}, kF64)) < 1e-12);
+  CHECK(max_abs(split.merged.means.index({red}) - torch::tensor({{0.25, 0.15, 2.0}}, kF64)) < 1e-12);
+  CHECK(max_abs(split.merged.means.index({red.logical_not()}) -
+                torch::tensor({{0.2 - 0.05 / 3, 0.1 - 0.05 / 3, 2.0}}, kF64)) < 1e-12);
+  // A cell of one colour refused for its shape is not split: the depth step stays apart.
+  std::vector<std::array<double, 10>> step = rows;
+  for (auto& row : step) row[7] = 0.5;
+  step[3][2] = 2.5, step[3][0] *= 1.25, step[3][1] *= 1.25;
+  const MergeResult kept = merge_gaussians(head_on(step), cam, o);
+  CHECK(kept.merged.count() == 4);
+  CHECK(kept.refused_color == 0);
+  CHECK(kept.refused_shape + kept.refused_normal == 1);  // tried once, whole
+}
+
 TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the same, a textured one keeps all",
           "[render]") {
   const Camera cam = centred_camera(48, 32, 40.0);
@@ -761,4 +798,23 @@ TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the
   const PruneResult pr = prune_gaussians(plain, cam, po);
   CHECK(pr.merged == plain.count() - plain.count() / 4);
   CHECK(pr.after() == pr.kept.count());
+}
+
+TEST_CASE("merge: a second level merges a plain plane's 2-px cells again into 4-px ones, and a textured one not at all",
+          "[render]") {
+  const Camera cam = centred_camera(48, 32, 40.0);
+  MergeOptions o;
+  o.cell_px = 2;
+  o.levels = 2;
+  const Gaussians plain = pixel_plane(cam, 2.0, false), textured = pixel_plane(cam, 2.0, true);
+  const MergeResult merged = merge_gaussians(plain, cam, o);
+  CHECK(merged.merged.count() == plain.count() / 16);
+  CHECK(merged.removed() == plain.count() - plain.count() / 16);
+  CHECK(merge_gaussians(textured, cam, o).merged.count() == textured.count());
+  const auto inner = [](const Tensor& t, int64_t border) {
+    return t.slice(1, border, -border).slice(2, border, -border);
+  };
+  const RenderOutput before = render(plain, cam), after = render(merged.merged, cam);
+  CHECK(max_abs(inner(after.rgb - before.rgb, 4)) < 0.03);
+  CHECK(inner(after.alpha, 4).min().item<double>() > 0.9);
 }

@@ -131,6 +131,14 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK_THAT(merge_report, Catch::Contains("Gaussians    " + std::to_string(merged.count()) + " written of " +
                                            std::to_string(g.count()) + " decoded"));
   CHECK_THAT(merge_report, Catch::Contains(std::to_string(g.count() - merged.count()) + " merged into neighbours"));
+  CHECK_THAT(merge_report, Catch::Contains("groups refused:"));
+  // A second level merges the merged cells again.
+  const std::string merge_twice = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
+                                  "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 " +
+                                  "--merge-cell 4 --merge-levels 2 --merge-split --merge-color 1 --merge-flatness 1 " +
+                                  "--merge-normal-cos 0 --out " + out + "/merged2.ply > " + out + "/merged2.txt 2>&1";
+  REQUIRE(std::system(merge_twice.c_str()) == 0);
+  CHECK(read_ply(out + "/merged2.ply").count() < merged.count());
   const std::string render = tool + " render --ply " + out +
                              "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " + out + "/orbit > " +
                              out + "/render.txt 2>&1";

@@ -29,6 +29,13 @@ void MergeOptions::visit(ConfigVisitor& v) {
   v.field("min_normal_cos", min_normal_cos,
           "merge a cell only when every flat member's normal is within this cosine of the merged Gaussian's normal",
           Range::unit());
+  v.field("split", split,
+          "a cell that cannot merge whole is split by colour: each group of members within max_color of its own "
+          "mean merges on its own (the heaviest member first), so one odd pixel no longer keeps its whole cell apart");
+  v.field("levels", levels,
+          "merge passes with cells of cell_px, 2 cell_px, 4 cell_px, ...: the merged Gaussians of a plain wall merge "
+          "again into larger ones, under the same tests",
+          Range::between(1, 6));
 }
 
 namespace {
@@ -43,18 +50,11 @@ Eigen::Matrix3d rotation_of(const double* q) {
                                          : Eigen::Matrix3d::Identity();
 }
 
-}  // namespace
+enum class Outcome { merged, invalid, color, shape, normal };
 
-MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const MergeOptions& o) {
-  ISPLAT_CHECK(!g.batched() && source.batch() == 0, "merge_gaussians: takes one unbatched set and camera");
-  torch::NoGradGuard no_grad;
-  MergeResult r;
-  r.before = g.count();
-  if (o.cell_px <= 0 || r.before < 2) {
-    r.merged = g;
-    return r;
-  }
-  const int64_t n = r.before;
+// One pass over cells of `cell_px` source pixels; adds its counts to `r`.
+Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, double cell_px, MergeResult& r) {
+  const int64_t n = g.count();
   const auto dtype = g.means.scalar_type();
   auto f64 = [&](const torch::Tensor& t, int64_t cols) {
     ISPLAT_CHECK(t.defined() && t.numel() == n * cols, "merge_gaussians: a Gaussian tensor ",
@@ -79,7 +79,7 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
     keyed[i] = {-1 - i, i};
     if (!(c[2] > 0)) continue;
     const double u = (k[0][0] * c[0] + k[0][1] * c[1]) / c[2] + k[0][2], v = k[1][1] * c[1] / c[2] + k[1][2];
-    const double cu = std::floor(u / o.cell_px), cv = std::floor(v / o.cell_px);
+    const double cu = std::floor(u / cell_px), cv = std::floor(v / cell_px);
     if (!(std::abs(cu) < kMaxCell && std::abs(cv) < kMaxCell)) continue;
     const int64_t key = (static_cast<int64_t>(cv) + kMaxCell) * (2 * kMaxCell) + (static_cast<int64_t>(cu) + kMaxCell);
     keyed[i] = {key, i};
@@ -97,40 +97,45 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
     out_colors.insert(out_colors.end(), colors + 3 * i, colors + 3 * i + 3);
     out_opac.push_back(opac[i]);
   };
+  auto color_of = [&](int64_t i) { return Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]); };
+  // A member's weight: opacity x footprint area (its two larger axes).
+  auto weight_of = [&](int64_t i) {
+    double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
+    std::sort(s, s + 3);
+    return opac[i] * s[1] * s[2];
+  };
   // What a group needs of each member, read once.
   struct Member {
     Eigen::Vector3d mean;
     Eigen::Matrix3d rotation;
-    double weight;    // opacity x footprint area
+    double weight;
     int normal_axis;  // the local axis of a flat member's normal; -1 when it is not flat (no normal to compare)
   };
   std::vector<Member> group;
-  // Tries one group; on success appends the merged Gaussian and returns true.
-  auto merge = [&](const std::pair<int64_t, int64_t>* first, int64_t count) {
+  // Tries one group; on success appends the merged Gaussian.
+  auto merge = [&](const std::vector<int64_t>& members) {
     group.clear();
     double weight_sum = 0, opacity = 0;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
-    for (int64_t j = 0; j < count; ++j) {
-      const int64_t i = first[j].second;
+    for (const int64_t i : members) {
       const double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
       int axes[3] = {0, 1, 2};  // by size, ties in axis order
       std::stable_sort(axes, axes + 3, [&](int x, int y) { return s[x] < s[y]; });
       const double w = opac[i] * s[axes[1]] * s[axes[2]];
-      if (!(w > 0) || !std::isfinite(w)) return false;
+      if (!(w > 0) || !std::isfinite(w)) return Outcome::invalid;
       const bool flat = s[axes[0]] <= 0.5 * s[axes[1]];
       group.push_back({Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]), rotation_of(quats + 4 * i), w,
                        flat ? axes[0] : -1});
       weight_sum += w;
       mean += w * group.back().mean;
-      color += w * Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]);
+      color += w * color_of(i);
       opacity += w * opac[i];
     }
     mean /= weight_sum, color /= weight_sum, opacity /= weight_sum;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int64_t j = 0; j < count; ++j) {
-      const int64_t i = first[j].second;
-      for (int a = 0; a < 3; ++a)
-        if (std::abs(colors[3 * i + a] - color[a]) > o.max_color) return false;
+    for (size_t j = 0; j < members.size(); ++j) {
+      const int64_t i = members[j];
+      if ((color_of(i) - color).cwiseAbs().maxCoeff() > o.max_color) return Outcome::color;
       const Member& m = group[j];
       const Eigen::Vector3d s2(scales[3 * i] * scales[3 * i], scales[3 * i + 1] * scales[3 * i + 1],
                                scales[3 * i + 2] * scales[3 * i + 2]);
@@ -139,15 +144,15 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
     }
     cov /= weight_sum;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    if (eig.info() != Eigen::Success) return false;
+    if (eig.info() != Eigen::Success) return Outcome::invalid;
     Eigen::Vector3d lambda = eig.eigenvalues().cwiseMax(0.0);  // ascending
-    if (!(lambda[1] > 0) || std::sqrt(lambda[0] / lambda[1]) > o.max_flatness) return false;
+    if (!(lambda[1] > 0) || std::sqrt(lambda[0] / lambda[1]) > o.max_flatness) return Outcome::shape;
     Eigen::Matrix3d axes = eig.eigenvectors();
     // Flat members must lie in the merged plane: two Gaussians a depth step apart make a thin line, which the
     // flatness test alone would pass.
     for (const Member& m : group)
       if (m.normal_axis >= 0 && std::abs(m.rotation.col(m.normal_axis).dot(axes.col(0))) < o.min_normal_cos)
-        return false;
+        return Outcome::normal;
     // Members that tile a patch cover more than their moment-matched Gaussian does (it has one peak where the
     // patch is flat-topped), so the merged Gaussian's in-plane axes grow until its footprint (opacity x area)
     // equals the members' total: a plain wall stays closed instead of showing gaps between merged cells.
@@ -160,18 +165,62 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
     out_quats.insert(out_quats.end(), {q.w(), q.x(), q.y(), q.z()});
     out_colors.insert(out_colors.end(), {color[0], color[1], color[2]});
     out_opac.push_back(opacity);
-    return true;
+    r.groups += 1;
+    r.members += static_cast<int64_t>(members.size());
+    return Outcome::merged;
   };
+  auto count_refusal = [&](Outcome outcome) {
+    r.refused_color += outcome == Outcome::color;
+    r.refused_shape += outcome == Outcome::shape;
+    r.refused_normal += outcome == Outcome::normal;
+  };
+  // The members within max_color of `centre` (any channel).
+  auto near_color = [&](const std::vector<int64_t>& from, const Eigen::Vector3d& centre) {
+    std::vector<int64_t> near;
+    for (const int64_t i : from)
+      if ((color_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
+    return near;
+  };
+  // Splits a refused cell: around its heaviest remaining member, the members within max_color of it, then of
+  // their weighted mean, try to merge; what does not merge is kept as it is.
+  // Splits a cell refused whole: around its heaviest remaining member, the members within max_color of it, then
+  // of their weighted mean, try to merge on their own; what does not merge is kept as it is. A cell that is one
+  // colour was refused for its shape, and stays apart.
+  auto merge_split = [&](std::vector<int64_t> rest) {
+    const size_t whole = rest.size();
+    while (rest.size() > 1) {
+      const int64_t seed = *std::max_element(rest.begin(), rest.end(),
+                                             [&](int64_t a, int64_t b) { return weight_of(a) < weight_of(b); });
+      std::vector<int64_t> part = near_color(rest, color_of(seed));
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      double w = 0;
+      for (const int64_t i : part) centre += weight_of(i) * color_of(i), w += weight_of(i);
+      if (w > 0) part = near_color(rest, centre / w);
+      if (std::find(part.begin(), part.end(), seed) == part.end()) part.push_back(seed);
+      if (part.size() == whole) break;
+      if (part.size() < 2 || merge(part) != Outcome::merged)
+        for (const int64_t i : part) copy(i);
+      rest.erase(std::remove_if(rest.begin(), rest.end(),
+                                [&](int64_t i) { return std::find(part.begin(), part.end(), i) != part.end(); }),
+                 rest.end());
+    }
+    for (const int64_t i : rest) copy(i);
+  };
+  std::vector<int64_t> cell;
   for (int64_t begin = 0; begin < n;) {
     int64_t end = begin + 1;
     if (keyed[begin].first >= 0)
       while (end < n && keyed[end].first == keyed[begin].first) ++end;
-    const int64_t count = end - begin;
-    if (count > 1 && merge(keyed.data() + begin, count)) {
-      ++r.groups;
-      r.members += count;
-    } else {
-      for (int64_t j = begin; j < end; ++j) copy(keyed[j].second);
+    cell.clear();
+    for (int64_t j = begin; j < end; ++j) cell.push_back(keyed[j].second);
+    const Outcome outcome = cell.size() > 1 ? merge(cell) : Outcome::invalid;
+    if (outcome != Outcome::merged) {
+      count_refusal(outcome);
+      if (o.split && cell.size() > 2) {
+        merge_split(cell);
+      } else {
+        for (const int64_t i : cell) copy(i);
+      }
     }
     begin = end;
   }
@@ -180,11 +229,27 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
   auto tensor = [&](std::vector<double>& v, std::vector<int64_t> shape) {
     return torch::from_blob(v.data(), shape, torch::kFloat64).clone().to(dtype);
   };
-  r.merged.means = tensor(out_means, {m, 3});
-  r.merged.scales = tensor(out_scales, {m, 3});
-  r.merged.quats = tensor(out_quats, {m, 4});
-  r.merged.colors = tensor(out_colors, {m, 3});
-  r.merged.opacities = g.opacities.dim() == 2 ? tensor(out_opac, {m, 1}) : tensor(out_opac, {m});
+  Gaussians merged;
+  merged.means = tensor(out_means, {m, 3});
+  merged.scales = tensor(out_scales, {m, 3});
+  merged.quats = tensor(out_quats, {m, 4});
+  merged.colors = tensor(out_colors, {m, 3});
+  merged.opacities = g.opacities.dim() == 2 ? tensor(out_opac, {m, 1}) : tensor(out_opac, {m});
+  return merged;
+}
+
+}  // namespace
+
+MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const MergeOptions& o) {
+  ISPLAT_CHECK(!g.batched() && source.batch() == 0, "merge_gaussians: takes one unbatched set and camera");
+  torch::NoGradGuard no_grad;
+  MergeResult r;
+  r.before = g.count();
+  r.merged = g;
+  if (o.cell_px <= 0) return r;
+  double cell_px = o.cell_px;
+  for (int64_t level = 0; level < o.levels && r.merged.count() >= 2; ++level, cell_px *= 2)
+    r.merged = merge_pass(r.merged, source, o, cell_px, r);
   return r;
 }
 
