@@ -88,6 +88,7 @@ int run_predict(int argc, char** argv) {
               "smallest cosine between a flat member's normal and the merged normal (0 = any)");
   args.flag("--merge-split", merge.split, "merge each single-coloured part of a cell that cannot merge whole");
   args.option("--merge-levels", merge.levels, "merge passes with cells of 1, 2, 4, ... times --merge-cell");
+  args.option("--merge-level-color", merge.level_color, "each further merge level multiplies --merge-color by this");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");

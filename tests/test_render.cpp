@@ -811,6 +811,15 @@ TEST_CASE("merge: a second level merges a plain plane's 2-px cells again into 4-
   CHECK(merged.merged.count() == plain.count() / 16);
   CHECK(merged.removed() == plain.count() - plain.count() / 16);
   CHECK(merge_gaussians(textured, cam, o).merged.count() == textured.count());
+  // A gradient of 0.02 per pixel: 2-px cells stay within 0.03 of their mean (0.01), the 4-px cells made of them
+  // within 0.02, which passes the same colour test and fails one tightened by level_color 0.5 (0.015).
+  Gaussians graded = plain;
+  const Tensor column = torch::arange(plain.count(), torch::kInt64).remainder(cam.width).remainder(24).to(kF64);
+  graded.colors = (0.1 + 0.02 * column).unsqueeze(1).repeat({1, 3});
+  CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 16);
+  o.level_color = 0.5;
+  CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 4);
+  CHECK(merge_gaussians(plain, cam, o).merged.count() == plain.count() / 16);
   const auto inner = [](const Tensor& t, int64_t border) {
     return t.slice(1, border, -border).slice(2, border, -border);
   };

@@ -36,6 +36,10 @@ void MergeOptions::visit(ConfigVisitor& v) {
           "merge passes with cells of cell_px, 2 cell_px, 4 cell_px, ...: the merged Gaussians of a plain wall merge "
           "again into larger ones, under the same tests",
           Range::between(1, 6));
+  v.field("level_color", level_color,
+          "each level after the first multiplies max_color by this, so larger merged Gaussians must be plainer "
+          "(1 = the same colour test at every level)",
+          Range::unit());
 }
 
 namespace {
@@ -52,8 +56,9 @@ Eigen::Matrix3d rotation_of(const double* q) {
 
 enum class Outcome { merged, invalid, color, shape, normal };
 
-// One pass over cells of `cell_px` source pixels; adds its counts to `r`.
-Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, double cell_px, MergeResult& r) {
+// One pass over cells of `o.cell_px` source pixels; adds its counts to `r`.
+Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, MergeResult& r) {
+  const double cell_px = o.cell_px;
   const int64_t n = g.count();
   const auto dtype = g.means.scalar_type();
   auto f64 = [&](const torch::Tensor& t, int64_t cols) {
@@ -247,9 +252,12 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
   r.before = g.count();
   r.merged = g;
   if (o.cell_px <= 0) return r;
-  double cell_px = o.cell_px;
-  for (int64_t level = 0; level < o.levels && r.merged.count() >= 2; ++level, cell_px *= 2)
-    r.merged = merge_pass(r.merged, source, o, cell_px, r);
+  MergeOptions level = o;
+  for (int64_t l = 0; l < o.levels && r.merged.count() >= 2; ++l) {
+    r.merged = merge_pass(r.merged, source, level, r);
+    level.cell_px *= 2;
+    level.max_color *= o.level_color;
+  }
   return r;
 }
 

@@ -19,6 +19,7 @@ struct MergeOptions {
   double min_normal_cos = 0.9;  // flat members' normals must agree with the merged normal this well
   bool split = false;           // a cell refused whole merges each of its single-coloured parts on its own
   int64_t levels = 1;           // passes with cells of cell_px, 2 cell_px, 4 cell_px, ...
+  double level_color = 1.0;     // each further level multiplies max_color by this (1 = the same test at every level)
   void visit(ConfigVisitor& v);
 };
 
@@ -38,8 +39,8 @@ struct MergeResult {
 // weighted mean, colour, opacity and covariance (each member weighted by opacity times its footprint area), with its
 // two in-plane axes grown (never shrunk) so that its opacity times area equals the members' total. Gaussians behind the
 // camera stay as they are. With `split`, a cell refused whole merges each single-coloured part on its own; with
-// `levels` > 1 the result is merged again with cells twice as large, and so on. No gradient. With cell_px = 0 the
-// set is returned unchanged.
+// `levels` > 1 the result is merged again with cells twice as large (and max_color times level_color), and so
+// on. No gradient. With cell_px = 0 the set is returned unchanged.
 MergeResult merge_gaussians(const Gaussians& gaussians, const Camera& source, const MergeOptions& options);
 
 }  // namespace isplat
