@@ -103,11 +103,16 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     out_opac.push_back(opac[i]);
   };
   auto color_of = [&](int64_t i) { return Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]); };
-  // A member's weight: opacity x footprint area (its two larger axes).
+  // A member's local axes by size (ties in axis order) and its weight: opacity x footprint area (the two larger).
+  auto axes_by_size = [&](int64_t i, int axes[3]) {
+    const double* s = scales + 3 * i;
+    axes[0] = 0, axes[1] = 1, axes[2] = 2;
+    std::stable_sort(axes, axes + 3, [&](int x, int y) { return std::abs(s[x]) < std::abs(s[y]); });
+    return opac[i] * std::abs(s[axes[1]]) * std::abs(s[axes[2]]);
+  };
   auto weight_of = [&](int64_t i) {
-    double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
-    std::sort(s, s + 3);
-    return opac[i] * s[1] * s[2];
+    int axes[3];
+    return axes_by_size(i, axes);
   };
   // What a group needs of each member, read once.
   struct Member {
@@ -123,12 +128,10 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     double weight_sum = 0, opacity = 0;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
     for (const int64_t i : members) {
-      const double s[3] = {std::abs(scales[3 * i]), std::abs(scales[3 * i + 1]), std::abs(scales[3 * i + 2])};
-      int axes[3] = {0, 1, 2};  // by size, ties in axis order
-      std::stable_sort(axes, axes + 3, [&](int x, int y) { return s[x] < s[y]; });
-      const double w = opac[i] * s[axes[1]] * s[axes[2]];
+      int axes[3];
+      const double w = axes_by_size(i, axes);
       if (!(w > 0) || !std::isfinite(w)) return Outcome::invalid;
-      const bool flat = s[axes[0]] <= 0.5 * s[axes[1]];
+      const bool flat = std::abs(scales[3 * i + axes[0]]) <= 0.5 * std::abs(scales[3 * i + axes[1]]);
       group.push_back({Eigen::Vector3d(means[3 * i], means[3 * i + 1], means[3 * i + 2]), rotation_of(quats + 4 * i), w,
                        flat ? axes[0] : -1});
       weight_sum += w;
@@ -186,8 +189,6 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       if ((color_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
     return near;
   };
-  // Splits a refused cell: around its heaviest remaining member, the members within max_color of it, then of
-  // their weighted mean, try to merge; what does not merge is kept as it is.
   // Splits a cell refused whole: around its heaviest remaining member, the members within max_color of it, then
   // of their weighted mean, try to merge on their own; what does not merge is kept as it is. A cell that is one
   // colour was refused for its shape, and stays apart.
@@ -203,8 +204,11 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       if (w > 0) part = near_color(rest, centre / w);
       if (std::find(part.begin(), part.end(), seed) == part.end()) part.push_back(seed);
       if (part.size() == whole) break;
-      if (part.size() < 2 || merge(part) != Outcome::merged)
+      const Outcome outcome = part.size() > 1 ? merge(part) : Outcome::invalid;
+      if (outcome != Outcome::merged) {
+        count_refusal(outcome);
         for (const int64_t i : part) copy(i);
+      }
       rest.erase(std::remove_if(rest.begin(), rest.end(),
                                 [&](int64_t i) { return std::find(part.begin(), part.end(), i) != part.end(); }),
                  rest.end());
