@@ -2,8 +2,8 @@
 # 0.43, 0.64 and 0.85, the one with the fewest Gaussians that is within 0.1 dB (paired mean) of each set's best fixed
 # budget on all three sets. Usage: python3 hypothesis.py <eval out folder>
 import os, sys
-sys.argv = sys.argv[:2]
-exec(open(os.path.join(os.path.dirname(__file__), 'targets.py')).read().split("budgets = ['0.43'")[0])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from targets import root, method, compare
 budgets = ['0.43', '0.64', '0.85']
 names = {'0.43': 'full_merge2s-budgets', '0.64': 'full_merge2s-budgets', '0.85': 'full_merge2s'}
 sets = sorted(d for d in os.listdir(root) if os.path.isdir(f"{root}/{d}"))

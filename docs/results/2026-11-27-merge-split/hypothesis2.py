@@ -2,7 +2,8 @@
 # selection sets, both seeds averaged per pair) within 0.1 dB (paired mean) of each set's best fixed budget on all
 # three sets. Usage: python3 hypothesis2.py <eval out folder>
 import os, sys
-exec(open(os.path.join(os.path.dirname(__file__), 'targets.py')).read().split("budgets = ['0.43'")[0])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from targets import root, method, compare
 budgets = ['0.43', '0.64', '0.85']
 candidates = [('full_merge2s-budgets', '0.43'), ('full_merge2s-budgets', '0.64'), ('full_merge2s', '0.85'),
               ('full_merge2sc045', '0.64'), ('full_merge2sc06', '0.64'), ('full_merge2sL2h', '0.64'),
