@@ -1,6 +1,6 @@
 # Issue 16's two targets for the chosen settings on an evaluation folder, with both seeds averaged per pair and paired
 # bootstrap 95% intervals (2000 resamples, seed 0), overall and per bin. Usage: python3 targets.py <eval out folder>
-# [selection|confirm]: the development choices (and split alone) on the selection sets, or the hypotheses on fresh ones.
+# [selection|confirm|confirm2]: the development choices (and split alone) on the selection sets, or the hypotheses on fresh ones.
 import json, os, random, sys
 root = sys.argv[1]
 def load(s, m):
@@ -30,6 +30,8 @@ ROWS = {
                   ("not chosen: split alone at the recipe's budget", 'full_merge2s', '0.85', '0.85', 'prune')],
     'confirm': [("pruning hypothesis", 'full_merge2s', '0.85', '0.85', 'prune'),
                 ("2x hypothesis", 'full_merge2s-budgets', '0.64', 'best', '2x')],
+    'confirm2': [("pruning hypothesis, second fresh sets", 'full_merge2s', '0.85', '0.85', 'prune'),
+                 ("second 2x hypothesis", 'full_merge2s-px053', '0.53', 'best', '2x')],
 }
 if __name__ == '__main__':
     rows = ROWS[sys.argv[2] if len(sys.argv) > 2 else 'selection']
