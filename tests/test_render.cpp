@@ -768,6 +768,12 @@ TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd
   CHECK(kept.merged.count() == 4);
   CHECK(kept.refused_color == 0);
   CHECK(kept.refused_shape + kept.refused_normal == 1);  // tried once, whole
+  // With a red member too, the cell is refused by colour, then its grey part for the depth step: both counted.
+  step[2][7] = 0.9;
+  const MergeResult parts = merge_gaussians(head_on(step), cam, o);
+  CHECK(parts.merged.count() == 4);
+  CHECK(parts.refused_color == 1);
+  CHECK(parts.refused_shape + parts.refused_normal == 1);
 }
 
 TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the same, a textured one keeps all",
@@ -812,12 +818,13 @@ TEST_CASE("merge: a second level merges a plain plane's 2-px cells again into 4-
   CHECK(merged.removed() == plain.count() - plain.count() / 16);
   CHECK(merge_gaussians(textured, cam, o).merged.count() == textured.count());
   // A gradient of 0.02 per pixel: 2-px cells stay within 0.03 of their mean (0.01), the 4-px cells made of them
-  // within 0.02, which passes the same colour test and fails one tightened by level_color 0.5 (0.015).
+  // within 0.02, which passes the same colour test and fails one tightened by level_color 0.3 (0.009; applied at
+  // the first level too, it would refuse the 2-px cells as well).
   Gaussians graded = plain;
   const Tensor column = torch::arange(plain.count(), torch::kInt64).remainder(cam.width).remainder(24).to(kF64);
   graded.colors = (0.1 + 0.02 * column).unsqueeze(1).repeat({1, 3});
   CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 16);
-  o.level_color = 0.5;
+  o.level_color = 0.3;
   CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 4);
   CHECK(merge_gaussians(plain, cam, o).merged.count() == plain.count() / 16);
   const auto inner = [](const Tensor& t, int64_t border) {

@@ -139,6 +139,14 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
                                   "--merge-normal-cos 0 --out " + out + "/merged2.ply > " + out + "/merged2.txt 2>&1";
   REQUIRE(std::system(merge_twice.c_str()) == 0);
   CHECK(read_ply(out + "/merged2.ply").count() < merged.count());
+  // A merge flag outside the schema's bounds fails, naming the key.
+  const std::string bad_merge = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
+                                "/images/IMG_0002.jpg --depth " + scene +
+                                "/depth/IMG_0002.exr --hfov 65 --merge-cell 4 " + "--merge-level-color 2 --out " + out +
+                                "/bad_merge.ply > " + out + "/bad_merge.txt 2>&1";
+  CHECK(std::system(bad_merge.c_str()) != 0);
+  CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("level_color"));
+  CHECK_FALSE(fs::exists(out + "/bad_merge.ply"));
   const std::string render = tool + " render --ply " + out +
                              "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " + out + "/orbit > " +
                              out + "/render.txt 2>&1";

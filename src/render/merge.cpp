@@ -30,11 +30,12 @@ void MergeOptions::visit(ConfigVisitor& v) {
           "merge a cell only when every flat member's normal is within this cosine of the merged Gaussian's normal",
           Range::unit());
   v.field("split", split,
-          "a cell that cannot merge whole is split by colour: each group of members within max_color of its own "
-          "mean merges on its own (the heaviest member first), so one odd pixel no longer keeps its whole cell apart");
+          "a cell that cannot merge whole is split by colour: around its heaviest remaining member, the members "
+          "within max_color of it (then of their weighted mean) try to merge on their own, so one odd pixel no longer "
+          "keeps its whole cell apart");
   v.field("levels", levels,
           "merge passes with cells of cell_px, 2 cell_px, 4 cell_px, ...: the merged Gaussians of a plain wall merge "
-          "again into larger ones, under the same tests",
+          "again into larger ones, under the same tests (max_color times level_color at each further level)",
           Range::between(1, 6));
   v.field("level_color", level_color,
           "each level after the first multiplies max_color by this, so larger merged Gaussians must be plainer "
@@ -190,8 +191,8 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     return near;
   };
   // Splits a cell refused whole: around its heaviest remaining member, the members within max_color of it, then
-  // of their weighted mean, try to merge on their own; what does not merge is kept as it is. A cell that is one
-  // colour was refused for its shape, and stays apart.
+  // of their weighted mean, try to merge on their own; what does not merge is kept as it is. A cell whose first
+  // part is the whole cell stays apart (it was tried whole already).
   auto merge_split = [&](std::vector<int64_t> rest) {
     const size_t whole = rest.size();
     while (rest.size() > 1) {
