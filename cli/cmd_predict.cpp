@@ -176,8 +176,8 @@ int run_predict(int argc, char** argv) {
   g = pruned.kept;
   const int64_t faint = pruned.low_opacity;
   ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
-               " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ", pruned.merged,
-               " merged); not writing an empty scene to ", out);
+               " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
+               pruned.merge.removed(), " merged); not writing an empty scene to ", out);
   write_ply(out, g, pipeline->model()->options.composer.linear_rgb);
   const double typical_depth = pred.supports.depth.median().item<double>();
   write_scene_camera(camera_sidecar_path(out), view, typical_depth);
@@ -191,10 +191,10 @@ int run_predict(int argc, char** argv) {
             << " outside the view, " << faint << " below opacity " << std::setprecision(3) << std::defaultfloat
             << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
             << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
-            << pruned.merged << " merged into neighbours)\n";
+            << pruned.merge.removed() << " merged into neighbours)\n";
   if (merge.cell_px > 0)
-    std::cout << "merging      groups refused: " << pruned.merge_refused_color << " by colour, "
-              << pruned.merge_refused_shape << " by flatness, " << pruned.merge_refused_normal << " by normals\n";
+    std::cout << "merging      groups refused: " << pruned.merge.refused_color << " by colour, "
+              << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals\n";
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k))

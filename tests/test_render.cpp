@@ -802,7 +802,7 @@ TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the
   po.min_contribution = 0;
   po.merge = o;
   const PruneResult pr = prune_gaussians(plain, cam, po);
-  CHECK(pr.merged == plain.count() - plain.count() / 4);
+  CHECK(pr.merge.removed() == plain.count() - plain.count() / 4);
   CHECK(pr.after() == pr.kept.count());
 }
 

@@ -108,9 +108,10 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const std::string scene = generated_eval_root(data.out, "courtyard_colmap") + "/scene_0";
   const std::string tool = (fs::path(ISPLAT_BINARY_DIR) / "infinisplat").string();
   const std::string out = test::temp_dir("use_out");
-  const std::string predict = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
-                              "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 --out " + out +
-                              "/scene.ply > " + out + "/predict.txt 2>&1";
+  // One photo with its depth; each run below adds its own flags.
+  const std::string predict_photo = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
+                                    "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 ";
+  const std::string predict = predict_photo + "--out " + out + "/scene.ply > " + out + "/predict.txt 2>&1";
   REQUIRE(std::system(predict.c_str()) == 0);
   const std::string report = test::read_bytes(out + "/predict.txt");
   CHECK_THAT(report, Catch::Contains("supports     2000"));
@@ -120,10 +121,8 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK(fs::exists(out + "/scene.camera.json"));
   // Merging writes fewer Gaussians and says how many it merged (an untrained model's Gaussians have random
   // shapes, hence any shape is allowed).
-  const std::string merge = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
-                            "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 --merge-cell 4 " +
-                            "--merge-color 1 --merge-flatness 1 --merge-normal-cos 0 --out " + out + "/merged.ply > " +
-                            out + "/merged.txt 2>&1";
+  const std::string merge = predict_photo + "--merge-cell 4 --merge-color 1 --merge-flatness 1 --merge-normal-cos 0 " +
+                            "--out " + out + "/merged.ply > " + out + "/merged.txt 2>&1";
   REQUIRE(std::system(merge.c_str()) == 0);
   const Gaussians merged = read_ply(out + "/merged.ply");
   CHECK(merged.count() < g.count());
@@ -133,16 +132,13 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK_THAT(merge_report, Catch::Contains(std::to_string(g.count() - merged.count()) + " merged into neighbours"));
   CHECK_THAT(merge_report, Catch::Contains("groups refused:"));
   // A second level merges the merged cells again.
-  const std::string merge_twice = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
-                                  "/images/IMG_0002.jpg --depth " + scene + "/depth/IMG_0002.exr --hfov 65 " +
+  const std::string merge_twice = predict_photo +
                                   "--merge-cell 4 --merge-levels 2 --merge-split --merge-color 1 --merge-flatness 1 " +
                                   "--merge-normal-cos 0 --out " + out + "/merged2.ply > " + out + "/merged2.txt 2>&1";
   REQUIRE(std::system(merge_twice.c_str()) == 0);
   CHECK(read_ply(out + "/merged2.ply").count() < merged.count());
   // A merge flag outside the schema's bounds fails, naming the key.
-  const std::string bad_merge = tool + " predict --checkpoint " + run + "/ck.safetensors --image " + scene +
-                                "/images/IMG_0002.jpg --depth " + scene +
-                                "/depth/IMG_0002.exr --hfov 65 --merge-cell 4 " + "--merge-level-color 2 --out " + out +
+  const std::string bad_merge = predict_photo + "--merge-cell 4 --merge-level-color 2 --out " + out +
                                 "/bad_merge.ply > " + out + "/bad_merge.txt 2>&1";
   CHECK(std::system(bad_merge.c_str()) != 0);
   CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("level_color"));

@@ -58,7 +58,7 @@ Eigen::Matrix3d rotation_of(const double* q) {
 enum class Outcome { merged, invalid, color, shape, normal };
 
 // One pass over cells of `o.cell_px` source pixels; adds its counts to `r`.
-Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, MergeResult& r) {
+Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, MergeCounts& r) {
   const double cell_px = o.cell_px;
   const int64_t n = g.count();
   const auto dtype = g.means.scalar_type();

@@ -23,14 +23,18 @@ struct MergeOptions {
   void visit(ConfigVisitor& v);
 };
 
-struct MergeResult {
-  Gaussians merged;
-  int64_t before = 0;
+// What merging did, also carried by PruneResult.
+struct MergeCounts {
   int64_t groups = 0;   // groups (cells, or parts of split cells, at every level) that became one Gaussian
   int64_t members = 0;  // Gaussians those groups held (at later levels, the previous level's Gaussians)
   // Groups refused, by the first test they failed (diagnostics; a split cell can count more than once).
   int64_t refused_color = 0, refused_shape = 0, refused_normal = 0;
   int64_t removed() const { return members - groups; }
+};
+
+struct MergeResult : MergeCounts {
+  Gaussians merged;
+  int64_t before = 0;
 };
 
 // Groups an unbatched set by the source-view cell its mean projects into. A cell of two or more Gaussians

@@ -98,10 +98,7 @@ PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const Prun
   r.kept = g.index(r.keep);
   const MergeResult merged = merge_gaussians(r.kept, source, o.merge);
   r.kept = merged.merged;
-  r.merged = merged.removed();
-  r.merge_refused_color = merged.refused_color;
-  r.merge_refused_shape = merged.refused_shape;
-  r.merge_refused_normal = merged.refused_normal;
+  r.merge = merged;
   return r;
 }
 

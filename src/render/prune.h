@@ -36,9 +36,9 @@ std::vector<Camera> nearby_views(const Camera& source, double shift, int64_t vie
 struct PruneResult {
   Gaussians kept;
   torch::Tensor keep;  // [N] bool: what survived the drops (merging then acts on those)
-  int64_t before = 0, low_opacity = 0, low_contribution = 0, merged = 0;  // merged: Gaussians removed by merging
-  int64_t merge_refused_color = 0, merge_refused_shape = 0, merge_refused_normal = 0;  // see MergeResult
-  int64_t after() const { return before - low_opacity - low_contribution - merged; }
+  int64_t before = 0, low_opacity = 0, low_contribution = 0;
+  MergeCounts merge;  // merge.removed(): Gaussians removed by merging
+  int64_t after() const { return before - low_opacity - low_contribution - merge.removed(); }
 };
 
 // Applies the options (when disabled, keeps everything): the drops, then merging. `source` is the camera the set was
