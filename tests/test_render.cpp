@@ -776,6 +776,37 @@ TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd
   CHECK(parts.refused_shape + parts.refused_normal == 1);
 }
 
+TEST_CASE("merge: in srgb the colour test is fine in the dark and coarse in the light, like the metrics", "[render]") {
+  const Camera cam = centred_camera(48, 32, 20.0);
+  // Two grey members in one 8-px cell, linear values a and b (0.02 apart: 0.01 each from their mean).
+  auto pair = [](double a, double b) {
+    return head_on(
+        {{0.2, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, a, a, a}, {0.25, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, b, b, b}});
+  };
+  MergeOptions o;
+  o.cell_px = 8;
+  o.max_color = 0.02;
+  // Dark: linear 0.01 and 0.03 are sRGB 0.100 and 0.188, 0.044 from their mean. Light: linear 0.70 and 0.72 are
+  // sRGB 0.854 and 0.864, 0.005 from theirs.
+  CHECK(merge_gaussians(pair(0.01, 0.03), cam, o).merged.count() == 1);
+  CHECK(merge_gaussians(pair(0.70, 0.72), cam, o).merged.count() == 1);
+  o.color_space = "srgb";
+  const MergeResult dark = merge_gaussians(pair(0.01, 0.03), cam, o);
+  CHECK(dark.merged.count() == 2);
+  CHECK(dark.refused_color == 1);
+  CHECK(merge_gaussians(pair(0.70, 0.72), cam, o).merged.count() == 1);
+  // Light members 0.06 apart in linear (0.03 from the mean) fail the linear test at 0.02 but pass in sRGB (0.015).
+  const Gaussians light = pair(0.70, 0.76);
+  const MergeResult merged = merge_gaussians(light, cam, o);
+  REQUIRE(merged.merged.count() == 1);
+  CHECK(merged.merged.colors[0][0].item<double>() == Approx(0.73));  // the merged colour stays the linear mean
+  o.color_space = "linear";
+  CHECK(merge_gaussians(light, cam, o).merged.count() == 2);
+  o.color_space = "hsv";
+  CHECK_THROWS_AS(merge_gaussians(light, cam, o), Error);
+  CHECK_THROWS_AS(config_from_json<MergeOptions>(nlohmann::json{{"color_space", "hsv"}}, "merge"), Error);
+}
+
 TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the same, a textured one keeps all",
           "[render]") {
   const Camera cam = centred_camera(48, 32, 40.0);

@@ -11,6 +11,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/color.h"
 
 namespace isplat {
 
@@ -20,8 +21,14 @@ void MergeOptions::visit(ConfigVisitor& v) {
           "with their mean and covariance, when they are flat and of one colour (0 = off)",
           Range::at_least(0.0));
   v.field("max_color", max_color,
-          "merge a cell only when every member's colour is within this of the cell's mean (linear RGB, any channel)",
+          "merge a cell only when every member's colour is within this of the cell's mean (in color_space, any "
+          "channel)",
           Range::unit());
+  v.field("color_space", color_space,
+          "where max_color is measured: linear (the colours as stored; with composer.linear_rgb a fixed step is "
+          "coarse in the dark and fine in the light) or srgb (after the sRGB transfer, the space the metrics and the "
+          "eye compare in)",
+          {"linear", "srgb"});
   v.field("max_flatness", max_flatness,
           "merge a cell only when the merged Gaussian's thickness is at most this fraction of its narrower in-plane "
           "width, so a cell across a depth edge stays apart",
@@ -72,6 +79,11 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
   const double *means = means_t.data_ptr<double>(), *scales = scales_t.data_ptr<double>(),
                *quats = quats_t.data_ptr<double>(), *colors = colors_t.data_ptr<double>(),
                *opac = opac_t.data_ptr<double>();
+  // The colours the max_color test compares (the merged colour itself is always the weighted mean of the stored ones).
+  ISPLAT_CHECK(o.color_space == "linear" || o.color_space == "srgb",
+               "merge_gaussians: color_space must be linear or srgb, got ", o.color_space);
+  const torch::Tensor tested_t = o.color_space == "srgb" ? linear_to_srgb(colors_t).contiguous() : colors_t;
+  const double* tested = tested_t.data_ptr<double>();
   const torch::Tensor K = source.K.to(torch::kFloat64).contiguous(), T = source.T_cw.to(torch::kFloat64).contiguous();
   const auto k = K.accessor<double, 2>();
   const auto t = T.accessor<double, 2>();
@@ -104,6 +116,7 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     out_opac.push_back(opac[i]);
   };
   auto color_of = [&](int64_t i) { return Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]); };
+  auto tested_of = [&](int64_t i) { return Eigen::Vector3d(tested[3 * i], tested[3 * i + 1], tested[3 * i + 2]); };
   // A member's local axes by size (ties in axis order) and its weight: opacity x footprint area (the two larger).
   auto axes_by_size = [&](int64_t i, int axes[3]) {
     const double* s = scales + 3 * i;
@@ -127,7 +140,8 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
   auto merge = [&](const std::vector<int64_t>& members) {
     group.clear();
     double weight_sum = 0, opacity = 0;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero(),
+                    tested_mean = Eigen::Vector3d::Zero();
     for (const int64_t i : members) {
       int axes[3];
       const double w = axes_by_size(i, axes);
@@ -138,13 +152,14 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       weight_sum += w;
       mean += w * group.back().mean;
       color += w * color_of(i);
+      tested_mean += w * tested_of(i);
       opacity += w * opac[i];
     }
-    mean /= weight_sum, color /= weight_sum, opacity /= weight_sum;
+    mean /= weight_sum, color /= weight_sum, tested_mean /= weight_sum, opacity /= weight_sum;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (size_t j = 0; j < members.size(); ++j) {
       const int64_t i = members[j];
-      if ((color_of(i) - color).cwiseAbs().maxCoeff() > o.max_color) return Outcome::color;
+      if ((tested_of(i) - tested_mean).cwiseAbs().maxCoeff() > o.max_color) return Outcome::color;
       const Member& m = group[j];
       const Eigen::Vector3d s2(scales[3 * i] * scales[3 * i], scales[3 * i + 1] * scales[3 * i + 1],
                                scales[3 * i + 2] * scales[3 * i + 2]);
@@ -183,11 +198,11 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     r.refused_shape += outcome == Outcome::shape;
     r.refused_normal += outcome == Outcome::normal;
   };
-  // The members within max_color of `centre` (any channel).
+  // The members within max_color of `centre` (any channel of the tested colours).
   auto near_color = [&](const std::vector<int64_t>& from, const Eigen::Vector3d& centre) {
     std::vector<int64_t> near;
     for (const int64_t i : from)
-      if ((color_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
+      if ((tested_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
     return near;
   };
   // Splits a cell refused whole: around its heaviest remaining member, the members within max_color of it, then
@@ -198,10 +213,10 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     while (rest.size() > 1) {
       const int64_t seed = *std::max_element(rest.begin(), rest.end(),
                                              [&](int64_t a, int64_t b) { return weight_of(a) < weight_of(b); });
-      std::vector<int64_t> part = near_color(rest, color_of(seed));
+      std::vector<int64_t> part = near_color(rest, tested_of(seed));
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       double w = 0;
-      for (const int64_t i : part) centre += weight_of(i) * color_of(i), w += weight_of(i);
+      for (const int64_t i : part) centre += weight_of(i) * tested_of(i), w += weight_of(i);
       if (w > 0) part = near_color(rest, centre / w);
       if (std::find(part.begin(), part.end(), seed) == part.end()) part.push_back(seed);
       if (part.size() == whole) break;

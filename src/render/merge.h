@@ -2,6 +2,7 @@
 // with the same first and second moments, so a plain wall keeps fewer Gaussians than a cluttered shelf.
 #pragma once
 #include <cstdint>
+#include <string>
 
 #include <torch/types.h>
 
@@ -13,8 +14,9 @@ namespace isplat {
 class ConfigVisitor;
 
 struct MergeOptions {
-  double cell_px = 0;           // grouping cell in source pixels (0 = off)
-  double max_color = 0.03;      // largest per-channel distance of a member's colour from the group's mean
+  double cell_px = 0;                  // grouping cell in source pixels (0 = off)
+  double max_color = 0.03;             // largest per-channel distance of a member's colour from the group's mean
+  std::string color_space = "linear";  // where max_color is measured: "linear" (the colours as stored) or "srgb"
   double max_flatness = 0.25;   // largest thickness / narrower width of the merged Gaussian (keeps depth edges apart)
   double min_normal_cos = 0.9;  // flat members' normals must agree with the merged normal this well
   bool split = false;           // a cell refused whole merges each of its single-coloured parts on its own
@@ -37,13 +39,13 @@ struct MergeResult : MergeCounts {
   int64_t before = 0;
 };
 
-// Groups an unbatched set by the source-view cell its mean projects into. A cell of two or more Gaussians
-// is replaced by one when every member's colour is within max_color of the mean, the merged Gaussian is flat
-// and every flat member lies in its plane (normals within min_normal_cos). The merged Gaussian has the members'
-// weighted mean, colour, opacity and covariance (each member weighted by opacity times its footprint area), with its
-// two in-plane axes grown (never shrunk) so that its opacity times area equals the members' total. Gaussians behind the
-// camera stay as they are. With `split`, a cell refused whole merges each single-coloured part on its own; with
-// `levels` > 1 the result is merged again with cells twice as large (and max_color times level_color), and so
+// Groups an unbatched set by the source-view cell its mean projects into. A cell of two or more Gaussians is
+// replaced by one when every member's colour is within max_color of the mean (in color_space), the merged Gaussian
+// is flat and every flat member lies in its plane (normals within min_normal_cos). The merged Gaussian has the
+// members' weighted mean, colour, opacity and covariance (each member weighted by opacity times its footprint area),
+// with its two in-plane axes grown (never shrunk) so that its opacity times area equals the members' total. Gaussians
+// behind the camera stay as they are. With `split`, a cell refused whole merges each single-coloured part on its own;
+// with `levels` > 1 the result is merged again with cells twice as large (and max_color times level_color), and so
 // on. No gradient. With cell_px = 0 the set is returned unchanged.
 MergeResult merge_gaussians(const Gaussians& gaussians, const Camera& source, const MergeOptions& options);
 
