@@ -197,7 +197,8 @@ int run_predict(int argc, char** argv) {
             << pruned.merge.removed() << " merged into neighbours)\n";
   if (merge.cell_px > 0)
     std::cout << "merging      groups refused: " << pruned.merge.refused_color << " by colour, "
-              << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals\n";
+              << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals; "
+              << pruned.merge.alone << " Gaussians alone in their cell\n";
   std::cout << "time (ms)   ";
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
     if (pred.timings_ms.count(k))

@@ -267,6 +267,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   r.gaussians = o.gaussians;
   r.decoded = o.decoded;
   r.stage_ms = o.stage_ms;
+  r.prune_counts = o.prune_counts;
   r.peak_mb = o.peak_mb;
   if (o.alpha.defined()) {
     r.hole_rate = hole_rate(o.alpha, mask);

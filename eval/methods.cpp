@@ -54,7 +54,7 @@ class ModelMethod final : public Method {
     out.decoded = p.gaussians.count();
     const auto tp = Clock::now();
     const PruneResult pr = prune_gaussians(p.gaussians, src.camera, options_.prune, render_);
-    if (options_.prune.enabled) out.stage_ms["prune"] = ms_since(tp);
+    if (options_.prune.enabled) out.stage_ms["prune"] = ms_since(tp), out.prune_counts = prune_counts(pr);
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();
     const RenderOutput r = render(pr.kept, target, render_);

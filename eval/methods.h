@@ -18,6 +18,7 @@ struct MethodOutput {
   int64_t gaussians = 0;                                      // rendered (after pruning)
   int64_t decoded = 0;                                        // before pruning
   std::map<std::string, double> stage_ms;                     // prior, sampler, encoder, decoder, composer, prune
+  std::map<std::string, int64_t> prune_counts;                // what pruning did (prune_counts()), when enabled
   double peak_mb = std::numeric_limits<double>::quiet_NaN();  // process peak memory during predict + render
   torch::Tensor alpha, depth, normal;  // the render's other outputs (RenderOutput), where the method renders
 };

@@ -21,7 +21,8 @@ struct PairResult {
   int64_t gaussians = 0;  // rendered (after pruning)
   int64_t decoded = 0;    // before pruning (0 in logs that predate it)
   double mask_fraction = 0;
-  std::map<std::string, double> stage_ms;  // inference stages: prior, sampler, encoder, decoder, composer, prune
+  std::map<std::string, double> stage_ms;       // inference stages: prior, sampler, encoder, decoder, composer, prune
+  std::map<std::string, int64_t> prune_counts;  // what pruning did (render/prune prune_counts), when enabled
   double peak_mb = std::numeric_limits<double>::quiet_NaN();
   // Stability (metrics/stability): NaN where the method does not render or the target has no depth.
   double hole_rate = std::numeric_limits<double>::quiet_NaN();

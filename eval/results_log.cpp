@@ -29,6 +29,7 @@ nlohmann::json result_json(const PairResult& r) {
   if (!r.motion.empty()) j["motion"] = r.motion;
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
+  if (!r.prune_counts.empty()) j["prune"] = r.prune_counts;
   return j;
 }
 
@@ -86,6 +87,12 @@ PairResult result_from_json(const nlohmann::json& j) {
     for (auto it = j.at("stage_ms").begin(); it != j.at("stage_ms").end(); ++it) {
       r.stage_ms[it.key()] = it.value().get<double>();
       check_range(it.key().c_str(), r.stage_ms[it.key()], 0, 1e9);
+    }
+  if (j.contains("prune"))
+    for (auto it = j.at("prune").begin(); it != j.at("prune").end(); ++it) {
+      r.prune_counts[it.key()] = it.value().get<int64_t>();
+      ISPLAT_CHECK(r.prune_counts[it.key()] >= 0, "'prune.", it.key(), "' = ", r.prune_counts[it.key()],
+                   " is negative");
     }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key().rfind("lpips_", 0) == 0) {

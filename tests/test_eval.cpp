@@ -533,6 +533,18 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   CHECK(pruned.decoded == 900);
   CHECK(pruned.gaussians < 900);  // an untrained model leaves faint and hidden base Gaussians
   CHECK(pruned.stage_ms.count("prune") == 1);
+  {  // each pair's log line says what pruning removed, and nothing else went
+    std::ifstream log(c.scoring.out + "/courtyard/results_tiny_prune_n900.jsonl");
+    std::string line;
+    REQUIRE(std::getline(log, line));
+    const PairResult r = result_from_json(nlohmann::json::parse(line));
+    REQUIRE(r.prune_counts.size() == 8);
+    CHECK(r.prune_counts.at("low_opacity") + r.prune_counts.at("low_contribution") == r.decoded - r.gaussians);
+    CHECK(r.prune_counts.at("merged_members") == 0);
+    nlohmann::json bad = result_json(r);
+    bad["prune"]["alone"] = -1;
+    CHECK_THROWS_WITH(result_from_json(bad), Catch::Contains("prune.alone"));
+  }
   CHECK(px.decoded > 0);
   CHECK(all.at("tiny@detail1").decoded > 0);
   for (const char* stage : {"prior", "sampler", "encoder", "decoder", "composer"}) CHECK(n.stage_ms.count(stage) == 1);

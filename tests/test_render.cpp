@@ -731,6 +731,16 @@ TEST_CASE("merge: other colours, a depth edge and Gaussians behind the camera st
   const Gaussians behind = head_on({{0.2, 0.1, -2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5},
                                     {0.2, 0.1, -2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}});
   CHECK(merge_gaussians(behind, cam, o).merged.count() == 2);
+  CHECK(merge_gaussians(behind, cam, o).alone == 2);  // behind the camera: no cell, nothing to merge with
+  CHECK(merge_gaussians(pair(2.0, 0.58), cam, o).alone == 0);
+  // Two members in 4-px cells of their own (u 26.5 and 30.5 px: cells 6 and 7) are alone, though they share an 8-px
+  // cell and merge at the second level: only the first level counts.
+  const Gaussians apart = head_on(
+      {{0.2, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}, {0.6, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}});
+  o.cell_px = 4, o.levels = 2;
+  const MergeResult two = merge_gaussians(apart, cam, o);
+  CHECK(two.alone == 2);
+  CHECK(two.groups == 1);  // merged at the second level (8-px cells)
 }
 
 TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd member", "[render]") {

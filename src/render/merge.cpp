@@ -64,8 +64,8 @@ Eigen::Matrix3d rotation_of(const double* q) {
 
 enum class Outcome { merged, invalid, color, shape, normal };
 
-// One pass over cells of `o.cell_px` source pixels; adds its counts to `r`.
-Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, MergeCounts& r) {
+// One pass over cells of `o.cell_px` source pixels; adds its counts to `r` (`alone` on the first pass only).
+Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, bool first, MergeCounts& r) {
   const double cell_px = o.cell_px;
   const int64_t n = g.count();
   const auto dtype = g.means.scalar_type();
@@ -238,6 +238,7 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       while (end < n && keyed[end].first == keyed[begin].first) ++end;
     cell.clear();
     for (int64_t j = begin; j < end; ++j) cell.push_back(keyed[j].second);
+    if (first && cell.size() == 1) r.alone += 1;
     const Outcome outcome = cell.size() > 1 ? merge(cell) : Outcome::invalid;
     if (outcome != Outcome::merged) {
       count_refusal(outcome);
@@ -274,7 +275,7 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
   if (o.cell_px <= 0) return r;
   MergeOptions level = o;
   for (int64_t l = 0; l < o.levels && r.merged.count() >= 2; ++l) {
-    r.merged = merge_pass(r.merged, source, level, r);
+    r.merged = merge_pass(r.merged, source, level, l == 0, r);
     level.cell_px *= 2;
     level.max_color *= o.level_color;
   }

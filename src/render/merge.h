@@ -31,6 +31,7 @@ struct MergeCounts {
   int64_t members = 0;  // Gaussians those groups held (at later levels, the previous level's Gaussians)
   // Groups refused, by the first test they failed (diagnostics; a split cell can count more than once).
   int64_t refused_color = 0, refused_shape = 0, refused_normal = 0;
+  int64_t alone = 0;  // Gaussians with no other in their first-level cell (or behind the camera): nothing to merge with
   int64_t removed() const { return members - groups; }
 };
 

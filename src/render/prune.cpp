@@ -77,6 +77,17 @@ static torch::Tensor visible_in_views(const Gaussians& g, const Camera& source, 
   return best >= o.min_contribution;
 }
 
+std::map<std::string, int64_t> prune_counts(const PruneResult& r) {
+  return {{"low_opacity", r.low_opacity},
+          {"low_contribution", r.low_contribution},
+          {"merged_groups", r.merge.groups},
+          {"merged_members", r.merge.members},
+          {"refused_color", r.merge.refused_color},
+          {"refused_shape", r.merge.refused_shape},
+          {"refused_normal", r.merge.refused_normal},
+          {"alone", r.merge.alone}};
+}
+
 PruneResult prune_gaussians(const Gaussians& g, const Camera& source, const PruneOptions& o,
                             const RenderOptions& render_options) {
   torch::NoGradGuard no_grad;

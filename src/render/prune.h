@@ -3,6 +3,8 @@
 // neighbours, so a scene keeps only the Gaussians it needs.
 #pragma once
 #include <cstdint>
+#include <map>
+#include <string>
 #include <vector>
 
 #include <torch/types.h>
@@ -40,6 +42,10 @@ struct PruneResult {
   MergeCounts merge;  // merge.removed(): Gaussians removed by merging
   int64_t after() const { return before - low_opacity - low_contribution - merge.removed(); }
 };
+
+// The counts by name, for logs: low_opacity, low_contribution, merged_groups, merged_members, refused_color,
+// refused_shape, refused_normal, alone.
+std::map<std::string, int64_t> prune_counts(const PruneResult& result);
 
 // Applies the options (when disabled, keeps everything): the drops, then merging. `source` is the camera the set was
 // predicted in.
