@@ -33,8 +33,7 @@ ROWS = {
     'confirm2': [("pruning hypothesis, second fresh sets", 'full_merge2s', '0.85', '0.85', 'prune'),
                  ("second 2x hypothesis", 'full_merge2s-px053', '0.53', 'best', '2x')],
 }
-if __name__ == '__main__':
-    rows = ROWS[sys.argv[2] if len(sys.argv) > 2 else 'selection']
+def report(rows):
     for s in sorted(d for d in os.listdir(root) if os.path.isdir(f"{root}/{d}")):
         fixed = {b: method(s, 'full', b) for b in budgets}
         mean = lambda M: sum(v['psnr'] for v in M.values()) / len(M)
@@ -56,3 +55,6 @@ if __name__ == '__main__':
             for bn in bins:
                 m, lo, hi, _, _, lp = compare(M, fixed[ref], bn)
                 print(f"    bin {bn}: {m:+.3f} [{lo:+.3f}, {hi:+.3f}] dB, LPIPS {lp:+.4f}")
+
+if __name__ == '__main__':
+    report(ROWS[sys.argv[2] if len(sys.argv) > 2 else 'selection'])
