@@ -1,6 +1,6 @@
 # The decision rules of 2026-11-27-merge-srgb.md on the selection folder (both seeds of full averaged per pair,
 # paired bootstrap 95% intervals), plus, for the sRGB round, the hypothesis check against the linear test.
-# Usage: python3 choose.py <eval out folder> [srgb|flatness|flatness2]   (the folder holding the three selection sets)
+# Usage: python3 choose.py <eval out folder> [srgb|flatness|flatness2|flatness3]   (the folder holding the three selection sets)
 import os, sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '2026-11-27-merge-split'))
 from targets import method, compare, budgets  # the split report's loader: reads sys.argv[1] as the folder
@@ -10,7 +10,8 @@ sets = sorted(d for d in os.listdir(root) if os.path.isdir(f"{root}/{d}"))
 # Each round: method name -> the value the pruning rule takes the largest of, and the candidates' budgets.
 ROUNDS = {'srgb': ({f"merge2sr{t}": float('0.' + t) for t in ('03', '045', '06', '08')}, ['0.53', '0.64', '0.85']),
           'flatness': ({'merge2sf04': 0.4, 'merge2sf06': 0.6}, ['0.64', '0.85']),
-          'flatness2': ({'merge2sf03': 0.3}, ['0.85'])}
+          'flatness2': ({'merge2sf03': 0.3}, ['0.85']),
+          'flatness3': ({'merge2sf03-px064': 0.3}, ['0.64'])}
 round_name = sys.argv[2] if len(sys.argv) > 2 else 'srgb'
 candidates, candidate_budgets = ROUNDS[round_name]
 mean = lambda M: sum(v['psnr'] for v in M.values()) / len(M)
