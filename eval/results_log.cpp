@@ -90,9 +90,9 @@ PairResult result_from_json(const nlohmann::json& j) {
     }
   if (j.contains("prune"))
     for (auto it = j.at("prune").begin(); it != j.at("prune").end(); ++it) {
-      r.prune_counts[it.key()] = it.value().get<int64_t>();
-      ISPLAT_CHECK(r.prune_counts[it.key()] >= 0, "'prune.", it.key(), "' = ", r.prune_counts[it.key()],
-                   " is negative");
+      const int64_t count = it.value().get<int64_t>();
+      ISPLAT_CHECK(count >= 0, "'prune.", it.key(), "' = ", count, " is negative");
+      r.prune_counts[it.key()] = count;
     }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key().rfind("lpips_", 0) == 0) {

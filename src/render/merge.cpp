@@ -80,8 +80,6 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
                *quats = quats_t.data_ptr<double>(), *colors = colors_t.data_ptr<double>(),
                *opac = opac_t.data_ptr<double>();
   // The colours the max_color test compares (the merged colour itself is always the weighted mean of the stored ones).
-  ISPLAT_CHECK(o.color_space == "linear" || o.color_space == "srgb",
-               "merge_gaussians: color_space must be linear or srgb, got ", o.color_space);
   const torch::Tensor tested_t = o.color_space == "srgb" ? linear_to_srgb(colors_t).contiguous() : colors_t;
   const double* tested = tested_t.data_ptr<double>();
   const torch::Tensor K = source.K.to(torch::kFloat64).contiguous(), T = source.T_cw.to(torch::kFloat64).contiguous();
@@ -273,6 +271,8 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
   r.before = g.count();
   r.merged = g;
   if (o.cell_px <= 0) return r;
+  ISPLAT_CHECK(o.color_space == "linear" || o.color_space == "srgb",
+               "merge_gaussians: color_space must be linear or srgb, got ", o.color_space);
   MergeOptions level = o;
   for (int64_t l = 0; l < o.levels && r.merged.count() >= 2; ++l) {
     r.merged = merge_pass(r.merged, source, level, l == 0, r);
