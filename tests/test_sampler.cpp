@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "sampler/base_gaussians.h"
+#include "sampler/depth_fill.h"
 #include "sampler/sampler.h"
 
 using namespace isplat;
@@ -272,6 +273,56 @@ TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a h
   CHECK(torch::isfinite(s.depth).all().item<bool>());
   // Depth never mixes across the step.
   CHECK(((s.depth > 1.01) & (s.depth < 2.99)).sum().item<int64_t>() == 0);
+}
+
+TEST_CASE("sampler: fill_px fills holes near valid depth from around them and leaves far pixels empty", "[sampler]") {
+  // A smooth surface, a 12x12 hole in it and an invalid strip 15 pixels wide along the right border.
+  const auto u = pixel_centers(H, W).select(-1, 0), v = pixel_centers(H, W).select(-1, 1);
+  const auto truth = 1.0 / (0.5 + 0.003 * u + 0.002 * v);
+  auto depth = truth.clone(), valid = ones();
+  depth.narrow(0, 10, 12).narrow(1, 20, 12).fill_(std::numeric_limits<float>::quiet_NaN());
+  valid.narrow(1, 50, 15).zero_();
+  const auto usable = valid * torch::isfinite(depth);
+
+  const FilledDepth f = fill_depth_holes(depth, valid, 8);
+  // Valid depth stays bit for bit; the hole (at most 6 px from valid depth) is filled near the surface.
+  CHECK(torch::equal(f.depth.masked_select(usable > 0), depth.masked_select(usable > 0)));
+  const auto hole = f.depth.narrow(0, 10, 12).narrow(1, 20, 12), hole_truth = truth.narrow(0, 10, 12).narrow(1, 20, 12);
+  CHECK(f.valid.narrow(0, 10, 12).narrow(1, 20, 12).min().item<float>() == 1.0f);
+  CHECK(((hole - hole_truth).abs() / hole_truth).max().item<double>() < 0.03);
+  // The strip: columns 50-57 lie within 8 px of valid depth and are filled, 58-64 stay invalid.
+  CHECK(f.valid.narrow(1, 50, 8).min().item<float>() == 1.0f);
+  CHECK(f.valid.narrow(1, 58, 7).max().item<float>() == 0.0f);
+  CHECK(f.depth.narrow(1, 58, 7).abs().max().item<float>() == 0.0f);
+  CHECK(f.filled == 144 + 8 * H);
+  CHECK(torch::isfinite(f.depth).all().item<bool>());
+
+  // Off, or nothing to fill from: unchanged; a negative distance is refused.
+  const FilledDepth off = fill_depth_holes(depth, valid, 0);
+  CHECK(off.filled == 0);
+  CHECK(torch::equal(off.valid, usable));
+  const FilledDepth none = fill_depth_holes(depth, torch::zeros({H, W}), 8);
+  CHECK(none.filled == 0);
+  CHECK(none.valid.max().item<float>() == 0.0f);
+  CHECK_THROWS_WITH(fill_depth_holes(depth, valid, -1), Catch::Contains("max_px"));
+
+  // The sampler: without filling no support lands in the hole; with fill_px = 8 supports cover it at the
+  // surface's depth, and none reach the strip's far part.
+  auto in_hole = [](const Supports& s) {
+    const auto su = s.uv.select(1, 0), sv = s.uv.select(1, 1);
+    return (su > 20.5) & (su < 31.5) & (sv > 10.5) & (sv < 21.5);
+  };
+  const Supports plain = sample_supports(depth, valid, K(), image(), fixed(8000), 3);
+  CHECK(in_hole(plain).sum().item<int64_t>() == 0);
+  SamplerOptions filled = fixed(8000);
+  filled.fill_px = 8;
+  const Supports s = sample_supports(depth, valid, K(), image(), filled, 3);
+  CHECK(s.count() == 8000);
+  CHECK(in_hole(s).sum().item<int64_t>() > 50);
+  // Inside the hole the fill interpolates; beyond the strip's edge it only continues the border's depth.
+  const auto expected = 1.0 / (0.5 + 0.003 * s.uv.select(1, 0) + 0.002 * s.uv.select(1, 1));
+  CHECK(((s.depth - expected).abs() / expected).masked_select(in_hole(s)).max().item<double>() < 0.03);
+  CHECK((s.uv.select(1, 0) > 57.5).sum().item<int64_t>() == 0);
 }
 
 TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {

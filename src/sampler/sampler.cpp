@@ -14,6 +14,7 @@
 #include "geometry/bilinear.h"
 #include "geometry/camera_torch.h"
 #include "geometry/pixel_mask.h"
+#include "sampler/depth_fill.h"
 
 namespace isplat {
 
@@ -70,6 +71,11 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area sampling elsewhere); 0 = the edge pixels only",
           Range::between(0, 16));
   v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
+  v.field("fill_px", fill_px,
+          "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
+          "small holes (sensor drop-outs, invalid prior pixels) get supports; farther pixels (sky) stay empty; "
+          "0 = off",
+          Range::between(0, 256));
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -78,6 +84,11 @@ double discontinuity_threshold(double z_mean) {
 }
 
 namespace {
+
+SamplerOptions without_fill(SamplerOptions o) {  // the options once fill_px has been applied
+  o.fill_px = 0;
+  return o;
+}
 
 struct Grid {
   const float* depth;
@@ -624,6 +635,10 @@ torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& va
 int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, const torch::Tensor& valid,
                        const torch::Tensor& K, const torch::Tensor& image) {
   if (o.budget_mode == "fixed") return o.budget;
+  if (o.fill_px > 0) {
+    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px);
+    return resolve_budget(without_fill(o), f.depth, f.valid, K, image);
+  }
   if (o.budget_mode == "detail") {
     ISPLAT_CHECK(image.defined(), "sampler: budget_mode = detail needs the image");
     torch::Tensor dk, vk, ik;
@@ -652,6 +667,10 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
 Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
                          const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
   torch::NoGradGuard no_grad;
+  if (options.fill_px > 0) {
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
+    return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed);
+  }
   torch::Tensor dk, vk, ik;
   Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
   g.nearest_color = options.color == "nearest";

@@ -39,6 +39,10 @@ struct SamplerOptions {
   // support too, and triangles wholly inside that band get none, so silhouettes sit on pixel rays as in pixel
   // mode while surfaces keep area sampling. 0 = only the edge pixels themselves.
   int64_t edge_band = 0;
+  // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
+  // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
+  // depth is).
+  int64_t fill_px = 0;
   // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
   // reads them; they are nearly free at 2 supports per pixel but add about a third at the paper's 1.5M.
   bool normals = false;
