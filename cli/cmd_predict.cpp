@@ -55,7 +55,7 @@ int run_predict(int argc, char** argv) {
   std::string checkpoint, image_path, depth_model, depth_path, prompts_path, out;
   double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
   MergeOptions merge;  // off unless --merge-cell
-  int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4;
+  int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
   bool keep_outside = false;
   std::vector<std::string> sets;
   ArgParser args("infinisplat predict",
@@ -73,6 +73,10 @@ int run_predict(int argc, char** argv) {
   args.option("--cx", cx, "principal point x in photo pixels (default: centre)");
   args.option("--cy", cy, "principal point y in photo pixels (default: centre)");
   args.option("--hfov", hfov, "horizontal field of view in degrees when neither --fx nor EXIF is available");
+  args.option("--fill-holes", fill_px,
+              "fill invalid depth within this many pixels of valid depth before sampling, so small holes in --depth "
+              "get Gaussians (0 = off; default: the checkpoint's sampler.fill_px)",
+              "N");
   args.option("--width", width, "working width (default: the training resolution's area at the photo's aspect)");
   args.option("--height", height, "working height");
   args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)");
@@ -108,6 +112,7 @@ int run_predict(int argc, char** argv) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
 
+  if (fill_px != -1) sets.push_back(cat("sampler.fill_px=", fill_px));  // the schema refuses other negatives
   if (!depth_model.empty()) sets.insert(sets.end(), {"prior.type=torchscript", "prior.torchscript=" + depth_model});
   if (!depth_path.empty()) sets.push_back("prior.type=dataset");
   if (!prompts_path.empty()) sets.push_back("prior.type=sparse");

@@ -143,6 +143,15 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK(std::system(bad_merge.c_str()) != 0);
   CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("level_color"));
   CHECK_FALSE(fs::exists(out + "/bad_merge.ply"));
+  // --fill-holes gives the photo's invalid depth (its sky, near the skyline) supports, so the scene changes; a
+  // negative distance fails, naming the key.
+  const std::string fill = predict_photo + "--fill-holes 8 --out " + out + "/filled.ply > " + out + "/filled.txt 2>&1";
+  REQUIRE(std::system(fill.c_str()) == 0);
+  CHECK_FALSE(torch::equal(read_ply(out + "/filled.ply").means, g.means));
+  const std::string bad_fill =
+      predict_photo + "--fill-holes -3 --out " + out + "/bad_fill.ply > " + out + "/bad_fill.txt 2>&1";
+  CHECK(std::system(bad_fill.c_str()) != 0);
+  CHECK_THAT(test::read_bytes(out + "/bad_fill.txt"), Catch::Contains("fill_px"));
   const std::string render = tool + " render --ply " + out +
                              "/scene.ply --trajectory orbit --frames 5 --depth --normal --out " + out + "/orbit > " +
                              out + "/render.txt 2>&1";

@@ -8,9 +8,9 @@
 namespace isplat {
 
 struct FilledDepth {
-  torch::Tensor depth;   // [H,W] float metres, 0 where still invalid
-  torch::Tensor valid;   // [H,W] float 0/1
-  int64_t filled = 0;    // pixels that became valid
+  torch::Tensor depth;  // [H,W] float metres, 0 where still invalid
+  torch::Tensor valid;  // [H,W] float 0/1
+  int64_t filled = 0;   // pixels that became valid
 };
 
 // Every unusable pixel (mask off, or depth NaN/inf/<= 0) within max_px pixels (Chebyshev) of a usable one gets
