@@ -1,5 +1,4 @@
-// Filling small holes in a depth map before sampling, so missing depth (sensor drop-outs, invalid prior pixels)
-// still gets supports with the photo's colours instead of leaving empty regions in every rendered view.
+// Filling small holes in a depth map before sampling, so missing depth still gets supports with the photo's colours.
 #pragma once
 #include <cstdint>
 
@@ -14,9 +13,10 @@ struct FilledDepth {
 };
 
 // Every unusable pixel (mask off, or depth NaN/inf/<= 0) within max_px pixels (Chebyshev) of a usable one gets
-// depth from a push-pull pyramid in log depth: holes take a smooth blend of the depth around them, coarse where
-// the hole is wide. Usable pixels keep their depth bit for bit; pixels farther than max_px (sky, large missing
-// regions) stay invalid. depth, valid [H,W]; max_px >= 0 (0 = unchanged). Deterministic, no gradient.
+// depth from a push-pull pyramid in log depth: holes take a smooth blend of the depth around them (always between
+// its smallest and largest value), coarse where the hole is wide. Usable pixels keep their depth (as float32);
+// pixels farther than max_px (the inside of large missing regions) stay invalid. depth, valid [H,W] on the CPU;
+// max_px >= 0 (0 = no filling: unusable depth only becomes 0 and invalid). Deterministic, no gradient.
 FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px);
 
 }  // namespace isplat

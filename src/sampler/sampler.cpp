@@ -626,6 +626,10 @@ int64_t detail_budget(const SamplerOptions& o, const std::vector<float>& weight)
 
 torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
                              const SamplerOptions& options) {
+  if (options.fill_px > 0) {
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
+    return detail_weights(f.depth, f.valid, image, without_fill(options));
+  }
   torch::Tensor dk, vk, ik;
   const Grid g = make_grid(depth, valid, torch::eye(3), image, dk, vk, ik);
   std::vector<float> w = detail_weights(g, options);
