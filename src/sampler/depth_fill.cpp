@@ -5,31 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include "core/error.h"
 #include "geometry/camera_torch.h"
+#include "geometry/pixel_mask.h"
 
 namespace isplat {
 namespace {
-
-// Chebyshev distance of every pixel to the nearest usable one (two raster passes; exact for this metric).
-std::vector<int64_t> chebyshev_distance(const float* usable, int64_t H, int64_t W) {
-  const int64_t far = std::numeric_limits<int64_t>::max() / 2;
-  std::vector<int64_t> d(static_cast<size_t>(H * W));
-  for (int64_t p = 0; p < H * W; ++p) d[p] = usable[p] != 0.0f ? 0 : far;
-  auto relax = [&](int64_t i, int64_t j, int64_t di, int64_t dj) {
-    const int64_t a = i + di, b = j + dj;
-    if (a < 0 || a >= H || b < 0 || b >= W) return;
-    d[i * W + j] = std::min(d[i * W + j], d[a * W + b] + 1);
-  };
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 0; j < W; ++j) relax(i, j, -1, -1), relax(i, j, -1, 0), relax(i, j, -1, 1), relax(i, j, 0, -1);
-  for (int64_t i = H - 1; i >= 0; --i)
-    for (int64_t j = W - 1; j >= 0; --j) relax(i, j, 1, 1), relax(i, j, 1, 0), relax(i, j, 1, -1), relax(i, j, 0, 1);
-  return d;
-}
 
 struct Level {
   int64_t H, W;
@@ -101,9 +84,11 @@ FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& va
       for (int64_t j = 0; j < fine.W; ++j)
         if (!fine.covered[i * fine.W + j]) fine.log_depth[i * fine.W + j] = upsample(levels[l + 1], i, j);
   }
-  const std::vector<int64_t> distance = chebyshev_distance(usable, H, W);
+  std::vector<uint8_t> reachable(static_cast<size_t>(H * W));  // within max_px (Chebyshev) of usable depth
+  for (int64_t p = 0; p < H * W; ++p) reachable[p] = usable[p] != 0.0f;
+  reachable = dilate_square(reachable, H, W, max_px);
   for (int64_t p = 0; p < H * W; ++p)
-    if (usable[p] == 0.0f && distance[p] <= max_px) {
+    if (usable[p] == 0.0f && reachable[p]) {
       out_depth[p] = static_cast<float>(std::exp(levels[0].log_depth[p]));
       out_valid[p] = 1.0f;
       ++out.filled;

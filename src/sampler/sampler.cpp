@@ -73,8 +73,8 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
-          "small holes (sensor drop-outs, invalid prior pixels) get supports; farther pixels (sky) stay empty; "
-          "0 = off",
+          "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
+          "(most of a sky) stays empty; 0 = off",
           Range::between(0, 256));
 }
 
