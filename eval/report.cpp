@@ -137,6 +137,14 @@ static std::vector<std::string> sweep_families(const std::vector<ReportRow>& row
   return families;
 }
 
+// Each perturbation's value that changes nothing (scale and exposure 1, the others 0).
+static const std::map<std::string, double>& neutral_values() {
+  static const std::map<std::string, double> neutral = {
+      {"depth_scale", 1}, {"exposure", 1},         {"depth_noise", 0},     {"depth_blur_px", 0},
+      {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}, {"depth_edge_holes", 0}};
+  return neutral;
+}
+
 // "full depth_noise" -> "depth_noise".
 static std::string family_key(const std::string& family) {
   return family.substr(family.rfind(' ') + 1);
@@ -148,9 +156,7 @@ static std::string family_key(const std::string& family) {
 static std::vector<std::pair<double, double>> sweep_points(const std::vector<ReportRow>& rows, const std::string& d,
                                                            const std::string& family, double ReportRow::*field,
                                                            double scale = 1) {
-  static const std::map<std::string, double> neutral = {
-      {"depth_scale", 1}, {"exposure", 1},         {"depth_noise", 0},    {"depth_blur_px", 0},
-      {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}};
+  const std::map<std::string, double>& neutral = neutral_values();
   std::vector<std::pair<double, double>> pts;
   for (const auto& r : rows)
     if (is_sweep_point(r, d) && method_family(r.method) == family)
@@ -344,14 +350,12 @@ static std::pair<std::function<double(double)>, std::string> perturbation_streng
     return {[](double v) { return std::abs(std::log(v)); }, "unit of abs(ln value)"};
   if (key == "jpeg_quality") return {[](double v) { return 100 - v; }, "quality point lost"};
   if (key == "prompts") return {[](double v) { return -std::log(v); }, "e-fold fewer"};
-  return {[](double v) { return v; }, key == "depth_blur_px" ? "pixel" : "unit"};
+  return {[](double v) { return v; }, key == "depth_blur_px" || key == "depth_edge_holes" ? "pixel" : "unit"};
 }
 
 std::vector<SweepSlope> sweep_slopes(const std::string& dataset,
                                      const std::map<std::string, std::vector<PairResult>>& results, int64_t resamples) {
-  static const std::map<std::string, double> neutral = {
-      {"depth_scale", 1}, {"exposure", 1},         {"depth_noise", 0},    {"depth_blur_px", 0},
-      {"depth_holes", 0}, {"depth_edge_noise", 0}, {"depth_hole_size", 0}};
+  const std::map<std::string, double>& neutral = neutral_values();
   std::map<std::string, std::vector<std::pair<double, const std::vector<PairResult>*>>> families;
   for (const auto& [method, res] : results)
     if (method.find('~') != std::string::npos && std::isfinite(sweep_value(method)))

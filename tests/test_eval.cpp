@@ -341,6 +341,19 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   const auto moved = (perturb_source(v, o, 2).depth != v.depth).to(torch::kFloat32);
   CHECK(moved.sum().item<int64_t>() == edge_pixels);  // only the edge pixels change
   o = PerturbOptions{};
+  o.depth_edge_holes = 2;
+  const ViewTensors dropped = perturb_source(v, o, 0);
+  CHECK(dropped.valid.sum().item<int64_t>() == H * W - 6 * H);  // columns 29..34: within 2 of columns 31, 32
+  CHECK(dropped.valid.narrow(1, 29, 6).max().item<float>() == 0.0f);
+  CHECK(dropped.valid.narrow(1, 0, 29).min().item<float>() == 1.0f);
+  CHECK(dropped.valid.narrow(1, 35, 29).min().item<float>() == 1.0f);
+  CHECK(torch::equal(dropped.depth, v.depth * dropped.valid));  // kept depth is untouched, dropped depth is 0
+  ViewTensors bump = v;  // one pixel nearer: its edge is a cross of 5 pixels, grown by 1 to 5x5 minus the corners
+  bump.depth = torch::full({H, W}, 4.0f);
+  bump.depth[20][10] = 3.0f;
+  o.depth_edge_holes = 1;
+  CHECK(perturb_source(bump, o, 0).valid.sum().item<int64_t>() == H * W - 21);  // a city-block band would drop 13
+  o = PerturbOptions{};
   o.depth_blur_px = 3;
   const auto blurred = perturb_source(v, o, 0).depth;
   CHECK(blurred[10][5].item<float>() == Approx(4.0f));  // flat regions keep their depth

@@ -14,13 +14,14 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/color.h"
+#include "geometry/pixel_mask.h"
 #include "io/tensor_image.h"
 
 namespace isplat {
 
 bool PerturbOptions::any_depth() const {
   return depth_scale != 1.0 || depth_noise > 0 || depth_warp > 0 || depth_blur_px > 0 || depth_holes > 0 ||
-         depth_edge_noise > 0 || depth_side != "all";
+         depth_edge_noise > 0 || depth_edge_holes > 0 || depth_side != "all";
 }
 
 bool PerturbOptions::any() const {
@@ -45,6 +46,10 @@ void PerturbOptions::visit(ConfigVisitor& v) {
           Range::between(0.0, 100.0));
   v.field("depth_edge_noise", depth_edge_noise, "multiplicative depth noise sigma at depth edges only",
           Range::between(0.0, 1.0));
+  v.field("depth_edge_holes", depth_edge_holes,
+          "drop-outs at occlusion edges: depth within this many pixels (Chebyshev) of a depth edge (a 5% jump "
+          "between neighbours, found before any other change) made invalid",
+          Range::between(0, 64));
   v.field("depth_side", depth_side, "keep depth (and the prompts drawn from it) only on this side of the image",
           {"all", "left", "right", "top", "bottom"});
   v.field("exposure", exposure, "source image multiplied by this in linear light", Range::above(0.0));
@@ -98,6 +103,14 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
   depth = torch::nan_to_num(depth, 0.0, 0.0, 0.0);
   const int64_t H = depth.size(0), W = depth.size(1);
   depth = depth * valid;
+  if (o.depth_edge_holes > 0) {  // before anything moves the edges: a band on both sides of every depth edge
+    const auto edges = depth_edges(depth, valid).to(torch::kUInt8).contiguous();
+    const std::vector<uint8_t> mask(edges.data_ptr<uint8_t>(), edges.data_ptr<uint8_t>() + H * W);
+    const std::vector<uint8_t> band = dilate_square(mask, H, W, o.depth_edge_holes);
+    const auto drop = torch::from_blob(const_cast<uint8_t*>(band.data()), {H, W}, torch::kUInt8);
+    valid = valid * (drop == 0).to(torch::kFloat32);
+    depth = depth * valid;
+  }
   if (o.depth_blur_px > 0) {  // normalized convolution: blur depth·valid and valid, then divide
     cv::Mat d(static_cast<int>(H), static_cast<int>(W), CV_32F, depth.data_ptr<float>());
     auto vc = valid.contiguous();

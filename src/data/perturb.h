@@ -1,6 +1,6 @@
 // Perturbations of a source view: depth errors (global scale, multiplicative noise, a smooth warp, blur, holes,
-// noise at depth edges, depth on one side only) and image changes (exposure, JPEG), for the stability suite; and
-// random depth errors drawn per tuple for training. Deterministic for a seed.
+// noise or drop-outs at depth edges, depth on one side only) and image changes (exposure, JPEG), for the stability
+// suite; and random depth errors drawn per tuple for training. Deterministic for a seed.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -20,6 +20,7 @@ struct PerturbOptions {
   double depth_holes = 0.0;        // share of valid depth pixels made invalid
   double depth_hole_size = 8.0;    // ... as blobs of about this radius (pixels); 0 = independent pixels
   double depth_edge_noise = 0.0;   // multiplicative noise sigma at depth edges only
+  int64_t depth_edge_holes = 0;    // depth within this many pixels (Chebyshev) of a depth edge made invalid
   std::string depth_side = "all";  // all | left | right | top | bottom: depth (and prompts) only there
   double exposure = 1.0;           // source image scaled by this in linear light
   int64_t jpeg_quality = 0;        // 0 = off; else the source image re-encoded as JPEG at this quality
