@@ -358,51 +358,6 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
   CHECK(resolve_budget(sa, depth, valid, K()) > plain_budget);
 }
 
-TEST_CASE("sampler: fill_snap splits a hole at a depth edge between the two surfaces and keeps smooth fills",
-          "[sampler]") {
-  // A step from 2 m (columns 0-31) to 4 m (32-64) with columns 20-43 invalid: 12 pixels on each side of the edge,
-  // wide enough that the blend's ramp is gentle enough for the sampler's triangles (about 3% per pixel).
-  auto step = torch::full({H, W}, 2.0f);
-  step.narrow(1, 32, W - 32).fill_(4.0f);
-  auto valid = ones();
-  valid.narrow(1, 20, 24).zero_();
-  const FilledDepth blend = fill_depth_holes(step, valid, 16);
-  const auto band = blend.depth.narrow(1, 20, 24);
-  CHECK(((band > 2.05f) & (band < 3.9f)).sum().item<int64_t>() > 0);  // the blend ramps across the edge
-  const FilledDepth snapped = fill_depth_holes(step, valid, 16, 0.05);
-  CHECK(snapped.filled == blend.filled);
-  CHECK(torch::equal(snapped.valid, blend.valid));
-  // Each side takes its own surface: the nearest depth, or the blend where that is within 5% of it (near the rims).
-  const auto left = snapped.depth.narrow(1, 20, 12), right = snapped.depth.narrow(1, 32, 12);
-  CHECK(left.min().item<float>() >= 2.0f);
-  CHECK(left.max().item<float>() <= 2.0f * 1.05f);
-  CHECK(right.min().item<float>() >= 4.0f / 1.05f);
-  CHECK(right.max().item<float>() <= 4.0f);
-  CHECK((left == 2.0f).sum().item<int64_t>() > 6 * H);  // most of the band snapped
-  CHECK((right == 4.0f).sum().item<int64_t>() > 6 * H);
-  CHECK(torch::equal(snapped.depth.narrow(1, 0, 20), step.narrow(1, 0, 20)));
-  // A hole in a smooth surface (depth changes up to 0.8% per pixel, the hole's centre lies 6 px from its rim): the
-  // blend stays within 10% of the nearest valid depth, so nothing snaps.
-  const auto u = pixel_centers(H, W).select(-1, 0), v = pixel_centers(H, W).select(-1, 1);
-  auto smooth = (1.0 / (0.5 + 0.003 * u + 0.002 * v)).to(torch::kFloat32);
-  smooth.narrow(0, 10, 12).narrow(1, 20, 12).fill_(std::numeric_limits<float>::quiet_NaN());
-  CHECK(torch::equal(fill_depth_holes(smooth, ones(), 8, 0.1).depth, fill_depth_holes(smooth, ones(), 8).depth));
-  // A tighter factor snaps part of that hole too: the option is a threshold, not a switch.
-  CHECK_FALSE(
-      torch::equal(fill_depth_holes(smooth, ones(), 8, 0.001).depth, fill_depth_holes(smooth, ones(), 8).depth));
-  CHECK_THROWS_WITH(fill_depth_holes(step, valid, 8, -0.1), Catch::Contains("snap"));
-  CHECK_THROWS_WITH(fill_depth_holes(step, valid, 8, 1.5), Catch::Contains("snap"));
-  // The sampler passes it through: with the snap no support lies between the two surfaces' 5% bands.
-  SamplerOptions o = fixed(6000);
-  o.fill_px = 16;
-  o.fill_snap = 0.05;
-  const Supports s = sample_supports(step, valid, K(), image(), o, 3);
-  CHECK(((s.depth > 2.1f) & (s.depth < 3.8f)).sum().item<int64_t>() == 0);
-  o.fill_snap = 0;
-  const Supports r = sample_supports(step, valid, K(), image(), o, 3);
-  CHECK(((r.depth > 2.1f) & (r.depth < 3.8f)).sum().item<int64_t>() > 0);
-}
-
 TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {
   auto depth = 1.0 + torch::rand({H, W});
   auto img = image();

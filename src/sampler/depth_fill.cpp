@@ -32,38 +32,13 @@ double upsample(const Level& coarse, int64_t i, int64_t j) {
   return (1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x1)) + fy * ((1 - fx) * at(y1, x0) + fx * at(y1, x1));
 }
 
-// For every pixel within max_px (Chebyshev) of a covered one: the index of a nearest covered pixel, by a
-// breadth-first wavefront over the 8 neighbours (its step count is the Chebyshev distance); -1 elsewhere. Sources
-// start in raster order and neighbours are visited in a fixed order, so ties always break the same way.
-std::vector<int64_t> nearest_usable(const std::vector<char>& covered, int64_t H, int64_t W, int64_t max_px) {
-  std::vector<int64_t> nearest(static_cast<size_t>(H * W), -1), front, next;
-  for (int64_t p = 0; p < H * W; ++p)
-    if (covered[p]) nearest[p] = p, front.push_back(p);
-  for (int64_t step = 0; step < max_px && !front.empty(); ++step) {
-    next.clear();
-    for (const int64_t p : front) {
-      const int64_t i = p / W, j = p % W;
-      for (int64_t di = -1; di <= 1; ++di)
-        for (int64_t dj = -1; dj <= 1; ++dj) {
-          const int64_t a = i + di, b = j + dj;
-          if (a < 0 || a >= H || b < 0 || b >= W || nearest[a * W + b] >= 0) continue;
-          nearest[a * W + b] = nearest[p];
-          next.push_back(a * W + b);
-        }
-    }
-    front.swap(next);
-  }
-  return nearest;
-}
-
 }  // namespace
 
-FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px, double snap) {
+FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px) {
   ISPLAT_CHECK(depth.dim() == 2, "depth fill: depth must be [H, W], got ", depth.sizes());
   ISPLAT_CHECK(valid.sizes() == depth.sizes(), "depth fill: valid ", valid.sizes(), " differs from depth ",
                depth.sizes());
   ISPLAT_CHECK(max_px >= 0, "depth fill: max_px must be >= 0, got ", max_px);
-  ISPLAT_CHECK(snap >= 0 && snap <= 1, "depth fill: snap must be in [0, 1], got ", snap);
   ISPLAT_CHECK(depth.device().is_cpu() && valid.device().is_cpu(), "depth fill: depth and valid must be on the CPU");
   torch::NoGradGuard no_grad;
   const torch::Tensor usable_t = usable_depth(depth.detach(), valid.detach()).to(torch::kFloat32).contiguous();
@@ -112,17 +87,9 @@ FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& va
   std::vector<uint8_t> reachable(static_cast<size_t>(H * W));  // within max_px (Chebyshev) of usable depth
   for (int64_t p = 0; p < H * W; ++p) reachable[p] = usable[p] != 0.0f;
   reachable = dilate_square(reachable, H, W, max_px);
-  const std::vector<int64_t> nearest =
-      snap > 0 ? nearest_usable(levels[0].covered, H, W, max_px) : std::vector<int64_t>{};
-  const double snap_log = std::log1p(snap);
   for (int64_t p = 0; p < H * W; ++p)
     if (usable[p] == 0.0f && reachable[p]) {
-      double log_z = levels[0].log_depth[p];
-      if (snap > 0 && nearest[p] >= 0) {
-        const double log_near = levels[0].log_depth[nearest[p]];
-        if (std::abs(log_z - log_near) > snap_log) log_z = log_near;
-      }
-      out_depth[p] = static_cast<float>(std::exp(log_z));
+      out_depth[p] = static_cast<float>(std::exp(levels[0].log_depth[p]));
       out_valid[p] = 1.0f;
       ++out.filled;
     }

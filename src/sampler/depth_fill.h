@@ -17,10 +17,6 @@ struct FilledDepth {
 // its smallest and largest value), coarse where the hole is wide. Usable pixels keep their depth (as float32);
 // pixels farther than max_px (the inside of large missing regions) stay invalid. depth, valid [H,W] on the CPU;
 // max_px >= 0 (0 = no filling: unusable depth only becomes 0 and invalid). Deterministic, no gradient.
-// snap > 0 keeps depth edges inside holes sharp: a filled pixel whose blend differs from the depth of its nearest
-// usable pixel (Chebyshev, found by an 8-connected wavefront) by more than that factor (|ln(blend / nearest)| >
-// ln(1 + snap)) takes the nearest depth instead, so a hole between a near and a far surface is split between
-// them rather than bridged. Smooth surfaces, where the two agree, keep the blend. snap in [0, 1]; 0 = off.
-FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px, double snap = 0.0);
+FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px);
 
 }  // namespace isplat

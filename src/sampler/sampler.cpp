@@ -76,11 +76,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
           "(most of a sky) stays empty; 0 = off",
           Range::between(0, 256));
-  v.field("fill_snap", fill_snap,
-          "with fill_px: a filled pixel whose blended depth differs from its nearest valid pixel's by more than "
-          "this factor (0.05 = 5%) takes the nearest depth instead, so a hole at a depth edge is split between the "
-          "near and the far surface rather than bridged by a ramp; smooth surfaces keep the blend; 0 = off",
-          Range::between(0.0, 1.0));
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -632,7 +627,7 @@ int64_t detail_budget(const SamplerOptions& o, const std::vector<float>& weight)
 torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
                              const SamplerOptions& options) {
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_snap);
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
     return detail_weights(f.depth, f.valid, image, without_fill(options));
   }
   torch::Tensor dk, vk, ik;
@@ -645,7 +640,7 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
                        const torch::Tensor& K, const torch::Tensor& image) {
   if (o.budget_mode == "fixed") return o.budget;
   if (o.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px, o.fill_snap);
+    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px);
     return resolve_budget(without_fill(o), f.depth, f.valid, K, image);
   }
   if (o.budget_mode == "detail") {
@@ -677,7 +672,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
                          const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
   torch::NoGradGuard no_grad;
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_snap);
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
     return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed);
   }
   torch::Tensor dk, vk, ik;

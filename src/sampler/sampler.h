@@ -43,9 +43,6 @@ struct SamplerOptions {
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).
   int64_t fill_px = 0;
-  // With fill_px: a filled pixel whose blend differs from its nearest valid pixel's depth by more than this
-  // factor takes that depth, so holes at depth edges are split between the two surfaces, not bridged. 0 = off.
-  double fill_snap = 0.0;
   // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
   // reads them; they are nearly free at 2 supports per pixel but add about a third at the paper's 1.5M.
   bool normals = false;
