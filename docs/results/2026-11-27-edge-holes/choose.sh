@@ -7,9 +7,9 @@ edge() { echo "$1_depth_edge_holes1+$1_depth_edge_holes2+$1_depth_edge_holes4+$1
 B=full_fill32
 for c in full_fill32_snap5 full_fill32_snap10 full_fill32_snap20; do
   echo "== $c against the blend"
-  echo -n "no holes:   "; python3 $P $root ${c}_depth_edge_holes0 ${B}_depth_edge_holes0 all
-  echo -n "holes 10%:  "; python3 $P $root ${c}_depth_holes0_1 ${B}_depth_holes0_1 all
-  echo -n "holes 30%:  "; python3 $P $root ${c}_depth_holes0_3 ${B}_depth_holes0_3 all
-  echo -n "edge mean:  "; python3 $P $root "$(edge $c)" "$(edge $B)" all
-  for e in 1 2 4 8; do echo -n "edge $e px:  "; python3 $P $root ${c}_depth_edge_holes$e ${B}_depth_edge_holes$e all; done
+  echo -n "no holes:   "; python3 $P "$root" ${c}_depth_edge_holes0 ${B}_depth_edge_holes0 all
+  echo -n "holes 10%:  "; python3 $P "$root" ${c}_depth_holes0_1 ${B}_depth_holes0_1 all
+  echo -n "holes 30%:  "; python3 $P "$root" ${c}_depth_holes0_3 ${B}_depth_holes0_3 all
+  echo -n "edge mean:  "; python3 $P "$root" "$(edge $c)" "$(edge $B)" all
+  for e in 1 2 4 8; do echo -n "edge $e px:  "; python3 $P "$root" ${c}_depth_edge_holes$e ${B}_depth_edge_holes$e all; done
 done

@@ -6,11 +6,11 @@ root=${1:-out/experiments/edge_holes}
 P=docs/results/2026-11-26-surface-frame/paired.py
 for e in 0 1 2 4 8; do
   echo "== fill against no fill, edge drop-outs $e px"
-  python3 $P $root "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
+  python3 $P "$root" "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
     "full_depth_edge_holes$e+full_s1_depth_edge_holes$e" all,3
 done
 for e in 1 2 4 8; do
   echo "== fill at $e px against the fill without drop-outs"
-  python3 $P $root "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
+  python3 $P "$root" "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
     "full_fill32_depth_edge_holes0+full_fill32_s1_depth_edge_holes0" all,3
 done

@@ -7,7 +7,7 @@ P=docs/results/2026-11-26-surface-frame/paired.py
 for row in pixel_supports dense_decoder; do
   for e in 0 2 8; do
     echo "== full against $row, both with the fill, edge drop-outs $e px"
-    python3 $P $root "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
+    python3 $P "$root" "full_fill32_depth_edge_holes$e+full_fill32_s1_depth_edge_holes$e" \
       "${row}_fill32_depth_edge_holes$e+${row}_fill32_s1_depth_edge_holes$e" all,3
   done
 done
