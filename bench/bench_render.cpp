@@ -214,7 +214,8 @@ int main(int argc, char** argv) {
     parser.flag("--quick", quick, "only the two smaller sizes");
     parser.flag("--large-1.5m", huge_large, "also run the large-splats variant at 1.5M");
     parser.option("--only", only, "run only the case with this name (e.g. 100k)", "NAME");
-    parser.option("--simd", simd, "pixel loops: best (what the CPU has), avx512, avx2 or portable", "LEVEL");
+    parser.option("--simd", simd, "pixel loops and projection: best (what the CPU has), avx512, avx2 or portable",
+                  "LEVEL");
     if (!parser.parse(argc, argv)) return 0;
     const std::vector<std::string> levels = {"portable", "avx2", "avx512"};
     if (simd != "best") {
@@ -229,7 +230,7 @@ int main(int argc, char** argv) {
     const int used = configure_threads(threads);
     std::cout
         << "bench_render: " << used << " threads, " << splat::simd_name(splat::simd_level())
-        << " pixel loops, median of timed runs (ms); float32; times exclude scene building\n"
+        << " kernels, median of timed runs (ms); float32; times exclude scene building\n"
         << "freed memory is kept for reuse (as in every executable); MALLOC_MMAP_MAX_=65536 in the environment "
            "gives glibc's default instead\n"
         << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "

@@ -122,9 +122,9 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_alpha,   // [1, H, W]
                             const torch::Tensor& grad_depth);  // [1, H, W]
 
-// Instruction sets of the pixel loops (float only; double always runs portable). The rasterizers use the best
-// the CPU has. All do the same IEEE operations in the same order, fusing the same multiply-adds (std::fma in
-// the portable loops), so all give bit-identical images and gradients. avx512 runs two 8-pixel groups per
+// Instruction sets of the pixel loops and the projection (float only; double always runs portable). The
+// kernels use the best the CPU has. All do the same IEEE operations in the same order, fusing the same multiply-adds
+// (std::fma in the portable loops), so all give bit-identical images and gradients. avx512 runs two 8-pixel groups per
 // register.
 enum class Simd { portable = 0, avx2 = 1, avx512 = 2 };
 const char* simd_name(Simd level);

@@ -1,61 +1,120 @@
 // EWA projection of 3D Gaussians to screen-space records, and its backward to means, scales, quats, opacities.
+// Both run on blocks of 16 Gaussians, one per vector lane (GCC vector extensions), compiled once per SIMD level.
+// Every lane does the one-Gaussian formulas' IEEE operations in the same order (the file builds with
+// -ffp-contract=off), so all levels give bit-identical records and gradients.
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
 
 #include <atomic>
 
 #include "render/kernels.h"
+#include "render/lanes_avx512.h"
 
 namespace isplat::splat {
 namespace {
 
-// Everything the forward computes for one Gaussian that the backward needs again.
+constexpr int kBlock = 16;  // Gaussians per block, one per lane
 template <class T>
-struct Geometry {
-  T t[3];    // camera-space mean
-  T a, b;    // t.x/t.z, t.y/t.z (unclamped)
-  T ac, bc;  // clamped into 1.3× the frustum, for the Jacobian
-  bool u_clamped, v_clamped;
-  T q[4], qnorm;  // normalized quaternion, norm of the input
-  T Rq[9];        // rotation of the normalized quaternion, row-major
-  T Tm[6];        // J·W, 2×3
-  T M[9];         // Rq·diag(s)
-  T A2[6];        // Tm·M, 2×3: Σ_raw = A2·A2ᵀ
-  T sa, sb, sc;   // Σ_raw = [[sa, sb], [sb, sc]]
-  T det;          // det(Σ_raw + dilation·I)
-  T rho;          // det Σ_raw / det (antialiased mode)
-  T opac;         // effective opacity o'
+struct VecOf {
+  typedef T type __attribute__((vector_size(kBlock * sizeof(T))));
+};
+template <class T>
+using Vec = typename VecOf<T>::type;  // 16 lanes of T
+template <class T>
+using Mask = decltype(Vec<T>{} < Vec<T>{});  // lane-wise comparison result: −1 (true) or 0
+
+template <class T>
+ISPLAT_INLINE Vec<T> bcast(T x) {  // exact, −0 included
+  Vec<T> v;
+  for (int j = 0; j < kBlock; ++j) v[j] = x;
+  return v;
+}
+// std::min(a, b) and std::max(a, b) lane by lane, NaN handling included.
+template <class V>
+ISPLAT_INLINE V vmin(V a, V b) {
+  return b < a ? b : a;
+}
+template <class V>
+ISPLAT_INLINE V vmax(V a, V b) {
+  return a < b ? b : a;
+}
+template <class V>
+ISPLAT_INLINE auto finite(V x) {
+  return x - x == 0;  // NaN and ±inf give NaN
+}
+template <class V>
+ISPLAT_INLINE V vsqrt(V x) {
+  for (int j = 0; j < kBlock; ++j) x[j] = std::sqrt(x[j]);
+  return x;
+}
+
+// One block's inputs, transposed to one vector per component. Lanes past the end hold zero scales (culled).
+template <class T>
+struct InputBlock {
+  Vec<T> m[3], s[3], q[4], o;
+  int count = 0;
+};
+template <class T>
+ISPLAT_INLINE void load_block(const T* means, const T* scales, const T* quats, const T* opac, int64_t first, int count,
+                              InputBlock<T>& in) {
+  in.count = count;
+  for (int j = 0; j < kBlock; ++j) {
+    const bool real = j < count;
+    const int64_t i = first + (real ? j : 0);
+    for (int c = 0; c < 3; ++c)
+      in.m[c][j] = real ? means[3 * i + c] : T(0), in.s[c][j] = real ? scales[3 * i + c] : T(0);
+    for (int c = 0; c < 4; ++c) in.q[c][j] = real ? quats[4 * i + c] : T(0);
+    in.o[j] = real ? opac[i] : T(0);
+  }
+}
+
+// Everything the forward computes for a block that the backward needs again.
+template <class T>
+struct GeometryBlock {
+  Vec<T> t[3];    // camera-space mean
+  Vec<T> a, b;    // t.x/t.z, t.y/t.z (unclamped)
+  Vec<T> ac, bc;  // clamped into 1.3× the frustum, for the Jacobian
+  Mask<T> u_clamped, v_clamped;
+  Vec<T> q[4], qnorm;  // normalized quaternion, norm of the input
+  Vec<T> Rq[9];        // rotation of the normalized quaternion, row-major
+  Vec<T> Tm[6];        // J·W, 2×3
+  Vec<T> M[9];         // Rq·diag(s)
+  Vec<T> A2[6];        // Tm·M, 2×3: Σ_raw = A2·A2ᵀ
+  Vec<T> sa, sb, sc;   // Σ_raw = [[sa, sb], [sb, sc]]
+  Vec<T> det;          // det(Σ_raw + dilation·I)
+  Vec<T> rho;          // det Σ_raw / det (antialiased mode)
+  Vec<T> opac;         // effective opacity o'
+  Mask<T> live;        // false: culled (behind the near plane, degenerate, invisible or non-finite)
 };
 
 // J (2×3, row-major), the projection's Jacobian at depth tz and the clamped normalized point (ac, bc);
 // one definition for the forward and the backward pass.
 template <class T>
-inline void projection_jacobian(T fx, T fy, T sk, T tz, T ac, T bc, T (&J)[6]) {
+ISPLAT_INLINE void projection_jacobian(T fx, T fy, T sk, Vec<T> tz, Vec<T> ac, Vec<T> bc, Vec<T> (&J)[6]) {
   J[0] = fx / tz, J[1] = sk / tz, J[2] = -(fx * ac + sk * bc) / tz;
-  J[3] = 0, J[4] = fy / tz, J[5] = -fy * bc / tz;
+  J[3] = bcast(T(0)), J[4] = fy / tz, J[5] = -fy * bc / tz;
 }
 
-// Returns false when the Gaussian is culled (behind the near plane, degenerate, invisible or non-finite).
 template <class T>
-bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& cam, const ProjectSettings& st,
-                 Geometry<T>& g) {
+ISPLAT_INLINE void project_block(const InputBlock<T>& in, const CameraParams& cam, const ProjectSettings& st,
+                                 GeometryBlock<T>& g) {
+  using V = Vec<T>;
   const double* R = cam.R;
   for (int i = 0; i < 3; ++i)
-    g.t[i] = T(R[3 * i]) * m[0] + T(R[3 * i + 1]) * m[1] + T(R[3 * i + 2]) * m[2] + T(cam.t[i]);
-  if (!(g.t[2] >= T(st.near))) return false;
-  if (!(s[0] > 0 && s[1] > 0 && s[2] > 0) || !(o > 0)) return false;
-  const T qn2 = qin[0] * qin[0] + qin[1] * qin[1] + qin[2] * qin[2] + qin[3] * qin[3];
-  if (!(qn2 > T(1e-30)) || !std::isfinite(qn2)) return false;
-  g.qnorm = std::sqrt(qn2);
-  for (int i = 0; i < 4; ++i) g.q[i] = qin[i] / g.qnorm;
-  const T w = g.q[0], x = g.q[1], y = g.q[2], z = g.q[3];
-  T* Rq = g.Rq;
-  Rq[0] = 1 - 2 * (y * y + z * z), Rq[1] = 2 * (x * y - w * z), Rq[2] = 2 * (x * z + w * y);
-  Rq[3] = 2 * (x * y + w * z), Rq[4] = 1 - 2 * (x * x + z * z), Rq[5] = 2 * (y * z - w * x);
-  Rq[6] = 2 * (x * z - w * y), Rq[7] = 2 * (y * z + w * x), Rq[8] = 1 - 2 * (x * x + y * y);
+    g.t[i] = T(R[3 * i]) * in.m[0] + T(R[3 * i + 1]) * in.m[1] + T(R[3 * i + 2]) * in.m[2] + T(cam.t[i]);
+  Mask<T> live = (g.t[2] >= T(st.near)) & (in.s[0] > T(0)) & (in.s[1] > T(0)) & (in.s[2] > T(0)) & (in.o > T(0));
+  const V qn2 = in.q[0] * in.q[0] + in.q[1] * in.q[1] + in.q[2] * in.q[2] + in.q[3] * in.q[3];
+  live &= (qn2 > T(1e-30)) & finite(qn2);
+  g.qnorm = vsqrt(qn2);
+  for (int i = 0; i < 4; ++i) g.q[i] = in.q[i] / g.qnorm;
+  const V w = g.q[0], x = g.q[1], y = g.q[2], z = g.q[3];
+  V* Rq = g.Rq;
+  Rq[0] = T(1) - T(2) * (y * y + z * z), Rq[1] = T(2) * (x * y - w * z), Rq[2] = T(2) * (x * z + w * y);
+  Rq[3] = T(2) * (x * y + w * z), Rq[4] = T(1) - T(2) * (x * x + z * z), Rq[5] = T(2) * (y * z - w * x);
+  Rq[6] = T(2) * (x * z - w * y), Rq[7] = T(2) * (y * z + w * x), Rq[8] = T(1) - T(2) * (x * x + y * y);
 
   const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew);
-  const T tz = g.t[2];
+  const V tz = g.t[2];
   g.a = g.t[0] / tz, g.b = g.t[1] / tz;
   // Clamp in pixel space to [-0.15, 1.15]× the image (1.3× the frustum, as gsplat generalizes the reference
   // rasterizer to any principal point); with skew, u is clamped on the already-clamped row.
@@ -63,38 +122,38 @@ bool project_one(const T* m, const T* s, const T* qin, T o, const CameraParams& 
   const T my = T(0.5 * (kFrustumClamp - 1.0) * double(cam.height));
   const T vlo = -my, vhi = T(cam.height) + my, ulo = -mx, uhi = T(cam.width) + mx;
   const T blo = (vlo - cy) / fy, bhi = (vhi - cy) / fy;
-  g.v_clamped = g.b < blo || g.b > bhi;
-  g.bc = std::min(std::max(g.b, blo), bhi);
-  const T uc = fx * g.a + sk * g.bc + cx;
-  g.u_clamped = uc < ulo || uc > uhi;
-  g.ac = g.u_clamped ? ((uc < ulo ? ulo : uhi) - cx - sk * g.bc) / fx : g.a;
+  g.v_clamped = (g.b < blo) | (g.b > bhi);
+  g.bc = vmin(vmax(g.b, bcast(blo)), bcast(bhi));
+  const V uc = fx * g.a + sk * g.bc + cx;
+  g.u_clamped = (uc < ulo) | (uc > uhi);
+  g.ac = g.u_clamped ? ((uc < ulo ? bcast(ulo) : bcast(uhi)) - cx - sk * g.bc) / fx : g.a;
 
   // J (2×3) at the clamped point, then Tm = J·W.
-  T J[6];
+  V J[6];
   projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 3; ++c)
       g.Tm[3 * r + c] = J[3 * r] * T(R[c]) + J[3 * r + 1] * T(R[3 + c]) + J[3 * r + 2] * T(R[6 + c]);
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) g.M[3 * r + c] = Rq[3 * r + c] * s[c];
+    for (int c = 0; c < 3; ++c) g.M[3 * r + c] = Rq[3 * r + c] * in.s[c];
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 3; ++c)
       g.A2[3 * r + c] = g.Tm[3 * r] * g.M[c] + g.Tm[3 * r + 1] * g.M[3 + c] + g.Tm[3 * r + 2] * g.M[6 + c];
-  const T* r0 = g.A2;
-  const T* r1 = g.A2 + 3;
+  const V* r0 = g.A2;
+  const V* r1 = g.A2 + 3;
   g.sa = r0[0] * r0[0] + r0[1] * r0[1] + r0[2] * r0[2];
   g.sb = r0[0] * r1[0] + r0[1] * r1[1] + r0[2] * r1[2];
   g.sc = r1[0] * r1[0] + r1[1] * r1[1] + r1[2] * r1[2];
   const T dil = T(st.dilation);
   g.det = (g.sa + dil) * (g.sc + dil) - g.sb * g.sb;
-  if (!(g.det > 0) || !std::isfinite(g.det)) return false;  // degenerate 2D covariance: never divide by it
-  g.rho = 1, g.opac = o;
+  live &= (g.det > T(0)) & finite(g.det);  // degenerate 2D covariance: never divide by it
+  g.rho = bcast(T(1)), g.opac = in.o;
   if (st.antialiased) {
     g.rho = (g.sa * g.sc - g.sb * g.sb) / g.det;
-    if (!(g.rho > 0)) return false;
-    g.opac = o * std::sqrt(g.rho);
+    live &= g.rho > T(0);
+    g.opac = in.o * vsqrt(g.rho);
   }
-  return T(255) * g.opac > 1;  // otherwise α can never reach 1/255
+  g.live = live & (T(255) * g.opac > T(1));  // otherwise α can never reach 1/255
 }
 
 // floor(x) clamped to [lo, hi] (huge or NaN x included), without a libm call.
@@ -105,165 +164,249 @@ inline int32_t tile_floor(double x, int32_t lo, int32_t hi) {
 }
 
 template <class T>
-void project_fwd_impl(const T* means, const T* scales, const T* quats, const T* colors, const T* opac, int64_t n,
-                      const CameraParams& cam, const ProjectSettings& st, T* packed, int32_t* rects,
-                      int64_t* nonfinite) {
-  const double fx = cam.fx, fy = cam.fy, cx = cam.cx, cy = cam.cy, sk = cam.skew;
+struct ProjectInputs {
+  const T *means, *scales, *quats, *colors, *opac;
+};
+
+// Projects Gaussians [begin, end) into their records and tile rectangles; counts non-finite inputs into bad[5].
+template <class T>
+ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                                     const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
+  using V = Vec<T>;
   const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
-  std::atomic<int64_t> bad[5] = {0, 0, 0, 0, 0};  // integer counts: the sum is the same in any order
-  at::parallel_for(0, n, 2048, [&](int64_t begin, int64_t end) {
-    Geometry<T> g;
-    int64_t local_bad[5] = {0, 0, 0, 0, 0};
-    auto count_bad = [](const T* x, int k) {
-      int b = 0;
-      for (int j = 0; j < k; ++j) b += std::isfinite(x[j]) ? 0 : 1;
-      return b;
-    };
-    for (int64_t i = begin; i < end; ++i) {
+  const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew), dil = T(st.dilation);
+  auto count_bad = [](const T* v, int k) {
+    int b = 0;
+    for (int j = 0; j < k; ++j) b += std::isfinite(v[j]) ? 0 : 1;
+    return b;
+  };
+  InputBlock<T> in;
+  GeometryBlock<T> g;
+  for (int64_t first = begin; first < end; first += kBlock) {
+    const int count = int(std::min<int64_t>(kBlock, end - first));
+    load_block(x.means, x.scales, x.quats, x.opac, first, count, in);
+    bool clean[kBlock];
+    for (int j = 0; j < count; ++j) {
+      const int64_t i = first + j;
+      const int b[5] = {count_bad(x.means + 3 * i, 3), count_bad(x.scales + 3 * i, 3), count_bad(x.quats + 4 * i, 4),
+                        count_bad(x.colors + 3 * i, 3), count_bad(x.opac + i, 1)};
+      for (int k = 0; k < 5; ++k) bad[k] += b[k];
+      clean[j] = b[0] + b[1] + b[2] + b[3] + b[4] == 0;
+    }
+    project_block(in, cam, st, g);
+    const V u = fx * g.a + sk * g.b + cx, v = fy * g.b + cy;
+    const V ad = g.sa + dil, cd = g.sc + dil;
+    const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
+    const Mask<T> live = g.live & finite(u) & finite(v) & finite(A) & finite(B) & finite(C);
+    const V scaled_opac = T(255) * g.opac;
+    // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
+    const Mask<T> k1 = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]), k2 = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
+    V axis[3], nrm[3];
+    for (int r = 0; r < 3; ++r) axis[r] = k1 ? g.Rq[3 * r + 1] : k2 ? g.Rq[3 * r + 2] : g.Rq[3 * r];
+    for (int r = 0; r < 3; ++r)
+      nrm[r] = T(cam.R[3 * r]) * axis[0] + T(cam.R[3 * r + 1]) * axis[1] + T(cam.R[3 * r + 2]) * axis[2];
+    const Mask<T> flip = nrm[0] * g.t[0] + nrm[1] * g.t[1] + nrm[2] * g.t[2] > T(0);
+    for (auto& c : nrm) c = flip ? -c : c;
+
+    for (int j = 0; j < count; ++j) {
+      const int64_t i = first + j;
       T* rec = packed + i * kRec;
       int32_t* rect = rects + i * 4;
       std::fill(rec, rec + kRec, T(0));
       std::fill(rect, rect + 4, 0);
-      const int b[5] = {count_bad(means + 3 * i, 3), count_bad(scales + 3 * i, 3), count_bad(quats + 4 * i, 4),
-                        count_bad(colors + 3 * i, 3), count_bad(opac + i, 1)};
-      if (b[0] + b[1] + b[2] + b[3] + b[4] > 0) {
-        for (int k = 0; k < 5; ++k) local_bad[k] += b[k];
-        continue;
-      }
-      if (!project_one(means + 3 * i, scales + 3 * i, quats + 4 * i, opac[i], cam, st, g)) continue;
-      const T u = T(fx) * g.a + T(sk) * g.b + T(cx), v = T(fy) * g.b + T(cy);
-      const T dil = T(st.dilation), ad = g.sa + dil, cd = g.sc + dil;
-      const T A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
-      const T cut = std::min(T(kMaxPower), std::log(T(255) * g.opac));
-      if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(A) || !std::isfinite(B) || !std::isfinite(C))
-        continue;
+      if (!clean[j] || !live[j]) continue;
+      // ln(255·o') only where it may be below the cap: ln 91 > 4.5.
+      const T cut = scaled_opac[j] >= T(91) ? T(kMaxPower) : std::min(T(kMaxPower), std::log(scaled_opac[j]));
       // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
-      const double k2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
-      const double rx = std::sqrt(k2 * double(ad)) + kSpanMargin, ry = std::sqrt(k2 * double(cd)) + kSpanMargin;
-      const int32_t tx0 = tile_floor((double(u) - rx) / kTile, 0, tiles_x);
-      const int32_t tx1 = tile_floor((double(u) + rx) / kTile, -1, tiles_x - 1) + 1;
-      const int32_t ty0 = tile_floor((double(v) - ry) / kTile, 0, tiles_y);
-      const int32_t ty1 = tile_floor((double(v) + ry) / kTile, -1, tiles_y - 1) + 1;
+      const double k2d = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
+      const double rx = std::sqrt(k2d * double(ad[j])) + kSpanMargin, ry = std::sqrt(k2d * double(cd[j])) + kSpanMargin;
+      const double uj = double(u[j]), vj = double(v[j]);
+      const int32_t tx0 = tile_floor((uj - rx) / kTile, 0, tiles_x);
+      const int32_t tx1 = tile_floor((uj + rx) / kTile, -1, tiles_x - 1) + 1;
+      const int32_t ty0 = tile_floor((vj - ry) / kTile, 0, tiles_y);
+      const int32_t ty1 = tile_floor((vj + ry) / kTile, -1, tiles_y - 1) + 1;
       if (tx0 >= tx1 || ty0 >= ty1) continue;  // footprint misses the image
       rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
-
-      // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
-      const T* s = scales + 3 * i;
-      const int k = (s[1] < s[0] && s[1] <= s[2]) ? 1 : (s[2] < s[0] && s[2] < s[1]) ? 2 : 0;
-      T nrm[3];
-      for (int r = 0; r < 3; ++r)
-        nrm[r] = T(cam.R[3 * r]) * g.Rq[k] + T(cam.R[3 * r + 1]) * g.Rq[3 + k] + T(cam.R[3 * r + 2]) * g.Rq[6 + k];
-      if (nrm[0] * g.t[0] + nrm[1] * g.t[1] + nrm[2] * g.t[2] > 0)
-        for (auto& c : nrm) c = -c;
-
-      rec[kU] = u, rec[kV] = v, rec[kConA] = A, rec[kConB] = B, rec[kConC] = C;
-      rec[kOpac] = g.opac, rec[kCut] = cut, rec[kDepth] = g.t[2];
-      rec[kR] = colors[3 * i], rec[kG] = colors[3 * i + 1], rec[kB] = colors[3 * i + 2];
-      rec[kNx] = nrm[0], rec[kNy] = nrm[1], rec[kNz] = nrm[2];
+      rec[kU] = u[j], rec[kV] = v[j], rec[kConA] = A[j], rec[kConB] = B[j], rec[kConC] = C[j];
+      rec[kOpac] = g.opac[j], rec[kCut] = cut, rec[kDepth] = g.t[2][j];
+      rec[kR] = x.colors[3 * i], rec[kG] = x.colors[3 * i + 1], rec[kB] = x.colors[3 * i + 2];
+      rec[kNx] = nrm[0][j], rec[kNy] = nrm[1][j], rec[kNz] = nrm[2][j];
       rec[kRx] = T(rx), rec[kRy] = T(ry);
     }
-    for (int k = 0; k < 5; ++k) bad[k] += local_bad[k];
-  });
-  for (int k = 0; k < 5; ++k) nonfinite[k] = bad[k];
+  }
 }
+
+// Back-propagates the 2D gradients of Gaussians [begin, end) through the projection.
+template <class T>
+ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                                     const ProjectSettings& st, const T* grad2d, T* g_means, T* g_scales, T* g_quats,
+                                     T* g_opac) {
+  using V = Vec<T>;
+  const T fx = T(cam.fx), fy = T(cam.fy), sk = T(cam.skew), dil = T(st.dilation);
+  const double* R = cam.R;
+  InputBlock<T> in;
+  GeometryBlock<T> g;
+  for (int64_t first = begin; first < end; first += kBlock) {
+    const int count = int(std::min<int64_t>(kBlock, end - first));
+    std::fill(g_means + 3 * first, g_means + 3 * (first + count), T(0));
+    std::fill(g_scales + 3 * first, g_scales + 3 * (first + count), T(0));
+    std::fill(g_quats + 4 * first, g_quats + 4 * (first + count), T(0));
+    std::fill(g_opac + first, g_opac + first + count, T(0));
+    V gi[kGrad2d];
+    bool any_in_block = false;
+    for (int j = 0; j < kBlock; ++j)
+      for (int k = 0; k < kGrad2d; ++k) {
+        gi[k][j] = j < count ? grad2d[(first + j) * kGrad2d + k] : T(0);
+        any_in_block |= gi[k][j] != 0;
+      }
+    if (!any_in_block) continue;  // culled or never contributing
+    Mask<T> any = gi[0] != T(0);
+    for (int k = 1; k < kGrad2d; ++k) any |= gi[k] != T(0);
+    load_block(x.means, x.scales, x.quats, x.opac, first, count, in);
+    project_block(in, cam, st, g);
+    const Mask<T> live = g.live & any;
+    const V gu = gi[0], gv = gi[1], gA = gi[2], gB = gi[3], gC = gi[4], gop = gi[5], gdepth = gi[9];
+    const V ad = g.sa + dil, cd = g.sc + dil;
+    const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
+
+    // Opacity (and the antialiasing factor sqrt(ρ), ρ = det Σ_raw / det).
+    V g_sa = bcast(T(0)), g_sb = g_sa, g_sc = g_sa, g_det = g_sa, g_o;
+    if (st.antialiased) {
+      const V sr = vsqrt(g.rho);
+      g_o = gop * sr;
+      const V g_rho = gop * in.o / (T(2) * sr);
+      const V g_detraw = g_rho / g.det;
+      g_det -= g_rho * g.rho / g.det;
+      g_sa += g_detraw * g.sc, g_sc += g_detraw * g.sa, g_sb -= T(2) * g.sb * g_detraw;
+    } else {
+      g_o = gop;
+    }
+    // Conic = (cd, -sb, ad) / det.
+    g_det -= (gA * A + gB * B + gC * C) / g.det;
+    V g_ad = gC / g.det, g_cd = gA / g.det;
+    g_sb -= gB / g.det;
+    g_ad += g_det * cd, g_cd += g_det * ad, g_sb -= T(2) * g.sb * g_det;
+    g_sa += g_ad, g_sc += g_cd;
+
+    // Σ_raw = A2·A2ᵀ.
+    V gA2[6];
+    for (int c = 0; c < 3; ++c) {
+      gA2[c] = T(2) * g_sa * g.A2[c] + g_sb * g.A2[3 + c];
+      gA2[3 + c] = g_sb * g.A2[c] + T(2) * g_sc * g.A2[3 + c];
+    }
+    // A2 = Tm·M: gTm = gA2·Mᵀ, gM = Tmᵀ·gA2.
+    V gTm[6], gM[9];
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 3; ++c)
+        gTm[3 * r + c] = gA2[3 * r] * g.M[3 * c] + gA2[3 * r + 1] * g.M[3 * c + 1] + gA2[3 * r + 2] * g.M[3 * c + 2];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) gM[3 * r + c] = g.Tm[r] * gA2[c] + g.Tm[3 + r] * gA2[3 + c];
+    // M = Rq·diag(s).
+    V G[9], gs[3];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) G[3 * r + c] = gM[3 * r + c] * in.s[c];
+    for (int c = 0; c < 3; ++c) gs[c] = gM[c] * g.Rq[c] + gM[3 + c] * g.Rq[3 + c] + gM[6 + c] * g.Rq[6 + c];
+    // Rq(q̂), then q̂ = q / |q|.
+    const V w = g.q[0], qx = g.q[1], y = g.q[2], z = g.q[3];
+    V gqn[4], gq[4];
+    gqn[0] = T(2) * (-z * G[1] + y * G[2] + z * G[3] - qx * G[5] - y * G[6] + qx * G[7]);
+    gqn[1] =
+        T(2) * (y * G[1] + z * G[2] + y * G[3] - T(2) * qx * G[4] - w * G[5] + z * G[6] + w * G[7] - T(2) * qx * G[8]);
+    gqn[2] =
+        T(2) * (T(-2) * y * G[0] + qx * G[1] + w * G[2] + qx * G[3] + z * G[5] - w * G[6] + z * G[7] - T(2) * y * G[8]);
+    gqn[3] =
+        T(2) * (T(-2) * z * G[0] - w * G[1] + qx * G[2] + w * G[3] - T(2) * z * G[4] + y * G[5] + qx * G[6] + y * G[7]);
+    const V dot = w * gqn[0] + qx * gqn[1] + y * gqn[2] + z * gqn[3];
+    for (int k = 0; k < 4; ++k) gq[k] = (gqn[k] - g.q[k] * dot) / g.qnorm;
+
+    // Tm = J·W: gJ = gTm·Wᵀ.
+    V gJ[6];
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 3; ++c)
+        gJ[3 * r + c] = gTm[3 * r] * T(R[3 * c]) + gTm[3 * r + 1] * T(R[3 * c + 1]) + gTm[3 * r + 2] * T(R[3 * c + 2]);
+    const V tz = g.t[2];
+    V J[6];
+    projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
+    V g_tz = bcast(T(0));
+    for (int k = 0; k < 6; ++k) g_tz -= gJ[k] * J[k] / tz;  // every entry of J is ∝ 1/z
+    V g_ac = -fx * gJ[2] / tz;
+    V g_bc = -(sk * gJ[2] + fy * gJ[5]) / tz;
+    // Through the frustum clamp: a clamped coordinate is constant in its own argument.
+    g_bc = g.u_clamped ? g_bc - sk / fx * g_ac : g_bc;
+    g_ac = g.u_clamped ? bcast(T(0)) : g_ac;
+    V g_a = g_ac, g_b = g.v_clamped ? bcast(T(0)) : g_bc;
+    // Mean: u = fx·a + skew·b + cx, v = fy·b + cy.
+    g_a += fx * gu;
+    g_b += sk * gu + fy * gv;
+    const V g_t[3] = {g_a / tz, g_b / tz, g_tz + gdepth - (g_a * g.a + g_b * g.b) / tz};
+    V gm[3];
+    for (int c = 0; c < 3; ++c) gm[c] = T(R[c]) * g_t[0] + T(R[3 + c]) * g_t[1] + T(R[6 + c]) * g_t[2];
+
+    for (int j = 0; j < count; ++j) {
+      if (!live[j]) continue;
+      const int64_t i = first + j;
+      for (int c = 0; c < 3; ++c) g_means[3 * i + c] = gm[c][j], g_scales[3 * i + c] = gs[c][j];
+      for (int c = 0; c < 4; ++c) g_quats[4 * i + c] = gq[c][j];
+      g_opac[i] = g_o[j];
+    }
+  }
+}
+
+// Each range function once per SIMD level: the same source, so the same operations in every lane.
+template <class T>
+void project_fwd_portable(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                          const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
+  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+}
+template <class T>
+void project_bwd_portable(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                          const ProjectSettings& st, const T* grad2d, T* gm, T* gs, T* gq, T* go) {
+  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+}
+#ifdef ISPLAT_HAVE_AVX2_LANES
+ISPLAT_AVX2_FN void project_fwd_avx2(const ProjectInputs<float>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                                     const ProjectSettings& st, float* packed, int32_t* rects, int64_t* bad) {
+  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+}
+ISPLAT_AVX512_FN void project_fwd_avx512(const ProjectInputs<float>& x, int64_t begin, int64_t end,
+                                         const CameraParams& cam, const ProjectSettings& st, float* packed,
+                                         int32_t* rects, int64_t* bad) {
+  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+}
+ISPLAT_AVX2_FN void project_bwd_avx2(const ProjectInputs<float>& x, int64_t begin, int64_t end, const CameraParams& cam,
+                                     const ProjectSettings& st, const float* grad2d, float* gm, float* gs, float* gq,
+                                     float* go) {
+  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+}
+ISPLAT_AVX512_FN void project_bwd_avx512(const ProjectInputs<float>& x, int64_t begin, int64_t end,
+                                         const CameraParams& cam, const ProjectSettings& st, const float* grad2d,
+                                         float* gm, float* gs, float* gq, float* go) {
+  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+}
+#endif
 
 template <class T>
-void project_bwd_impl(const T* means, const T* scales, const T* quats, const T* opac, int64_t n,
-                      const CameraParams& cam, const ProjectSettings& st, const T* grad2d, T* g_means, T* g_scales,
-                      T* g_quats, T* g_opac) {
-  const T fx = T(cam.fx), fy = T(cam.fy), sk = T(cam.skew);
-  const double* R = cam.R;
-  at::parallel_for(0, n, 2048, [&](int64_t begin, int64_t end) {
-    Geometry<T> g;
-    for (int64_t i = begin; i < end; ++i) {
-      const T* gi = grad2d + i * kGrad2d;
-      T* gm = g_means + 3 * i;
-      T* gs = g_scales + 3 * i;
-      T* gq = g_quats + 4 * i;
-      std::fill(gm, gm + 3, T(0));
-      std::fill(gs, gs + 3, T(0));
-      std::fill(gq, gq + 4, T(0));
-      g_opac[i] = 0;
-      bool any = false;
-      for (int k = 0; k < kGrad2d; ++k) any |= gi[k] != 0;
-      if (!any) continue;  // culled or never contributing
-      const T* s = scales + 3 * i;
-      if (!project_one(means + 3 * i, s, quats + 4 * i, opac[i], cam, st, g)) continue;
-      const T gu = gi[0], gv = gi[1], gA = gi[2], gB = gi[3], gC = gi[4], gop = gi[5], gdepth = gi[9];
-      const T dil = T(st.dilation), ad = g.sa + dil, cd = g.sc + dil;
-      const T A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
+using FwdRangeFn = void (*)(const ProjectInputs<T>&, int64_t, int64_t, const CameraParams&, const ProjectSettings&, T*,
+                            int32_t*, int64_t*);
+template <class T>
+using BwdRangeFn = void (*)(const ProjectInputs<T>&, int64_t, int64_t, const CameraParams&, const ProjectSettings&,
+                            const T*, T*, T*, T*, T*);
 
-      // Opacity (and the antialiasing factor sqrt(ρ), ρ = det Σ_raw / det).
-      T g_sa = 0, g_sb = 0, g_sc = 0, g_det = 0;
-      if (st.antialiased) {
-        const T sr = std::sqrt(g.rho);
-        g_opac[i] = gop * sr;
-        const T g_rho = gop * opac[i] / (2 * sr);
-        const T g_detraw = g_rho / g.det;
-        g_det -= g_rho * g.rho / g.det;
-        g_sa += g_detraw * g.sc, g_sc += g_detraw * g.sa, g_sb -= 2 * g.sb * g_detraw;
-      } else {
-        g_opac[i] = gop;
-      }
-      // Conic = (cd, -sb, ad) / det.
-      g_det -= (gA * A + gB * B + gC * C) / g.det;
-      T g_ad = gC / g.det, g_cd = gA / g.det;
-      g_sb -= gB / g.det;
-      g_ad += g_det * cd, g_cd += g_det * ad, g_sb -= 2 * g.sb * g_det;
-      g_sa += g_ad, g_sc += g_cd;
-
-      // Σ_raw = A2·A2ᵀ.
-      T gA2[6];
-      for (int c = 0; c < 3; ++c) {
-        gA2[c] = 2 * g_sa * g.A2[c] + g_sb * g.A2[3 + c];
-        gA2[3 + c] = g_sb * g.A2[c] + 2 * g_sc * g.A2[3 + c];
-      }
-      // A2 = Tm·M: gTm = gA2·Mᵀ, gM = Tmᵀ·gA2.
-      T gTm[6], gM[9];
-      for (int r = 0; r < 2; ++r)
-        for (int c = 0; c < 3; ++c)
-          gTm[3 * r + c] = gA2[3 * r] * g.M[3 * c] + gA2[3 * r + 1] * g.M[3 * c + 1] + gA2[3 * r + 2] * g.M[3 * c + 2];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) gM[3 * r + c] = g.Tm[r] * gA2[c] + g.Tm[3 + r] * gA2[3 + c];
-      // M = Rq·diag(s).
-      T G[9];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) G[3 * r + c] = gM[3 * r + c] * s[c];
-      for (int c = 0; c < 3; ++c) gs[c] = gM[c] * g.Rq[c] + gM[3 + c] * g.Rq[3 + c] + gM[6 + c] * g.Rq[6 + c];
-      // Rq(q̂), then q̂ = q / |q|.
-      const T w = g.q[0], x = g.q[1], y = g.q[2], z = g.q[3];
-      T gqn[4];
-      gqn[0] = 2 * (-z * G[1] + y * G[2] + z * G[3] - x * G[5] - y * G[6] + x * G[7]);
-      gqn[1] = 2 * (y * G[1] + z * G[2] + y * G[3] - 2 * x * G[4] - w * G[5] + z * G[6] + w * G[7] - 2 * x * G[8]);
-      gqn[2] = 2 * (-2 * y * G[0] + x * G[1] + w * G[2] + x * G[3] + z * G[5] - w * G[6] + z * G[7] - 2 * y * G[8]);
-      gqn[3] = 2 * (-2 * z * G[0] - w * G[1] + x * G[2] + w * G[3] - 2 * z * G[4] + y * G[5] + x * G[6] + y * G[7]);
-      const T dot = w * gqn[0] + x * gqn[1] + y * gqn[2] + z * gqn[3];
-      for (int k = 0; k < 4; ++k) gq[k] = (gqn[k] - g.q[k] * dot) / g.qnorm;
-
-      // Tm = J·W: gJ = gTm·Wᵀ.
-      T gJ[6];
-      for (int r = 0; r < 2; ++r)
-        for (int c = 0; c < 3; ++c)
-          gJ[3 * r + c] =
-              gTm[3 * r] * T(R[3 * c]) + gTm[3 * r + 1] * T(R[3 * c + 1]) + gTm[3 * r + 2] * T(R[3 * c + 2]);
-      const T tz = g.t[2];
-      T J[6];
-      projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
-      T g_tz = 0;
-      for (int k = 0; k < 6; ++k) g_tz -= gJ[k] * J[k] / tz;  // every entry of J is ∝ 1/z
-      T g_ac = -fx * gJ[2] / tz;
-      T g_bc = -(sk * gJ[2] + fy * gJ[5]) / tz;
-      // Through the frustum clamp: a clamped coordinate is constant in its own argument.
-      if (g.u_clamped) g_bc -= sk / fx * g_ac, g_ac = 0;
-      T g_a = g_ac, g_b = g.v_clamped ? T(0) : g_bc;
-      // Mean: u = fx·a + skew·b + cx, v = fy·b + cy.
-      g_a += fx * gu;
-      g_b += sk * gu + fy * gv;
-      const T g_t[3] = {g_a / tz, g_b / tz, g_tz + gdepth - (g_a * g.a + g_b * g.b) / tz};
-      for (int c = 0; c < 3; ++c) gm[c] = T(R[c]) * g_t[0] + T(R[3 + c]) * g_t[1] + T(R[6 + c]) * g_t[2];
-    }
-  });
+// The range functions for the SIMD level in use (float), else portable.
+template <class T>
+std::pair<FwdRangeFn<T>, BwdRangeFn<T>> range_fns() {
+#ifdef ISPLAT_HAVE_AVX2_LANES
+  if constexpr (std::is_same_v<T, float>) {
+    if (simd_level() == Simd::avx512) return {project_fwd_avx512, project_bwd_avx512};
+    if (simd_level() == Simd::avx2) return {project_fwd_avx2, project_bwd_avx2};
+  }
+#endif
+  return {project_fwd_portable<T>, project_bwd_portable<T>};
 }
+
+// Ranges of whole blocks per task, so the blocks never depend on the thread count.
+constexpr int64_t kGrain = 2048;
+static_assert(kGrain % kBlock == 0);
 
 }  // namespace
 
@@ -275,9 +418,19 @@ Projection project_fwd(const torch::Tensor& means, const torch::Tensor& scales, 
   out.packed = torch::empty({n, kRec}, means.options());
   out.rects = torch::empty({n, 4}, means.options().dtype(torch::kInt32));
   AT_DISPATCH_FLOATING_TYPES(means.scalar_type(), "project_fwd", [&] {
-    project_fwd_impl<scalar_t>(means.data_ptr<scalar_t>(), scales.data_ptr<scalar_t>(), quats.data_ptr<scalar_t>(),
-                               colors.data_ptr<scalar_t>(), opacities.data_ptr<scalar_t>(), n, cam, settings,
-                               out.packed.data_ptr<scalar_t>(), out.rects.data_ptr<int32_t>(), out.nonfinite);
+    using T = scalar_t;
+    const ProjectInputs<T> x{means.data_ptr<T>(), scales.data_ptr<T>(), quats.data_ptr<T>(), colors.data_ptr<T>(),
+                             opacities.data_ptr<T>()};
+    const FwdRangeFn<T> fn = range_fns<T>().first;
+    T* packed = out.packed.data_ptr<T>();
+    int32_t* rects = out.rects.data_ptr<int32_t>();
+    std::atomic<int64_t> bad[5] = {0, 0, 0, 0, 0};  // integer counts: the sum is the same in any order
+    at::parallel_for(0, (n + kGrain - 1) / kGrain, 1, [&](int64_t c0, int64_t c1) {
+      int64_t local_bad[5] = {0, 0, 0, 0, 0};
+      fn(x, c0 * kGrain, std::min(n, c1 * kGrain), cam, settings, packed, rects, local_bad);
+      for (int k = 0; k < 5; ++k) bad[k] += local_bad[k];
+    });
+    for (int k = 0; k < 5; ++k) out.nonfinite[k] = bad[k];
   });
   return out;
 }
@@ -289,10 +442,16 @@ ProjectGrads project_bwd(const torch::Tensor& means, const torch::Tensor& scales
   ProjectGrads out{torch::empty_like(means), torch::empty_like(scales), torch::empty_like(quats),
                    torch::empty_like(opacities)};
   AT_DISPATCH_FLOATING_TYPES(means.scalar_type(), "project_bwd", [&] {
-    project_bwd_impl<scalar_t>(means.data_ptr<scalar_t>(), scales.data_ptr<scalar_t>(), quats.data_ptr<scalar_t>(),
-                               opacities.data_ptr<scalar_t>(), n, cam, settings, grad2d.data_ptr<scalar_t>(),
-                               out.means.data_ptr<scalar_t>(), out.scales.data_ptr<scalar_t>(),
-                               out.quats.data_ptr<scalar_t>(), out.opacities.data_ptr<scalar_t>());
+    using T = scalar_t;
+    const ProjectInputs<T> x{means.data_ptr<T>(), scales.data_ptr<T>(), quats.data_ptr<T>(), nullptr,
+                             opacities.data_ptr<T>()};
+    const BwdRangeFn<T> fn = range_fns<T>().second;
+    const T* g2 = grad2d.data_ptr<T>();
+    T *gm = out.means.data_ptr<T>(), *gs = out.scales.data_ptr<T>(), *gq = out.quats.data_ptr<T>(),
+      *go = out.opacities.data_ptr<T>();
+    at::parallel_for(0, (n + kGrain - 1) / kGrain, 1, [&](int64_t c0, int64_t c1) {
+      fn(x, c0 * kGrain, std::min(n, c1 * kGrain), cam, settings, g2, gm, gs, gq, go);
+    });
   });
   return out;
 }
