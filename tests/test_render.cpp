@@ -449,7 +449,7 @@ std::vector<splat::Simd> simd_levels() {
     if (level <= splat::simd_supported())
       levels.push_back(level);
     else
-      WARN("this CPU has no " << splat::simd_name(level) << ": its pixel loops are not checked here");
+      WARN("this CPU has no " << splat::simd_name(level) << ": its pixel loops and projection are not checked here");
   }
   return levels;
 }
@@ -486,8 +486,10 @@ TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]"
 
 TEST_CASE("render: every SIMD level's projection agrees bit for bit, culled and non-finite inputs included",
           "[render]") {
-  // The projection runs 16 Gaussians per vector, built once per level. A mixed set: in view, behind the camera,
-  // outside the 1.3x frustum (clamped Jacobian), degenerate, non-finite, and a tail block of 3 (5003 = 16·312 + 11).
+  // The projection runs 16 Gaussians per vector, built once per level; this ties the levels together (the
+  // reference and finite-difference tests check the projection itself). A mixed set: in view, behind the camera,
+  // outside the 1.3x frustum (clamped Jacobian), degenerate, non-finite, a block with no gradient (rows 32..47),
+  // and a last block of 11 (5003 = 16·312 + 11).
   for (bool antialiased : {false, true}) {
     CAPTURE(antialiased);
     torch::manual_seed(7);
@@ -505,6 +507,7 @@ TEST_CASE("render: every SIMD level's projection agrees bit for bit, culled and 
     settings.antialiased = antialiased;
     const Tensor grad2d = torch::randn({n, splat::kGrad2d});
     grad2d[21].zero_();
+    grad2d.narrow(0, 32, 16).zero_();
     std::vector<std::vector<Tensor>> results;
     for (splat::Simd level : simd_levels()) {
       const splat::Simd before = splat::set_simd_level(level);
@@ -517,8 +520,15 @@ TEST_CASE("render: every SIMD level's projection agrees bit for bit, culled and 
     const Tensor visible = results[0][1].select(1, 2) > results[0][1].select(1, 0);
     CHECK(visible.sum().item<int64_t>() > 2000);
     CHECK(visible.sum().item<int64_t>() < n - 1000);
-    CHECK(torch::equal(results[0][6], torch::tensor({1, 1, 0, 1, 0}, torch::kInt64)));
+    CHECK(torch::equal(results[0][6], torch::tensor({1, 1, 0, 1, 0}, torch::kInt64)));  // rows 5, 7, 8
+    for (int64_t row : {5, 7, 8, 9, 11, 13, 17}) {  // non-finite, zero quaternion, zero opacity, negative scale,
+      CAPTURE(row);                                 // too faint: zero records and empty rectangles
+      CHECK(max_abs(results[0][0][row]) == 0);
+      CHECK(max_abs(results[0][1][row]) == 0);
+    }
     CHECK(max_abs(results[0][2]) > 0);
+    CHECK(max_abs(results[0][2].narrow(0, 32, 16)) == 0);  // no gradient in, none out
+    CHECK(max_abs(results[0][5][21]) == 0);
     for (size_t level = 1; level < results.size(); ++level)
       for (size_t k = 0; k < results[0].size(); ++k) {
         CAPTURE(splat::simd_name(splat::Simd(level)), k);

@@ -1,14 +1,17 @@
 // EWA projection of 3D Gaussians to screen-space records, and its backward to means, scales, quats, opacities.
 // Both run on blocks of 16 Gaussians, one per vector lane (GCC vector extensions), compiled once per SIMD level.
 // Every lane does the one-Gaussian formulas' IEEE operations in the same order (the file builds with
-// -ffp-contract=off), so all levels give bit-identical records and gradients.
+// -ffp-contract=off), so all levels give bit-identical records and gradients (a NaN's sign bit aside).
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
 
 #include <atomic>
 
+#include <type_traits>
+#include <utility>
+
 #include "render/kernels.h"
-#include "render/lanes_avx512.h"
+#include "render/lanes_avx512.h"  // the target macros of the SIMD levels
 
 namespace isplat::splat {
 namespace {
@@ -52,12 +55,10 @@ ISPLAT_INLINE V vsqrt(V x) {
 template <class T>
 struct InputBlock {
   Vec<T> m[3], s[3], q[4], o;
-  int count = 0;
 };
 template <class T>
 ISPLAT_INLINE void load_block(const T* means, const T* scales, const T* quats, const T* opac, int64_t first, int count,
                               InputBlock<T>& in) {
-  in.count = count;
   for (int j = 0; j < kBlock; ++j) {
     const bool real = j < count;
     const int64_t i = first + (real ? j : 0);
@@ -170,7 +171,7 @@ struct ProjectInputs {
 
 // Projects Gaussians [begin, end) into their records and tile rectangles; counts non-finite inputs into bad[5].
 template <class T>
-ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                                      const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
   using V = Vec<T>;
   const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
@@ -184,12 +185,12 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, i
   GeometryBlock<T> g;
   for (int64_t first = begin; first < end; first += kBlock) {
     const int count = int(std::min<int64_t>(kBlock, end - first));
-    load_block(x.means, x.scales, x.quats, x.opac, first, count, in);
+    load_block(src.means, src.scales, src.quats, src.opac, first, count, in);
     bool clean[kBlock];
     for (int j = 0; j < count; ++j) {
       const int64_t i = first + j;
-      const int b[5] = {count_bad(x.means + 3 * i, 3), count_bad(x.scales + 3 * i, 3), count_bad(x.quats + 4 * i, 4),
-                        count_bad(x.colors + 3 * i, 3), count_bad(x.opac + i, 1)};
+      const int b[5] = {count_bad(src.means + 3 * i, 3), count_bad(src.scales + 3 * i, 3),
+                        count_bad(src.quats + 4 * i, 4), count_bad(src.colors + 3 * i, 3), count_bad(src.opac + i, 1)};
       for (int k = 0; k < 5; ++k) bad[k] += b[k];
       clean[j] = b[0] + b[1] + b[2] + b[3] + b[4] == 0;
     }
@@ -200,9 +201,10 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, i
     const Mask<T> live = g.live & finite(u) & finite(v) & finite(A) & finite(B) & finite(C);
     const V scaled_opac = T(255) * g.opac;
     // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
-    const Mask<T> k1 = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]), k2 = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
+    const Mask<T> smallest_y = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]);
+    const Mask<T> smallest_z = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
     V axis[3], nrm[3];
-    for (int r = 0; r < 3; ++r) axis[r] = k1 ? g.Rq[3 * r + 1] : k2 ? g.Rq[3 * r + 2] : g.Rq[3 * r];
+    for (int r = 0; r < 3; ++r) axis[r] = smallest_y ? g.Rq[3 * r + 1] : smallest_z ? g.Rq[3 * r + 2] : g.Rq[3 * r];
     for (int r = 0; r < 3; ++r)
       nrm[r] = T(cam.R[3 * r]) * axis[0] + T(cam.R[3 * r + 1]) * axis[1] + T(cam.R[3 * r + 2]) * axis[2];
     const Mask<T> flip = nrm[0] * g.t[0] + nrm[1] * g.t[1] + nrm[2] * g.t[2] > T(0);
@@ -218,8 +220,9 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, i
       // ln(255·o') only where it may be below the cap: ln 91 > 4.5.
       const T cut = scaled_opac[j] >= T(91) ? T(kMaxPower) : std::min(T(kMaxPower), std::log(scaled_opac[j]));
       // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
-      const double k2d = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
-      const double rx = std::sqrt(k2d * double(ad[j])) + kSpanMargin, ry = std::sqrt(k2d * double(cd[j])) + kSpanMargin;
+      const double extent2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
+      const double rx = std::sqrt(extent2 * double(ad[j])) + kSpanMargin,
+                   ry = std::sqrt(extent2 * double(cd[j])) + kSpanMargin;
       const double uj = double(u[j]), vj = double(v[j]);
       const int32_t tx0 = tile_floor((uj - rx) / kTile, 0, tiles_x);
       const int32_t tx1 = tile_floor((uj + rx) / kTile, -1, tiles_x - 1) + 1;
@@ -229,7 +232,7 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, i
       rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
       rec[kU] = u[j], rec[kV] = v[j], rec[kConA] = A[j], rec[kConB] = B[j], rec[kConC] = C[j];
       rec[kOpac] = g.opac[j], rec[kCut] = cut, rec[kDepth] = g.t[2][j];
-      rec[kR] = x.colors[3 * i], rec[kG] = x.colors[3 * i + 1], rec[kB] = x.colors[3 * i + 2];
+      rec[kR] = src.colors[3 * i], rec[kG] = src.colors[3 * i + 1], rec[kB] = src.colors[3 * i + 2];
       rec[kNx] = nrm[0][j], rec[kNy] = nrm[1][j], rec[kNz] = nrm[2][j];
       rec[kRx] = T(rx), rec[kRy] = T(ry);
     }
@@ -238,7 +241,7 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& x, int64_t begin, i
 
 // Back-propagates the 2D gradients of Gaussians [begin, end) through the projection.
 template <class T>
-ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                                      const ProjectSettings& st, const T* grad2d, T* g_means, T* g_scales, T* g_quats,
                                      T* g_opac) {
   using V = Vec<T>;
@@ -262,7 +265,7 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& x, int64_t begin, i
     if (!any_in_block) continue;  // culled or never contributing
     Mask<T> any = gi[0] != T(0);
     for (int k = 1; k < kGrad2d; ++k) any |= gi[k] != T(0);
-    load_block(x.means, x.scales, x.quats, x.opac, first, count, in);
+    load_block(src.means, src.scales, src.quats, src.opac, first, count, in);
     project_block(in, cam, st, g);
     const Mask<T> live = g.live & any;
     const V gu = gi[0], gv = gi[1], gA = gi[2], gB = gi[3], gC = gi[4], gop = gi[5], gdepth = gi[9];
@@ -307,16 +310,16 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& x, int64_t begin, i
       for (int c = 0; c < 3; ++c) G[3 * r + c] = gM[3 * r + c] * in.s[c];
     for (int c = 0; c < 3; ++c) gs[c] = gM[c] * g.Rq[c] + gM[3 + c] * g.Rq[3 + c] + gM[6 + c] * g.Rq[6 + c];
     // Rq(q̂), then q̂ = q / |q|.
-    const V w = g.q[0], qx = g.q[1], y = g.q[2], z = g.q[3];
+    const V w = g.q[0], x = g.q[1], y = g.q[2], z = g.q[3];
     V gqn[4], gq[4];
-    gqn[0] = T(2) * (-z * G[1] + y * G[2] + z * G[3] - qx * G[5] - y * G[6] + qx * G[7]);
+    gqn[0] = T(2) * (-z * G[1] + y * G[2] + z * G[3] - x * G[5] - y * G[6] + x * G[7]);
     gqn[1] =
-        T(2) * (y * G[1] + z * G[2] + y * G[3] - T(2) * qx * G[4] - w * G[5] + z * G[6] + w * G[7] - T(2) * qx * G[8]);
+        T(2) * (y * G[1] + z * G[2] + y * G[3] - T(2) * x * G[4] - w * G[5] + z * G[6] + w * G[7] - T(2) * x * G[8]);
     gqn[2] =
-        T(2) * (T(-2) * y * G[0] + qx * G[1] + w * G[2] + qx * G[3] + z * G[5] - w * G[6] + z * G[7] - T(2) * y * G[8]);
+        T(2) * (T(-2) * y * G[0] + x * G[1] + w * G[2] + x * G[3] + z * G[5] - w * G[6] + z * G[7] - T(2) * y * G[8]);
     gqn[3] =
-        T(2) * (T(-2) * z * G[0] - w * G[1] + qx * G[2] + w * G[3] - T(2) * z * G[4] + y * G[5] + qx * G[6] + y * G[7]);
-    const V dot = w * gqn[0] + qx * gqn[1] + y * gqn[2] + z * gqn[3];
+        T(2) * (T(-2) * z * G[0] - w * G[1] + x * G[2] + w * G[3] - T(2) * z * G[4] + y * G[5] + x * G[6] + y * G[7]);
+    const V dot = w * gqn[0] + x * gqn[1] + y * gqn[2] + z * gqn[3];
     for (int k = 0; k < 4; ++k) gq[k] = (gqn[k] - g.q[k] * dot) / g.qnorm;
 
     // Tm = J·W: gJ = gTm·Wᵀ.
@@ -354,34 +357,35 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& x, int64_t begin, i
 
 // Each range function once per SIMD level: the same source, so the same operations in every lane.
 template <class T>
-void project_fwd_portable(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+void project_fwd_portable(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                           const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
-  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
 }
 template <class T>
-void project_bwd_portable(const ProjectInputs<T>& x, int64_t begin, int64_t end, const CameraParams& cam,
+void project_bwd_portable(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                           const ProjectSettings& st, const T* grad2d, T* gm, T* gs, T* gq, T* go) {
-  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
 #ifdef ISPLAT_HAVE_AVX2_LANES
-ISPLAT_AVX2_FN void project_fwd_avx2(const ProjectInputs<float>& x, int64_t begin, int64_t end, const CameraParams& cam,
-                                     const ProjectSettings& st, float* packed, int32_t* rects, int64_t* bad) {
-  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+ISPLAT_AVX2_FN void project_fwd_avx2(const ProjectInputs<float>& src, int64_t begin, int64_t end,
+                                     const CameraParams& cam, const ProjectSettings& st, float* packed, int32_t* rects,
+                                     int64_t* bad) {
+  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
 }
-ISPLAT_AVX512_FN void project_fwd_avx512(const ProjectInputs<float>& x, int64_t begin, int64_t end,
+ISPLAT_AVX512_FN void project_fwd_avx512(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                          const CameraParams& cam, const ProjectSettings& st, float* packed,
                                          int32_t* rects, int64_t* bad) {
-  project_fwd_range(x, begin, end, cam, st, packed, rects, bad);
+  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
 }
-ISPLAT_AVX2_FN void project_bwd_avx2(const ProjectInputs<float>& x, int64_t begin, int64_t end, const CameraParams& cam,
-                                     const ProjectSettings& st, const float* grad2d, float* gm, float* gs, float* gq,
-                                     float* go) {
-  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+ISPLAT_AVX2_FN void project_bwd_avx2(const ProjectInputs<float>& src, int64_t begin, int64_t end,
+                                     const CameraParams& cam, const ProjectSettings& st, const float* grad2d, float* gm,
+                                     float* gs, float* gq, float* go) {
+  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
-ISPLAT_AVX512_FN void project_bwd_avx512(const ProjectInputs<float>& x, int64_t begin, int64_t end,
+ISPLAT_AVX512_FN void project_bwd_avx512(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                          const CameraParams& cam, const ProjectSettings& st, const float* grad2d,
                                          float* gm, float* gs, float* gq, float* go) {
-  project_bwd_range(x, begin, end, cam, st, grad2d, gm, gs, gq, go);
+  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
 #endif
 
@@ -404,7 +408,7 @@ std::pair<FwdRangeFn<T>, BwdRangeFn<T>> range_fns() {
   return {project_fwd_portable<T>, project_bwd_portable<T>};
 }
 
-// Ranges of whole blocks per task, so the blocks never depend on the thread count.
+// Tasks take whole multiples of the block, so only the array's last block is partial.
 constexpr int64_t kGrain = 2048;
 static_assert(kGrain % kBlock == 0);
 
