@@ -11,6 +11,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "data/nerfstudio.h"
@@ -353,6 +354,17 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   bump.depth[20][10] = 3.0f;
   o.depth_edge_holes = 1;
   CHECK(perturb_source(bump, o, 0).valid.sum().item<int64_t>() == H * W - 21);  // a city-block band would drop 13
+  o.depth_edge_holes_side = "far";  // the far side only: the bump's 20 neighbours lose their depth, it keeps its own
+  const ViewTensors shadow = perturb_source(bump, o, 0);
+  CHECK(shadow.valid.sum().item<int64_t>() == H * W - 20);
+  CHECK(shadow.valid[20][10].item<float>() == 1.0f);
+  o.depth_edge_holes = 2;  // on the step, the far half of the two-sided band: columns 29..31, not 32..34
+  const ViewTensors far = perturb_source(v, o, 0);
+  CHECK(far.valid.sum().item<int64_t>() == H * W - 3 * H);
+  CHECK(far.valid.narrow(1, 29, 3).max().item<float>() == 0.0f);
+  CHECK(far.valid.narrow(1, 32, 32).min().item<float>() == 1.0f);
+  CHECK(far.valid.narrow(1, 0, 29).min().item<float>() == 1.0f);
+  CHECK_THROWS_AS(config_from_json<PerturbOptions>({{"depth_edge_holes_side", "near"}}, "test"), Error);
   o = PerturbOptions{};
   o.depth_blur_px = 3;
   const auto blurred = perturb_source(v, o, 0).depth;

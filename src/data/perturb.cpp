@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/config.h"
@@ -50,6 +51,10 @@ void PerturbOptions::visit(ConfigVisitor& v) {
           "drop-outs at occlusion edges: depth within this many pixels (Chebyshev) of a depth edge (a 5% jump "
           "between neighbours, found before any other change) made invalid",
           Range::between(0, 64));
+  v.field("depth_edge_holes_side", depth_edge_holes_side,
+          "which side of each depth edge depth_edge_holes drops: both, or far (only pixels with a 5% nearer pixel "
+          "within depth_edge_holes + 1: the shadow a stereo or time-of-flight sensor leaves behind an occluder)",
+          {"both", "far"});
   v.field("depth_side", depth_side, "keep depth (and the prompts drawn from it) only on this side of the image",
           {"all", "left", "right", "top", "bottom"});
   v.field("exposure", exposure, "source image multiplied by this in linear light", Range::above(0.0));
@@ -77,6 +82,30 @@ PerturbOptions draw_depth_error(const DepthErrorOptions& o, uint64_t seed) {
   p.depth_blur_px = o.blur_px * torch::rand({1}, gen).item<double>();
   return p;
 }
+
+namespace {
+// Per pixel, the smallest valid depth within `radius` pixels (Chebyshev); +inf where there is none. Separable:
+// a row pass, then a column pass, O(pixels·radius).
+std::vector<float> min_filter_square(const float* depth, const float* valid, int64_t H, int64_t W, int64_t radius) {
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> rows(size_t(H * W)), out(size_t(H * W));
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      float m = inf;
+      for (int64_t k = std::max<int64_t>(0, j - radius); k <= std::min(W - 1, j + radius); ++k)
+        if (valid[i * W + k] != 0) m = std::min(m, depth[i * W + k]);
+      rows[i * W + j] = m;
+    }
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 0; j < W; ++j) {
+      float m = inf;
+      for (int64_t k = std::max<int64_t>(0, i - radius); k <= std::min(H - 1, i + radius); ++k)
+        m = std::min(m, rows[k * W + j]);
+      out[i * W + j] = m;
+    }
+  return out;
+}
+}  // namespace
 
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
   const auto z = depth.contiguous(), ok = valid.to(torch::kFloat32).contiguous();
@@ -106,7 +135,13 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
   if (o.depth_edge_holes > 0) {  // before anything moves the edges: a band on both sides of every depth edge
     const auto edges = depth_edges(depth, valid).to(torch::kUInt8).contiguous();
     const std::vector<uint8_t> mask(edges.data_ptr<uint8_t>(), edges.data_ptr<uint8_t>() + H * W);
-    const std::vector<uint8_t> band = dilate_square(mask, H, W, o.depth_edge_holes);
+    std::vector<uint8_t> band = dilate_square(mask, H, W, o.depth_edge_holes);
+    if (o.depth_edge_holes_side == "far") {  // only band pixels with one 5% nearer within n + 1: the far side
+      const auto nearest = min_filter_square(depth.contiguous().data_ptr<float>(), valid.contiguous().data_ptr<float>(),
+                                             H, W, o.depth_edge_holes + 1);
+      const float* z = depth.data_ptr<float>();
+      for (int64_t p = 0; p < H * W; ++p) band[p] = band[p] && nearest[p] < 0.95f * z[p];
+    }
     const auto drop = torch::from_blob(const_cast<uint8_t*>(band.data()), {H, W}, torch::kUInt8);
     valid = valid * (drop == 0).to(torch::kFloat32);
     depth = depth * valid;

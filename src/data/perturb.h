@@ -12,18 +12,19 @@ namespace isplat {
 class ConfigVisitor;
 
 struct PerturbOptions {
-  double depth_scale = 1.0;        // global scale error: z·s
-  double depth_noise = 0.0;        // multiplicative noise sigma on every pixel: z(1 + ε), ε ~ N(0, σ²)
-  double depth_warp = 0.0;         // smooth shape error: z·exp(σ·f), f bilinear between N(0, 1) grid nodes
-  int64_t depth_warp_cells = 3;    // ... with this many grid cells across the width
-  double depth_blur_px = 0.0;      // Gaussian blur sigma of the depth map, pixels (valid pixels only)
-  double depth_holes = 0.0;        // share of valid depth pixels made invalid
-  double depth_hole_size = 8.0;    // ... as blobs of about this radius (pixels); 0 = independent pixels
-  double depth_edge_noise = 0.0;   // multiplicative noise sigma at depth edges only
-  int64_t depth_edge_holes = 0;    // depth within this many pixels (Chebyshev) of a depth edge made invalid
-  std::string depth_side = "all";  // all | left | right | top | bottom: depth (and prompts) only there
-  double exposure = 1.0;           // source image scaled by this in linear light
-  int64_t jpeg_quality = 0;        // 0 = off; else the source image re-encoded as JPEG at this quality
+  double depth_scale = 1.0;       // global scale error: z·s
+  double depth_noise = 0.0;       // multiplicative noise sigma on every pixel: z(1 + ε), ε ~ N(0, σ²)
+  double depth_warp = 0.0;        // smooth shape error: z·exp(σ·f), f bilinear between N(0, 1) grid nodes
+  int64_t depth_warp_cells = 3;   // ... with this many grid cells across the width
+  double depth_blur_px = 0.0;     // Gaussian blur sigma of the depth map, pixels (valid pixels only)
+  double depth_holes = 0.0;       // share of valid depth pixels made invalid
+  double depth_hole_size = 8.0;   // ... as blobs of about this radius (pixels); 0 = independent pixels
+  double depth_edge_noise = 0.0;  // multiplicative noise sigma at depth edges only
+  int64_t depth_edge_holes = 0;   // depth within this many pixels (Chebyshev) of a depth edge made invalid
+  std::string depth_edge_holes_side = "both";  // ... on both sides, or "far": only behind the nearer surface
+  std::string depth_side = "all";              // all | left | right | top | bottom: depth (and prompts) only there
+  double exposure = 1.0;                       // source image scaled by this in linear light
+  int64_t jpeg_quality = 0;                    // 0 = off; else the source image re-encoded as JPEG at this quality
   bool any() const;
   bool any_depth() const;  // any option that changes depth or its valid mask
   void visit(ConfigVisitor& v);
