@@ -486,10 +486,10 @@ TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]"
 
 TEST_CASE("render: every SIMD level's projection agrees bit for bit, culled and non-finite inputs included",
           "[render]") {
-  // The projection runs 16 Gaussians per vector, built once per level; this ties the levels together (the
-  // reference and finite-difference tests check the projection itself). A mixed set: in view, behind the camera,
-  // outside the 1.3x frustum (clamped Jacobian), degenerate, non-finite, a block with no gradient (rows 32..47),
-  // and a last block of 11 (5003 = 16·312 + 11).
+  // The projection runs a block of Gaussians per vector (4 or 8 lanes), built once per level; this ties the levels
+  // together (the reference and finite-difference tests check the projection itself). A mixed set: in view, behind
+  // the camera, outside the 1.3x frustum (clamped Jacobian), degenerate, non-finite, whole blocks with no gradient
+  // (rows 32..47), and a partial last block (5003 is odd).
   for (bool antialiased : {false, true}) {
     CAPTURE(antialiased);
     torch::manual_seed(7);

@@ -1,5 +1,5 @@
 // EWA projection of 3D Gaussians to screen-space records, and its backward to means, scales, quats, opacities.
-// Both run on blocks of 16 Gaussians, one per vector lane (GCC vector extensions), compiled once per SIMD level.
+// Both run on blocks of Gaussians, one per vector lane (GCC vector extensions), compiled once per SIMD level.
 // Every lane does the one-Gaussian formulas' IEEE operations in the same order (the file builds with
 // -ffp-contract=off), so all levels give bit-identical records and gradients (a NaN's sign bit aside).
 #include <ATen/Dispatch.h>
@@ -16,20 +16,23 @@
 namespace isplat::splat {
 namespace {
 
-constexpr int kBlock = 16;  // Gaussians per block, one per lane
-template <class T>
+// L Gaussians per block, one per lane: as many as one register holds (8 floats on AVX2 and AVX-512, 4 on SSE).
+// Wider blocks spill: 16 lanes took 1.5-2x as long on AVX-512 and AVX2.
+template <class T, int L>
 struct VecOf {
-  typedef T type __attribute__((vector_size(kBlock * sizeof(T))));
+  typedef T type __attribute__((vector_size(L * sizeof(T))));
 };
-template <class T>
-using Vec = typename VecOf<T>::type;  // 16 lanes of T
-template <class T>
-using Mask = decltype(Vec<T>{} < Vec<T>{});  // lane-wise comparison result: −1 (true) or 0
+template <class T, int L>
+using Vec = typename VecOf<T, L>::type;
+template <class T, int L>
+using Mask = decltype(Vec<T, L>{} < Vec<T, L>{});  // lane-wise comparison result: −1 (true) or 0
+template <class V>
+constexpr int lanes_of = int(sizeof(V) / sizeof(std::declval<V>()[0]));
 
-template <class T>
-ISPLAT_INLINE Vec<T> bcast(T x) {  // exact, −0 included
-  Vec<T> v;
-  for (int j = 0; j < kBlock; ++j) v[j] = x;
+template <int L, class T>
+ISPLAT_INLINE Vec<T, L> bcast(T x) {  // exact, −0 included
+  Vec<T, L> v;
+  for (int j = 0; j < L; ++j) v[j] = x;
   return v;
 }
 // std::min(a, b) and std::max(a, b) lane by lane, NaN handling included.
@@ -47,19 +50,19 @@ ISPLAT_INLINE auto finite(V x) {
 }
 template <class V>
 ISPLAT_INLINE V vsqrt(V x) {
-  for (int j = 0; j < kBlock; ++j) x[j] = std::sqrt(x[j]);
+  for (int j = 0; j < lanes_of<V>; ++j) x[j] = std::sqrt(x[j]);
   return x;
 }
 
 // One block's inputs, transposed to one vector per component. Lanes past the end hold zero scales (culled).
-template <class T>
+template <class T, int L>
 struct InputBlock {
-  Vec<T> m[3], s[3], q[4], o;
+  Vec<T, L> m[3], s[3], q[4], o;
 };
-template <class T>
+template <class T, int L>
 ISPLAT_INLINE void load_block(const T* means, const T* scales, const T* quats, const T* opac, int64_t first, int count,
-                              InputBlock<T>& in) {
-  for (int j = 0; j < kBlock; ++j) {
+                              InputBlock<T, L>& in) {
+  for (int j = 0; j < L; ++j) {
     const bool real = j < count;
     const int64_t i = first + (real ? j : 0);
     for (int c = 0; c < 3; ++c)
@@ -70,40 +73,40 @@ ISPLAT_INLINE void load_block(const T* means, const T* scales, const T* quats, c
 }
 
 // Everything the forward computes for a block that the backward needs again.
-template <class T>
+template <class T, int L>
 struct GeometryBlock {
-  Vec<T> t[3];    // camera-space mean
-  Vec<T> a, b;    // t.x/t.z, t.y/t.z (unclamped)
-  Vec<T> ac, bc;  // clamped into 1.3× the frustum, for the Jacobian
-  Mask<T> u_clamped, v_clamped;
-  Vec<T> q[4], qnorm;  // normalized quaternion, norm of the input
-  Vec<T> Rq[9];        // rotation of the normalized quaternion, row-major
-  Vec<T> Tm[6];        // J·W, 2×3
-  Vec<T> M[9];         // Rq·diag(s)
-  Vec<T> A2[6];        // Tm·M, 2×3: Σ_raw = A2·A2ᵀ
-  Vec<T> sa, sb, sc;   // Σ_raw = [[sa, sb], [sb, sc]]
-  Vec<T> det;          // det(Σ_raw + dilation·I)
-  Vec<T> rho;          // det Σ_raw / det (antialiased mode)
-  Vec<T> opac;         // effective opacity o'
-  Mask<T> live;        // false: culled (behind the near plane, degenerate, invisible or non-finite)
+  Vec<T, L> t[3];    // camera-space mean
+  Vec<T, L> a, b;    // t.x/t.z, t.y/t.z (unclamped)
+  Vec<T, L> ac, bc;  // clamped into 1.3× the frustum, for the Jacobian
+  Mask<T, L> u_clamped, v_clamped;
+  Vec<T, L> q[4], qnorm;  // normalized quaternion, norm of the input
+  Vec<T, L> Rq[9];        // rotation of the normalized quaternion, row-major
+  Vec<T, L> Tm[6];        // J·W, 2×3
+  Vec<T, L> M[9];         // Rq·diag(s)
+  Vec<T, L> A2[6];        // Tm·M, 2×3: Σ_raw = A2·A2ᵀ
+  Vec<T, L> sa, sb, sc;   // Σ_raw = [[sa, sb], [sb, sc]]
+  Vec<T, L> det;          // det(Σ_raw + dilation·I)
+  Vec<T, L> rho;          // det Σ_raw / det (antialiased mode)
+  Vec<T, L> opac;         // effective opacity o'
+  Mask<T, L> live;        // false: culled (behind the near plane, degenerate, invisible or non-finite)
 };
 
 // J (2×3, row-major), the projection's Jacobian at depth tz and the clamped normalized point (ac, bc);
 // one definition for the forward and the backward pass.
-template <class T>
-ISPLAT_INLINE void projection_jacobian(T fx, T fy, T sk, Vec<T> tz, Vec<T> ac, Vec<T> bc, Vec<T> (&J)[6]) {
+template <class T, int L>
+ISPLAT_INLINE void projection_jacobian(T fx, T fy, T sk, Vec<T, L> tz, Vec<T, L> ac, Vec<T, L> bc, Vec<T, L> (&J)[6]) {
   J[0] = fx / tz, J[1] = sk / tz, J[2] = -(fx * ac + sk * bc) / tz;
-  J[3] = bcast(T(0)), J[4] = fy / tz, J[5] = -fy * bc / tz;
+  J[3] = bcast<L>(T(0)), J[4] = fy / tz, J[5] = -fy * bc / tz;
 }
 
-template <class T>
-ISPLAT_INLINE void project_block(const InputBlock<T>& in, const CameraParams& cam, const ProjectSettings& st,
-                                 GeometryBlock<T>& g) {
-  using V = Vec<T>;
+template <class T, int L>
+ISPLAT_INLINE void project_block(const InputBlock<T, L>& in, const CameraParams& cam, const ProjectSettings& st,
+                                 GeometryBlock<T, L>& g) {
+  using V = Vec<T, L>;
   const double* R = cam.R;
   for (int i = 0; i < 3; ++i)
     g.t[i] = T(R[3 * i]) * in.m[0] + T(R[3 * i + 1]) * in.m[1] + T(R[3 * i + 2]) * in.m[2] + T(cam.t[i]);
-  Mask<T> live = (g.t[2] >= T(st.near)) & (in.s[0] > T(0)) & (in.s[1] > T(0)) & (in.s[2] > T(0)) & (in.o > T(0));
+  Mask<T, L> live = (g.t[2] >= T(st.near)) & (in.s[0] > T(0)) & (in.s[1] > T(0)) & (in.s[2] > T(0)) & (in.o > T(0));
   const V qn2 = in.q[0] * in.q[0] + in.q[1] * in.q[1] + in.q[2] * in.q[2] + in.q[3] * in.q[3];
   live &= (qn2 > T(1e-30)) & finite(qn2);
   g.qnorm = vsqrt(qn2);
@@ -124,14 +127,14 @@ ISPLAT_INLINE void project_block(const InputBlock<T>& in, const CameraParams& ca
   const T vlo = -my, vhi = T(cam.height) + my, ulo = -mx, uhi = T(cam.width) + mx;
   const T blo = (vlo - cy) / fy, bhi = (vhi - cy) / fy;
   g.v_clamped = (g.b < blo) | (g.b > bhi);
-  g.bc = vmin(vmax(g.b, bcast(blo)), bcast(bhi));
+  g.bc = vmin(vmax(g.b, bcast<L>(blo)), bcast<L>(bhi));
   const V uc = fx * g.a + sk * g.bc + cx;
   g.u_clamped = (uc < ulo) | (uc > uhi);
-  g.ac = g.u_clamped ? ((uc < ulo ? bcast(ulo) : bcast(uhi)) - cx - sk * g.bc) / fx : g.a;
+  g.ac = g.u_clamped ? ((uc < ulo ? bcast<L>(ulo) : bcast<L>(uhi)) - cx - sk * g.bc) / fx : g.a;
 
   // J (2×3) at the clamped point, then Tm = J·W.
   V J[6];
-  projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
+  projection_jacobian<T, L>(fx, fy, sk, tz, g.ac, g.bc, J);
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 3; ++c)
       g.Tm[3 * r + c] = J[3 * r] * T(R[c]) + J[3 * r + 1] * T(R[3 + c]) + J[3 * r + 2] * T(R[6 + c]);
@@ -148,7 +151,7 @@ ISPLAT_INLINE void project_block(const InputBlock<T>& in, const CameraParams& ca
   const T dil = T(st.dilation);
   g.det = (g.sa + dil) * (g.sc + dil) - g.sb * g.sb;
   live &= (g.det > T(0)) & finite(g.det);  // degenerate 2D covariance: never divide by it
-  g.rho = bcast(T(1)), g.opac = in.o;
+  g.rho = bcast<L>(T(1)), g.opac = in.o;
   if (st.antialiased) {
     g.rho = (g.sa * g.sc - g.sb * g.sb) / g.det;
     live &= g.rho > T(0);
@@ -170,10 +173,10 @@ struct ProjectInputs {
 };
 
 // Projects Gaussians [begin, end) into their records and tile rectangles; counts non-finite inputs into bad[5].
-template <class T>
+template <class T, int L>
 ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                                      const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
-  using V = Vec<T>;
+  using V = Vec<T, L>;
   const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
   const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew), dil = T(st.dilation);
   auto count_bad = [](const T* v, int k) {
@@ -181,12 +184,12 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
     for (int j = 0; j < k; ++j) b += std::isfinite(v[j]) ? 0 : 1;
     return b;
   };
-  InputBlock<T> in;
-  GeometryBlock<T> g;
-  for (int64_t first = begin; first < end; first += kBlock) {
-    const int count = int(std::min<int64_t>(kBlock, end - first));
+  InputBlock<T, L> in;
+  GeometryBlock<T, L> g;
+  for (int64_t first = begin; first < end; first += L) {
+    const int count = int(std::min<int64_t>(L, end - first));
     load_block(src.means, src.scales, src.quats, src.opac, first, count, in);
-    bool clean[kBlock];
+    bool clean[L];
     for (int j = 0; j < count; ++j) {
       const int64_t i = first + j;
       const int b[5] = {count_bad(src.means + 3 * i, 3), count_bad(src.scales + 3 * i, 3),
@@ -198,16 +201,16 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
     const V u = fx * g.a + sk * g.b + cx, v = fy * g.b + cy;
     const V ad = g.sa + dil, cd = g.sc + dil;
     const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
-    const Mask<T> live = g.live & finite(u) & finite(v) & finite(A) & finite(B) & finite(C);
+    const Mask<T, L> live = g.live & finite(u) & finite(v) & finite(A) & finite(B) & finite(C);
     const V scaled_opac = T(255) * g.opac;
     // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
-    const Mask<T> smallest_y = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]);
-    const Mask<T> smallest_z = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
+    const Mask<T, L> smallest_y = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]);
+    const Mask<T, L> smallest_z = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
     V axis[3], nrm[3];
     for (int r = 0; r < 3; ++r) axis[r] = smallest_y ? g.Rq[3 * r + 1] : smallest_z ? g.Rq[3 * r + 2] : g.Rq[3 * r];
     for (int r = 0; r < 3; ++r)
       nrm[r] = T(cam.R[3 * r]) * axis[0] + T(cam.R[3 * r + 1]) * axis[1] + T(cam.R[3 * r + 2]) * axis[2];
-    const Mask<T> flip = nrm[0] * g.t[0] + nrm[1] * g.t[1] + nrm[2] * g.t[2] > T(0);
+    const Mask<T, L> flip = nrm[0] * g.t[0] + nrm[1] * g.t[1] + nrm[2] * g.t[2] > T(0);
     for (auto& c : nrm) c = flip ? -c : c;
 
     for (int j = 0; j < count; ++j) {
@@ -240,40 +243,40 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
 }
 
 // Back-propagates the 2D gradients of Gaussians [begin, end) through the projection.
-template <class T>
+template <class T, int L>
 ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                                      const ProjectSettings& st, const T* grad2d, T* g_means, T* g_scales, T* g_quats,
                                      T* g_opac) {
-  using V = Vec<T>;
+  using V = Vec<T, L>;
   const T fx = T(cam.fx), fy = T(cam.fy), sk = T(cam.skew), dil = T(st.dilation);
   const double* R = cam.R;
-  InputBlock<T> in;
-  GeometryBlock<T> g;
-  for (int64_t first = begin; first < end; first += kBlock) {
-    const int count = int(std::min<int64_t>(kBlock, end - first));
+  InputBlock<T, L> in;
+  GeometryBlock<T, L> g;
+  for (int64_t first = begin; first < end; first += L) {
+    const int count = int(std::min<int64_t>(L, end - first));
     std::fill(g_means + 3 * first, g_means + 3 * (first + count), T(0));
     std::fill(g_scales + 3 * first, g_scales + 3 * (first + count), T(0));
     std::fill(g_quats + 4 * first, g_quats + 4 * (first + count), T(0));
     std::fill(g_opac + first, g_opac + first + count, T(0));
     V gi[kGrad2d];
     bool any_in_block = false;
-    for (int j = 0; j < kBlock; ++j)
+    for (int j = 0; j < L; ++j)
       for (int k = 0; k < kGrad2d; ++k) {
         gi[k][j] = j < count ? grad2d[(first + j) * kGrad2d + k] : T(0);
         any_in_block |= gi[k][j] != 0;
       }
     if (!any_in_block) continue;  // culled or never contributing
-    Mask<T> any = gi[0] != T(0);
+    Mask<T, L> any = gi[0] != T(0);
     for (int k = 1; k < kGrad2d; ++k) any |= gi[k] != T(0);
     load_block(src.means, src.scales, src.quats, src.opac, first, count, in);
     project_block(in, cam, st, g);
-    const Mask<T> live = g.live & any;
+    const Mask<T, L> live = g.live & any;
     const V gu = gi[0], gv = gi[1], gA = gi[2], gB = gi[3], gC = gi[4], gop = gi[5], gdepth = gi[9];
     const V ad = g.sa + dil, cd = g.sc + dil;
     const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
 
     // Opacity (and the antialiasing factor sqrt(ρ), ρ = det Σ_raw / det).
-    V g_sa = bcast(T(0)), g_sb = g_sa, g_sc = g_sa, g_det = g_sa, g_o;
+    V g_sa = bcast<L>(T(0)), g_sb = g_sa, g_sc = g_sa, g_det = g_sa, g_o;
     if (st.antialiased) {
       const V sr = vsqrt(g.rho);
       g_o = gop * sr;
@@ -329,15 +332,15 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin,
         gJ[3 * r + c] = gTm[3 * r] * T(R[3 * c]) + gTm[3 * r + 1] * T(R[3 * c + 1]) + gTm[3 * r + 2] * T(R[3 * c + 2]);
     const V tz = g.t[2];
     V J[6];
-    projection_jacobian(fx, fy, sk, tz, g.ac, g.bc, J);
-    V g_tz = bcast(T(0));
+    projection_jacobian<T, L>(fx, fy, sk, tz, g.ac, g.bc, J);
+    V g_tz = bcast<L>(T(0));
     for (int k = 0; k < 6; ++k) g_tz -= gJ[k] * J[k] / tz;  // every entry of J is ∝ 1/z
     V g_ac = -fx * gJ[2] / tz;
     V g_bc = -(sk * gJ[2] + fy * gJ[5]) / tz;
     // Through the frustum clamp: a clamped coordinate is constant in its own argument.
     g_bc = g.u_clamped ? g_bc - sk / fx * g_ac : g_bc;
-    g_ac = g.u_clamped ? bcast(T(0)) : g_ac;
-    V g_a = g_ac, g_b = g.v_clamped ? bcast(T(0)) : g_bc;
+    g_ac = g.u_clamped ? bcast<L>(T(0)) : g_ac;
+    V g_a = g_ac, g_b = g.v_clamped ? bcast<L>(T(0)) : g_bc;
     // Mean: u = fx·a + skew·b + cx, v = fy·b + cy.
     g_a += fx * gu;
     g_b += sk * gu + fy * gv;
@@ -359,33 +362,33 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin,
 template <class T>
 void project_fwd_portable(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                           const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
-  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
+  project_fwd_range<T, int(16 / sizeof(T))>(src, begin, end, cam, st, packed, rects, bad);
 }
 template <class T>
 void project_bwd_portable(const ProjectInputs<T>& src, int64_t begin, int64_t end, const CameraParams& cam,
                           const ProjectSettings& st, const T* grad2d, T* gm, T* gs, T* gq, T* go) {
-  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
+  project_bwd_range<T, int(16 / sizeof(T))>(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
 #ifdef ISPLAT_HAVE_AVX2_LANES
 ISPLAT_AVX2_FN void project_fwd_avx2(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                      const CameraParams& cam, const ProjectSettings& st, float* packed, int32_t* rects,
                                      int64_t* bad) {
-  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
+  project_fwd_range<float, 8>(src, begin, end, cam, st, packed, rects, bad);
 }
 ISPLAT_AVX512_FN void project_fwd_avx512(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                          const CameraParams& cam, const ProjectSettings& st, float* packed,
                                          int32_t* rects, int64_t* bad) {
-  project_fwd_range(src, begin, end, cam, st, packed, rects, bad);
+  project_fwd_range<float, 8>(src, begin, end, cam, st, packed, rects, bad);
 }
 ISPLAT_AVX2_FN void project_bwd_avx2(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                      const CameraParams& cam, const ProjectSettings& st, const float* grad2d, float* gm,
                                      float* gs, float* gq, float* go) {
-  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
+  project_bwd_range<float, 8>(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
 ISPLAT_AVX512_FN void project_bwd_avx512(const ProjectInputs<float>& src, int64_t begin, int64_t end,
                                          const CameraParams& cam, const ProjectSettings& st, const float* grad2d,
                                          float* gm, float* gs, float* gq, float* go) {
-  project_bwd_range(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
+  project_bwd_range<float, 8>(src, begin, end, cam, st, grad2d, gm, gs, gq, go);
 }
 #endif
 
@@ -410,7 +413,7 @@ std::pair<FwdRangeFn<T>, BwdRangeFn<T>> range_fns() {
 
 // Tasks take whole multiples of the block, so only the array's last block is partial.
 constexpr int64_t kGrain = 2048;
-static_assert(kGrain % kBlock == 0);
+static_assert(kGrain % 16 == 0);  // a multiple of every block size
 
 }  // namespace
 
