@@ -16,8 +16,9 @@
 namespace isplat::splat {
 namespace {
 
-// L Gaussians per block, one per lane: as many as one register holds (8 floats on AVX2 and AVX-512, 4 on SSE).
-// Wider blocks spill: 16 lanes took 1.5-2x as long on AVX-512 and AVX2.
+// L Gaussians per block, one per lane: 256-bit vectors on AVX2 and AVX-512 (8 floats; one register on AVX2, half
+// of one on AVX-512), 128-bit in the portable build (4 floats, 2 doubles). 16 float lanes took about 1.3-1.8x as
+// long on AVX-512 and 2-2.8x on AVX2 (measured, docs/results/2026-11-27-projection-simd.md).
 template <class T, int L>
 struct VecOf {
   typedef T type __attribute__((vector_size(L * sizeof(T))));
@@ -413,7 +414,7 @@ std::pair<FwdRangeFn<T>, BwdRangeFn<T>> range_fns() {
 
 // Tasks take whole multiples of the block, so only the array's last block is partial.
 constexpr int64_t kGrain = 2048;
-static_assert(kGrain % 16 == 0);  // a multiple of every block size
+static_assert(kGrain % 16 == 0);  // a multiple of every block size (2, 4 or 8 lanes)
 
 }  // namespace
 
