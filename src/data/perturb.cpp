@@ -83,30 +83,6 @@ PerturbOptions draw_depth_error(const DepthErrorOptions& o, uint64_t seed) {
   return p;
 }
 
-namespace {
-// Per pixel, the smallest valid depth within `radius` pixels (Chebyshev); +inf where there is none. Separable:
-// a row pass, then a column pass, O(pixels·radius).
-std::vector<float> min_filter_square(const float* depth, const float* valid, int64_t H, int64_t W, int64_t radius) {
-  const float inf = std::numeric_limits<float>::infinity();
-  std::vector<float> rows(size_t(H * W)), out(size_t(H * W));
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 0; j < W; ++j) {
-      float m = inf;
-      for (int64_t k = std::max<int64_t>(0, j - radius); k <= std::min(W - 1, j + radius); ++k)
-        if (valid[i * W + k] != 0) m = std::min(m, depth[i * W + k]);
-      rows[i * W + j] = m;
-    }
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 0; j < W; ++j) {
-      float m = inf;
-      for (int64_t k = std::max<int64_t>(0, i - radius); k <= std::min(H - 1, i + radius); ++k)
-        m = std::min(m, rows[k * W + j]);
-      out[i * W + j] = m;
-    }
-  return out;
-}
-}  // namespace
-
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
   const auto z = depth.contiguous(), ok = valid.to(torch::kFloat32).contiguous();
   const int64_t H = z.size(0), W = z.size(1);
@@ -137,10 +113,17 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
     const std::vector<uint8_t> mask(edges.data_ptr<uint8_t>(), edges.data_ptr<uint8_t>() + H * W);
     std::vector<uint8_t> band = dilate_square(mask, H, W, o.depth_edge_holes);
     if (o.depth_edge_holes_side == "far") {  // only band pixels with one 5% nearer within n + 1: the far side
-      const auto nearest = min_filter_square(depth.contiguous().data_ptr<float>(), valid.contiguous().data_ptr<float>(),
-                                             H, W, o.depth_edge_holes + 1);
-      const float* z = depth.data_ptr<float>();
-      for (int64_t p = 0; p < H * W; ++p) band[p] = band[p] && nearest[p] < 0.95f * z[p];
+      // The smallest valid depth within n + 1 px (Chebyshev): an erosion, with invalid pixels (and the outside of
+      // the image) at +inf.
+      const float inf = std::numeric_limits<float>::infinity();
+      auto z = torch::where(valid > 0, depth, inf).contiguous();
+      const int k = static_cast<int>(2 * (o.depth_edge_holes + 1) + 1);
+      cv::Mat zm(static_cast<int>(H), static_cast<int>(W), CV_32F, z.data_ptr<float>()), nearest;
+      cv::erode(zm, nearest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)), cv::Point(-1, -1), 1,
+                cv::BORDER_CONSTANT, cv::Scalar::all(inf));
+      const float* zp = depth.data_ptr<float>();
+      const float* np = nearest.ptr<float>();
+      for (int64_t p = 0; p < H * W; ++p) band[p] = band[p] && np[p] < 0.95f * zp[p];
     }
     const auto drop = torch::from_blob(const_cast<uint8_t*>(band.data()), {H, W}, torch::kUInt8);
     valid = valid * (drop == 0).to(torch::kFloat32);
