@@ -6,7 +6,6 @@
 #include <ATen/Parallel.h>
 
 #include <atomic>
-
 #include <type_traits>
 #include <utility>
 
@@ -86,7 +85,9 @@ struct GeometryBlock {
   Vec<T, L> M[9];         // Rq·diag(s)
   Vec<T, L> A2[6];        // Tm·M, 2×3: Σ_raw = A2·A2ᵀ
   Vec<T, L> sa, sb, sc;   // Σ_raw = [[sa, sb], [sb, sc]]
+  Vec<T, L> ad, cd;       // the diagonal of Σ_raw + dilation·I
   Vec<T, L> det;          // det(Σ_raw + dilation·I)
+  Vec<T, L> A, B, C;      // conic (Σ_raw + dilation·I)⁻¹ = [[A, B], [B, C]]
   Vec<T, L> rho;          // det Σ_raw / det (antialiased mode)
   Vec<T, L> opac;         // effective opacity o'
   Mask<T, L> live;        // false: culled (behind the near plane, degenerate, invisible or non-finite)
@@ -150,8 +151,10 @@ ISPLAT_INLINE void project_block(const InputBlock<T, L>& in, const CameraParams&
   g.sb = r0[0] * r1[0] + r0[1] * r1[1] + r0[2] * r1[2];
   g.sc = r1[0] * r1[0] + r1[1] * r1[1] + r1[2] * r1[2];
   const T dil = T(st.dilation);
-  g.det = (g.sa + dil) * (g.sc + dil) - g.sb * g.sb;
-  live &= (g.det > T(0)) & finite(g.det);  // degenerate 2D covariance: never divide by it
+  g.ad = g.sa + dil, g.cd = g.sc + dil;
+  g.det = g.ad * g.cd - g.sb * g.sb;
+  live &= (g.det > T(0)) & finite(g.det);  // degenerate 2D covariance: culled, so its lanes' quotients are unused
+  g.A = g.cd / g.det, g.B = -g.sb / g.det, g.C = g.ad / g.det;
   g.rho = bcast<L>(T(1)), g.opac = in.o;
   if (st.antialiased) {
     g.rho = (g.sa * g.sc - g.sb * g.sb) / g.det;
@@ -179,7 +182,7 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
                                      const ProjectSettings& st, T* packed, int32_t* rects, int64_t* bad) {
   using V = Vec<T, L>;
   const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
-  const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew), dil = T(st.dilation);
+  const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew);
   auto count_bad = [](const T* v, int k) {
     int b = 0;
     for (int j = 0; j < k; ++j) b += std::isfinite(v[j]) ? 0 : 1;
@@ -200,9 +203,7 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
     }
     project_block(in, cam, st, g);
     const V u = fx * g.a + sk * g.b + cx, v = fy * g.b + cy;
-    const V ad = g.sa + dil, cd = g.sc + dil;
-    const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
-    const Mask<T, L> live = g.live & finite(u) & finite(v) & finite(A) & finite(B) & finite(C);
+    const Mask<T, L> live = g.live & finite(u) & finite(v) & finite(g.A) & finite(g.B) & finite(g.C);
     const V scaled_opac = T(255) * g.opac;
     // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
     const Mask<T, L> smallest_y = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]);
@@ -225,8 +226,8 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
       const T cut = scaled_opac[j] >= T(91) ? T(kMaxPower) : std::min(T(kMaxPower), std::log(scaled_opac[j]));
       // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
       const double extent2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
-      const double rx = std::sqrt(extent2 * double(ad[j])) + kSpanMargin,
-                   ry = std::sqrt(extent2 * double(cd[j])) + kSpanMargin;
+      const double rx = std::sqrt(extent2 * double(g.ad[j])) + kSpanMargin,
+                   ry = std::sqrt(extent2 * double(g.cd[j])) + kSpanMargin;
       const double uj = double(u[j]), vj = double(v[j]);
       const int32_t tx0 = tile_floor((uj - rx) / kTile, 0, tiles_x);
       const int32_t tx1 = tile_floor((uj + rx) / kTile, -1, tiles_x - 1) + 1;
@@ -234,7 +235,7 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
       const int32_t ty1 = tile_floor((vj + ry) / kTile, -1, tiles_y - 1) + 1;
       if (tx0 >= tx1 || ty0 >= ty1) continue;  // footprint misses the image
       rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
-      rec[kU] = u[j], rec[kV] = v[j], rec[kConA] = A[j], rec[kConB] = B[j], rec[kConC] = C[j];
+      rec[kU] = u[j], rec[kV] = v[j], rec[kConA] = g.A[j], rec[kConB] = g.B[j], rec[kConC] = g.C[j];
       rec[kOpac] = g.opac[j], rec[kCut] = cut, rec[kDepth] = g.t[2][j];
       rec[kR] = src.colors[3 * i], rec[kG] = src.colors[3 * i + 1], rec[kB] = src.colors[3 * i + 2];
       rec[kNx] = nrm[0][j], rec[kNy] = nrm[1][j], rec[kNz] = nrm[2][j];
@@ -249,7 +250,7 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin,
                                      const ProjectSettings& st, const T* grad2d, T* g_means, T* g_scales, T* g_quats,
                                      T* g_opac) {
   using V = Vec<T, L>;
-  const T fx = T(cam.fx), fy = T(cam.fy), sk = T(cam.skew), dil = T(st.dilation);
+  const T fx = T(cam.fx), fy = T(cam.fy), sk = T(cam.skew);
   const double* R = cam.R;
   InputBlock<T, L> in;
   GeometryBlock<T, L> g;
@@ -273,8 +274,6 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin,
     project_block(in, cam, st, g);
     const Mask<T, L> live = g.live & any;
     const V gu = gi[0], gv = gi[1], gA = gi[2], gB = gi[3], gC = gi[4], gop = gi[5], gdepth = gi[9];
-    const V ad = g.sa + dil, cd = g.sc + dil;
-    const V A = cd / g.det, B = -g.sb / g.det, C = ad / g.det;
 
     // Opacity (and the antialiasing factor sqrt(ρ), ρ = det Σ_raw / det).
     V g_sa = bcast<L>(T(0)), g_sb = g_sa, g_sc = g_sa, g_det = g_sa, g_o;
@@ -289,10 +288,10 @@ ISPLAT_INLINE void project_bwd_range(const ProjectInputs<T>& src, int64_t begin,
       g_o = gop;
     }
     // Conic = (cd, -sb, ad) / det.
-    g_det -= (gA * A + gB * B + gC * C) / g.det;
+    g_det -= (gA * g.A + gB * g.B + gC * g.C) / g.det;
     V g_ad = gC / g.det, g_cd = gA / g.det;
     g_sb -= gB / g.det;
-    g_ad += g_det * cd, g_cd += g_det * ad, g_sb -= T(2) * g.sb * g_det;
+    g_ad += g_det * g.cd, g_cd += g_det * g.ad, g_sb -= T(2) * g.sb * g_det;
     g_sa += g_ad, g_sc += g_cd;
 
     // Σ_raw = A2·A2ᵀ.
