@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "sampler/base_gaussians.h"
@@ -356,6 +357,59 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
   const int64_t plain_budget = resolve_budget(sa, depth, valid, K());
   sa.fill_px = 8;
   CHECK(resolve_budget(sa, depth, valid, K()) > plain_budget);
+}
+
+TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side's depth, other holes the blend",
+          "[sampler]") {
+  const auto u = pixel_centers(H, W).select(-1, 0);
+  // An occluder at 1 m on columns 0-27, a slanted background (inverse depth affine in u, so a plane) behind it,
+  // and a sensor's shadow: columns 28-33 of the background have no depth.
+  const auto background = 1.0 / (0.30 - 0.002 * u);
+  auto depth = torch::where(u < 28, torch::ones({H, W}), background).to(torch::kFloat32);
+  auto valid = ones();
+  valid.narrow(1, 28, 6).zero_();
+  const FilledDepth blend = fill_depth_holes(depth, valid, 8);
+  const FilledDepth far = fill_depth_holes(depth, valid, 8, true);
+  CHECK(far.filled == blend.filled);
+  CHECK(far.filled == 6 * H);
+  const auto shadow_truth = background.narrow(1, 28, 6);
+  // The blend bridges the two surfaces; the far side continues the background's plane into the shadow (the
+  // diagonal rays that reach the top or bottom row there see no slope, and the others outvote them).
+  CHECK(blend.depth.narrow(1, 28, 6).min().item<double>() < 0.7 * shadow_truth.min().item<double>());
+  const auto far_error = (far.depth.narrow(1, 28, 6) - shadow_truth).abs() / shadow_truth;
+  CHECK(far_error.max().item<double>() < 1e-4);
+  // Only the shadow changes: valid depth stays as it was.
+  CHECK(torch::equal(far.depth.narrow(1, 34, W - 34), blend.depth.narrow(1, 34, W - 34)));
+  CHECK(torch::equal(far.depth.narrow(1, 0, 28), blend.depth.narrow(1, 0, 28)));
+
+  // A hole with no edge across it, even on a steep plane (3x the depth across the image), is filled as blend fills it.
+  const auto plane = 1.0 / (0.9 - 0.012 * u);
+  auto holed = ones();
+  holed.narrow(0, 10, 12).narrow(1, 20, 12).zero_();
+  CHECK(torch::equal(fill_depth_holes(plane, holed, 8, true).depth, fill_depth_holes(plane, holed, 8).depth));
+
+  // Through the sampler (with edge supports, which the blend's steep ramp leaves the only ones in the shadow): with
+  // far, the shadow's supports lie on the background's plane; with the blend, some hang between the surfaces.
+  SamplerOptions o = fixed(6000);
+  o.fill_px = 8;
+  o.edge_supports = true;
+  auto in_shadow = [](const Supports& s) {
+    const auto su = s.uv.select(1, 0);
+    return (su > 28.5) & (su < 33.5);
+  };
+  const Supports b = sample_supports(depth, valid, K(), image(), o, 5);
+  o.fill_mode = "far";
+  const Supports f = sample_supports(depth, valid, K(), image(), o, 5);
+  const auto f_truth = 1.0 / (0.30 - 0.002 * f.uv.select(1, 0)), b_truth = 1.0 / (0.30 - 0.002 * b.uv.select(1, 0));
+  REQUIRE(in_shadow(f).sum().item<int64_t>() > 20);
+  CHECK(((f.depth - f_truth).abs() / f_truth).masked_select(in_shadow(f)).max().item<double>() < 0.01);
+  REQUIRE(in_shadow(b).sum().item<int64_t>() > 20);
+  CHECK((b.depth / b_truth).masked_select(in_shadow(b)).min().item<double>() < 0.7);
+  // The schema: far without fill_px is refused, naming the key.
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"fill_mode", "far"}}, "test"),
+                    Catch::Contains("fill_mode"));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"fill_px", 8}, {"fill_mode", "near"}}, "test"),
+                    Catch::Contains("fill_mode"));
 }
 
 TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {

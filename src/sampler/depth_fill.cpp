@@ -1,6 +1,7 @@
 // Push-pull hole filling in log depth, limited to a Chebyshev distance from usable depth.
 #include "sampler/depth_fill.h"
 
+#include <ATen/Parallel.h>
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include "core/error.h"
 #include "geometry/camera_torch.h"
 #include "geometry/pixel_mask.h"
+#include "sampler/sampler.h"
 
 namespace isplat {
 namespace {
@@ -32,9 +34,57 @@ double upsample(const Level& coarse, int64_t i, int64_t j) {
   return (1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x1)) + fy * ((1 - fx) * at(y1, x0) + fx * at(y1, x1));
 }
 
+// The far side of a hole at pixel (i, j). Along each of the 8 pixel directions, the first usable pixel within
+// `reach` steps is a hit; its surface is extrapolated back to (i, j) linearly in inverse depth (exact on a
+// plane), with the slope from the next usable pixel or the one after it along the ray (none across an edge). When
+// the extrapolations disagree by the sampler's discontinuity test, the hole lies across a depth edge: the pixel
+// takes the inverse-distance mean, in log depth, of the hits on the far side (those the test does not separate
+// from the farthest). Returns false (the blend stays) with fewer than two hits or no edge between them.
+bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int64_t W, int64_t i, int64_t j,
+                        int64_t reach, double& log_out) {
+  static constexpr int kDi[8] = {-1, -1, -1, 0, 0, 1, 1, 1}, kDj[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
+  double z[8], weight[8];
+  bool sloped[8];
+  int hits = 0;
+  const auto ok = [&](int64_t a, int64_t b) { return a >= 0 && b >= 0 && a < H && b < W && usable[a * W + b] != 0; };
+  for (int k = 0; k < 8; ++k)
+    for (int64_t s = 1; s <= reach; ++s) {
+      const int64_t a = i + s * kDi[k], b = j + s * kDj[k];
+      if (a < 0 || b < 0 || a >= H || b >= W) break;
+      if (!ok(a, b)) continue;
+      const double iz = 1.0 / depth[a * W + b];
+      double slope = 0;  // change of inverse depth per step outward along the ray
+      sloped[hits] = false;
+      for (int64_t t = 1; t <= 2; ++t)
+        if (ok(a + t * kDi[k], b + t * kDj[k])) {
+          const double iz2 = 1.0 / depth[(a + t * kDi[k]) * W + (b + t * kDj[k])];
+          if (std::max(iz, iz2) / std::min(iz, iz2) < discontinuity_threshold(2.0 / (iz + iz2)))
+            slope = (iz2 - iz) / t, sloped[hits] = true;
+          break;
+        }
+      // Back to (i, j), s steps inward; within a factor of 2 of the hit, so a curved surface cannot run away.
+      const double iz_here = std::clamp(iz - s * slope, 0.5 * iz, 2.0 * iz);
+      z[hits] = 1.0 / iz_here;
+      weight[hits++] = 1.0 / (s * ((kDi[k] != 0 && kDj[k] != 0) ? std::sqrt(2.0) : 1.0));
+      break;
+    }
+  if (hits < 2) return false;
+  const double zmin = *std::min_element(z, z + hits), zmax = *std::max_element(z, z + hits);
+  if (zmax / zmin < discontinuity_threshold(0.5 * (zmin + zmax))) return false;
+  // The far hits whose surface could be extrapolated; those without a slope (at the image border, next to another
+  // hole or edge) only when there is no other.
+  double sum = 0, wsum = 0;
+  for (int pass = 0; pass < 2 && wsum == 0; ++pass)
+    for (int k = 0; k < hits; ++k)
+      if ((sloped[k] || pass == 1) && zmax / z[k] < discontinuity_threshold(0.5 * (z[k] + zmax)))
+        sum += weight[k] * std::log(z[k]), wsum += weight[k];
+  log_out = sum / wsum;  // the farthest hit counts in the second pass
+  return true;
+}
+
 }  // namespace
 
-FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px) {
+FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px, bool far_side) {
   ISPLAT_CHECK(depth.dim() == 2, "depth fill: depth must be [H, W], got ", depth.sizes());
   ISPLAT_CHECK(valid.sizes() == depth.sizes(), "depth fill: valid ", valid.sizes(), " differs from depth ",
                depth.sizes());
@@ -87,9 +137,18 @@ FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& va
   std::vector<uint8_t> reachable(static_cast<size_t>(H * W));  // within max_px (Chebyshev) of usable depth
   for (int64_t p = 0; p < H * W; ++p) reachable[p] = usable[p] != 0.0f;
   reachable = dilate_square(reachable, H, W, max_px);
+  std::vector<double>& fill = levels[0].log_depth;
+  if (far_side) {  // reads only the usable input, so rows are independent
+    at::parallel_for(0, H, 8, [&](int64_t r0, int64_t r1) {
+      for (int64_t i = r0; i < r1; ++i)
+        for (int64_t j = 0; j < W; ++j)
+          if (usable[i * W + j] == 0.0f && reachable[i * W + j])
+            far_side_log_depth(usable, out_depth, H, W, i, j, max_px + 1, fill[i * W + j]);
+    });
+  }
   for (int64_t p = 0; p < H * W; ++p)
     if (usable[p] == 0.0f && reachable[p]) {
-      out_depth[p] = static_cast<float>(std::exp(levels[0].log_depth[p]));
+      out_depth[p] = static_cast<float>(std::exp(fill[p]));
       out_valid[p] = 1.0f;
       ++out.filled;
     }

@@ -76,6 +76,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
           "(most of a sky) stays empty; 0 = off",
           Range::between(0, 256));
+  v.field("fill_mode", fill_mode,
+          "with fill_px: blend fills each hole from all around it (push-pull); far gives pixels whose hole lies "
+          "across a depth edge the depth of its far side (the shadow a stereo or time-of-flight sensor leaves "
+          "behind an occluder is background), other holes as blend",
+          {"blend", "far"});
+  v.require("fill_mode", fill_mode == "blend" || fill_px > 0, "far needs sampler.fill_px > 0");
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -627,7 +633,7 @@ int64_t detail_budget(const SamplerOptions& o, const std::vector<float>& weight)
 torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
                              const SamplerOptions& options) {
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_mode == "far");
     return detail_weights(f.depth, f.valid, image, without_fill(options));
   }
   torch::Tensor dk, vk, ik;
@@ -640,7 +646,7 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
                        const torch::Tensor& K, const torch::Tensor& image) {
   if (o.budget_mode == "fixed") return o.budget;
   if (o.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px);
+    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px, o.fill_mode == "far");
     return resolve_budget(without_fill(o), f.depth, f.valid, K, image);
   }
   if (o.budget_mode == "detail") {
@@ -672,7 +678,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
                          const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
   torch::NoGradGuard no_grad;
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px);
+    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_mode == "far");
     return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed);
   }
   torch::Tensor dk, vk, ik;
