@@ -369,7 +369,7 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   auto valid = ones();
   valid.narrow(1, 28, 6).zero_();
   const FilledDepth blend = fill_depth_holes(depth, valid, 8);
-  const FilledDepth far = fill_depth_holes(depth, valid, 8, true);
+  const FilledDepth far = fill_depth_holes(depth, valid, 8, 10);
   CHECK(far.filled == blend.filled);
   CHECK(far.filled == 6 * H);
   const auto shadow_truth = background.narrow(1, 28, 6);
@@ -382,11 +382,25 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   CHECK(torch::equal(far.depth.narrow(1, 34, W - 34), blend.depth.narrow(1, 34, W - 34)));
   CHECK(torch::equal(far.depth.narrow(1, 0, 28), blend.depth.narrow(1, 0, 28)));
 
+  // A strip wider than far_width (here every shadow pixel lies 7 px from the occluder plus the background) is blended.
+  CHECK(torch::equal(fill_depth_holes(depth, valid, 8, 6).depth, blend.depth));
+  CHECK_THROWS_WITH(fill_depth_holes(depth, valid, 8, -1), Catch::Contains("far_width"));
+
+  // The far side is the next surface beyond the edge, not the farthest: a hole between an occluder (1 m, left) and
+  // a wall (3 m, right and below) whose upward rays reach a far surface (9 m) through a gap takes the wall's depth.
+  auto layers = torch::full({H, W}, 3.0f);
+  layers.narrow(1, 0, 28).fill_(1.0f);
+  layers.narrow(0, 0, 20).narrow(1, 28, 3).fill_(9.0f);
+  auto gap = ones();
+  gap.narrow(0, 20, 8).narrow(1, 28, 3).zero_();
+  const auto gap_fill = fill_depth_holes(layers, gap, 8, 10).depth.narrow(0, 20, 8).narrow(1, 28, 3);
+  CHECK((gap_fill - 3.0f).abs().max().item<float>() < 1e-4f);
+
   // A hole with no edge across it, even on a steep plane (3x the depth across the image), is filled as blend fills it.
   const auto plane = 1.0 / (0.9 - 0.012 * u);
   auto holed = ones();
   holed.narrow(0, 10, 12).narrow(1, 20, 12).zero_();
-  CHECK(torch::equal(fill_depth_holes(plane, holed, 8, true).depth, fill_depth_holes(plane, holed, 8).depth));
+  CHECK(torch::equal(fill_depth_holes(plane, holed, 8, 10).depth, fill_depth_holes(plane, holed, 8).depth));
 
   // Through the sampler (with edge supports, which the blend's steep ramp leaves the only ones in the shadow): with
   // far, the shadow's supports lie on the background's plane; with the blend, some hang between the surfaces.

@@ -36,17 +36,23 @@ double upsample(const Level& coarse, int64_t i, int64_t j) {
 
 // The far side of a hole at pixel (i, j). Along each of the 8 pixel directions, the first usable pixel within
 // `reach` steps is a hit; its surface is extrapolated back to (i, j) linearly in inverse depth (exact on a
-// plane), with the slope from the next usable pixel or the one after it along the ray (none across an edge). When
-// the extrapolations disagree by the sampler's discontinuity test, the hole lies across a depth edge: the pixel
-// takes the inverse-distance mean, in log depth, of the hits on the far side (those the test does not separate
-// from the farthest). Returns false (the blend stays) with fewer than two hits or no edge between them.
+// plane), with the slope from the next usable pixel or the one after it along the ray (none across an edge).
+// The near layer is the hits the sampler's discontinuity test does not separate from the nearest; the far layer
+// is the nearest hit it does separate, with the hits not separated from that one (not the farthest surface: a ray
+// through a gap between objects may reach a third). When a far layer exists and the hole is a strip at most
+// `width` pixels across (nearest near hit + nearest far hit), the pixel takes the inverse-distance mean, in log
+// depth, of the far layer. Otherwise it returns false and the blend stays: holes with no edge across them, and
+// wide holes between surfaces, such as a receding street whose "far side" is a whole region.
 bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int64_t W, int64_t i, int64_t j,
-                        int64_t reach, double& log_out) {
+                        int64_t reach, int64_t width, double& log_out) {
   static constexpr int kDi[8] = {-1, -1, -1, 0, 0, 1, 1, 1}, kDj[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
-  double z[8], weight[8];
+  double z[8], dist[8];
   bool sloped[8];
   int hits = 0;
   const auto ok = [&](int64_t a, int64_t b) { return a >= 0 && b >= 0 && a < H && b < W && usable[a * W + b] != 0; };
+  const auto apart = [](double a, double b) {
+    return std::max(a, b) / std::min(a, b) >= discontinuity_threshold(0.5 * (a + b));
+  };
   for (int k = 0; k < 8; ++k)
     for (int64_t s = 1; s <= reach; ++s) {
       const int64_t a = i + s * kDi[k], b = j + s * kDj[k];
@@ -58,37 +64,42 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
       for (int64_t t = 1; t <= 2; ++t)
         if (ok(a + t * kDi[k], b + t * kDj[k])) {
           const double iz2 = 1.0 / depth[(a + t * kDi[k]) * W + (b + t * kDj[k])];
-          if (std::max(iz, iz2) / std::min(iz, iz2) < discontinuity_threshold(2.0 / (iz + iz2)))
-            slope = (iz2 - iz) / t, sloped[hits] = true;
+          if (!apart(1.0 / iz, 1.0 / iz2)) slope = (iz2 - iz) / t, sloped[hits] = true;
           break;
         }
       // Back to (i, j), s steps inward; within a factor of 2 of the hit, so a curved surface cannot run away.
-      const double iz_here = std::clamp(iz - s * slope, 0.5 * iz, 2.0 * iz);
-      z[hits] = 1.0 / iz_here;
-      weight[hits++] = 1.0 / (s * ((kDi[k] != 0 && kDj[k] != 0) ? std::sqrt(2.0) : 1.0));
+      z[hits] = 1.0 / std::clamp(iz - s * slope, 0.5 * iz, 2.0 * iz);
+      dist[hits++] = s * ((kDi[k] != 0 && kDj[k] != 0) ? std::sqrt(2.0) : 1.0);
       break;
     }
   if (hits < 2) return false;
-  const double zmin = *std::min_element(z, z + hits), zmax = *std::max_element(z, z + hits);
-  if (zmax / zmin < discontinuity_threshold(0.5 * (zmin + zmax))) return false;
-  // The far hits whose surface could be extrapolated; those without a slope (at the image border, next to another
-  // hole or edge) only when there is no other.
+  const double znear = *std::min_element(z, z + hits);
+  double zfar = 0, near_dist = 1e30, far_dist = 1e30;
+  for (int k = 0; k < hits; ++k)
+    if (apart(z[k], znear) && (zfar == 0 || z[k] < zfar)) zfar = z[k];
+  if (zfar == 0) return false;  // no edge across the hole
+  for (int k = 0; k < hits; ++k)
+    (apart(z[k], zfar) ? near_dist : far_dist) = std::min(apart(z[k], zfar) ? near_dist : far_dist, dist[k]);
+  if (near_dist + far_dist > width) return false;
+  // The far layer's hits whose surface could be extrapolated; those without a slope (at the image border, next
+  // to another hole or edge) only when there is no other.
   double sum = 0, wsum = 0;
   for (int pass = 0; pass < 2 && wsum == 0; ++pass)
     for (int k = 0; k < hits; ++k)
-      if ((sloped[k] || pass == 1) && zmax / z[k] < discontinuity_threshold(0.5 * (z[k] + zmax)))
-        sum += weight[k] * std::log(z[k]), wsum += weight[k];
-  log_out = sum / wsum;  // the farthest hit counts in the second pass
+      if ((sloped[k] || pass == 1) && !apart(z[k], zfar)) sum += std::log(z[k]) / dist[k], wsum += 1 / dist[k];
+  log_out = sum / wsum;  // the hit zfar counts in the second pass
   return true;
 }
 
 }  // namespace
 
-FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px, bool far_side) {
+FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px,
+                             int64_t far_width) {
   ISPLAT_CHECK(depth.dim() == 2, "depth fill: depth must be [H, W], got ", depth.sizes());
   ISPLAT_CHECK(valid.sizes() == depth.sizes(), "depth fill: valid ", valid.sizes(), " differs from depth ",
                depth.sizes());
   ISPLAT_CHECK(max_px >= 0, "depth fill: max_px must be >= 0, got ", max_px);
+  ISPLAT_CHECK(far_width >= 0, "depth fill: far_width must be >= 0, got ", far_width);
   ISPLAT_CHECK(depth.device().is_cpu() && valid.device().is_cpu(), "depth fill: depth and valid must be on the CPU");
   torch::NoGradGuard no_grad;
   const torch::Tensor usable_t = usable_depth(depth.detach(), valid.detach()).to(torch::kFloat32).contiguous();
@@ -138,12 +149,12 @@ FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& va
   for (int64_t p = 0; p < H * W; ++p) reachable[p] = usable[p] != 0.0f;
   reachable = dilate_square(reachable, H, W, max_px);
   std::vector<double>& fill = levels[0].log_depth;
-  if (far_side) {  // reads only the usable input, so rows are independent
+  if (far_width > 0) {  // reads only the usable input, so rows are independent
     at::parallel_for(0, H, 8, [&](int64_t r0, int64_t r1) {
       for (int64_t i = r0; i < r1; ++i)
         for (int64_t j = 0; j < W; ++j)
           if (usable[i * W + j] == 0.0f && reachable[i * W + j])
-            far_side_log_depth(usable, out_depth, H, W, i, j, max_px + 1, fill[i * W + j]);
+            far_side_log_depth(usable, out_depth, H, W, i, j, max_px + 1, far_width, fill[i * W + j]);
     });
   }
   for (int64_t p = 0; p < H * W; ++p)

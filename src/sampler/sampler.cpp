@@ -77,10 +77,14 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "(most of a sky) stays empty; 0 = off",
           Range::between(0, 256));
   v.field("fill_mode", fill_mode,
-          "with fill_px: blend fills each hole from all around it (push-pull); far gives pixels whose hole lies "
-          "across a depth edge the depth of its far side (the shadow a stereo or time-of-flight sensor leaves "
-          "behind an occluder is background), other holes as blend",
+          "with fill_px: blend fills each hole from all around it (push-pull); far gives a pixel whose hole is a "
+          "strip across a depth edge (at most fill_far_width wide) the depth of the edge's far side (the shadow a "
+          "stereo or time-of-flight sensor leaves behind an occluder is background), other holes as blend",
           {"blend", "far"});
+  v.field("fill_far_width", fill_far_width,
+          "fill_mode far: the widest strip, in pixels from the near surface to the far one, filled from the far "
+          "side (a wider hole between two surfaces, such as a receding street, is blended)",
+          Range::between(2, 256));
   v.require("fill_mode", fill_mode == "blend" || fill_px > 0, "far needs sampler.fill_px > 0");
 }
 
@@ -94,6 +98,10 @@ namespace {
 SamplerOptions without_fill(SamplerOptions o) {  // the options once fill_px has been applied
   o.fill_px = 0;
   return o;
+}
+
+FilledDepth fill_holes(const torch::Tensor& depth, const torch::Tensor& valid, const SamplerOptions& o) {
+  return fill_depth_holes(depth, valid, o.fill_px, o.fill_mode == "far" ? o.fill_far_width : 0);
 }
 
 struct Grid {
@@ -633,7 +641,7 @@ int64_t detail_budget(const SamplerOptions& o, const std::vector<float>& weight)
 torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& image,
                              const SamplerOptions& options) {
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_mode == "far");
+    const FilledDepth f = fill_holes(depth, valid, options);
     return detail_weights(f.depth, f.valid, image, without_fill(options));
   }
   torch::Tensor dk, vk, ik;
@@ -646,7 +654,7 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
                        const torch::Tensor& K, const torch::Tensor& image) {
   if (o.budget_mode == "fixed") return o.budget;
   if (o.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, o.fill_px, o.fill_mode == "far");
+    const FilledDepth f = fill_holes(depth, valid, o);
     return resolve_budget(without_fill(o), f.depth, f.valid, K, image);
   }
   if (o.budget_mode == "detail") {
@@ -678,7 +686,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
                          const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
   torch::NoGradGuard no_grad;
   if (options.fill_px > 0) {
-    const FilledDepth f = fill_depth_holes(depth, valid, options.fill_px, options.fill_mode == "far");
+    const FilledDepth f = fill_holes(depth, valid, options);
     return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed);
   }
   torch::Tensor dk, vk, ik;

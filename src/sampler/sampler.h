@@ -43,9 +43,11 @@ struct SamplerOptions {
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).
   int64_t fill_px = 0;
-  // With fill_px: "blend" fills every hole from all around it; "far" gives a hole that lies across a depth edge
-  // the far side's depth (a sensor's shadow behind an occluder), so the fill does not bridge the two surfaces.
+  // With fill_px: "blend" fills every hole from all around it; "far" gives a hole that is a strip at most
+  // fill_far_width pixels across a depth edge the far side's depth (a sensor's shadow behind an occluder), so the
+  // fill does not bridge the two surfaces.
   std::string fill_mode = "blend";
+  int64_t fill_far_width = 10;
   // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
   // reads them; they are nearly free at 2 supports per pixel but add about a third at the paper's 1.5M.
   bool normals = false;
