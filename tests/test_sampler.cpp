@@ -374,7 +374,7 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   CHECK(far.filled == 6 * H);
   const auto shadow_truth = background.narrow(1, 28, 6);
   // The blend bridges the two surfaces; the far side continues the background's plane into the shadow (the
-  // diagonal rays that reach the top or bottom row there see no slope, and the others outvote them).
+  // diagonal rays that reach the top or bottom row there see no slope, and are left out while sloped hits exist).
   CHECK(blend.depth.narrow(1, 28, 6).min().item<double>() < 0.7 * shadow_truth.min().item<double>());
   const auto far_error = (far.depth.narrow(1, 28, 6) - shadow_truth).abs() / shadow_truth;
   CHECK(far_error.max().item<double>() < 1e-4);
@@ -382,8 +382,10 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   CHECK(torch::equal(far.depth.narrow(1, 34, W - 34), blend.depth.narrow(1, 34, W - 34)));
   CHECK(torch::equal(far.depth.narrow(1, 0, 28), blend.depth.narrow(1, 0, 28)));
 
-  // A strip wider than far_width (here every shadow pixel lies 7 px from the occluder plus the background) is blended.
+  // A strip wider than far_width (here every shadow pixel lies 7 px from the occluder plus the background) is blended;
+  // one exactly as wide is filled from the far side.
   CHECK(torch::equal(fill_depth_holes(depth, valid, 8, 6).depth, blend.depth));
+  CHECK(torch::equal(fill_depth_holes(depth, valid, 8, 7).depth, far.depth));
   CHECK_THROWS_WITH(fill_depth_holes(depth, valid, 8, -1), Catch::Contains("far_width"));
 
   // The far side is the next surface beyond the edge, not the farthest: a hole between an occluder (1 m, left) and
@@ -395,8 +397,13 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   gap.narrow(0, 20, 8).narrow(1, 28, 3).zero_();
   const auto gap_fill = fill_depth_holes(layers, gap, 8, 10).depth.narrow(0, 20, 8).narrow(1, 28, 3);
   CHECK((gap_fill - 3.0f).abs().max().item<float>() < 1e-4f);
+  // The width counts the near layer and the far layer only: at (20, 29) the 9 m surface lies 1 step up, the
+  // occluder 2 steps left and the wall 2 steps right, so with far_width = 3 the strip (2 + 2) is blended.
+  const auto narrow_gap = fill_depth_holes(layers, gap, 8, 3).depth, gap_blend = fill_depth_holes(layers, gap, 8).depth;
+  CHECK(narrow_gap[20][29].item<float>() == gap_blend[20][29].item<float>());
+  CHECK(narrow_gap[20][29].item<float>() != Approx(3.0f).epsilon(0.01));
 
-  // A hole with no edge across it, even on a steep plane (3x the depth across the image), is filled as blend fills it.
+  // A hole with no edge across it, even on a steep plane (7x the depth across the image), is filled as blend fills it.
   const auto plane = 1.0 / (0.9 - 0.012 * u);
   auto holed = ones();
   holed.narrow(0, 10, 12).narrow(1, 20, 12).zero_();

@@ -40,7 +40,8 @@ double upsample(const Level& coarse, int64_t i, int64_t j) {
 // The near layer is the hits the sampler's discontinuity test does not separate from the nearest; the far layer
 // is the nearest hit it does separate, with the hits not separated from that one (not the farthest surface: a ray
 // through a gap between objects may reach a third). When a far layer exists and the hole is a strip at most
-// `width` pixels across (nearest near hit + nearest far hit), the pixel takes the inverse-distance mean, in log
+// `width` steps across (nearest near hit + nearest far hit along the 8 rays, so a strip of w missing pixels across
+// an axis-aligned edge counts w + 1), the pixel takes the inverse-distance mean, in log
 // depth, of the far layer. Otherwise it returns false and the blend stays: holes with no edge across them, and
 // wide holes between surfaces, such as a receding street whose "far side" is a whole region.
 bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int64_t W, int64_t i, int64_t j,
@@ -78,8 +79,12 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
   for (int k = 0; k < hits; ++k)
     if (apart(z[k], znear) && (zfar == 0 || z[k] < zfar)) zfar = z[k];
   if (zfar == 0) return false;  // no edge across the hole
-  for (int k = 0; k < hits; ++k)
-    (apart(z[k], zfar) ? near_dist : far_dist) = std::min(apart(z[k], zfar) ? near_dist : far_dist, dist[k]);
+  for (int k = 0; k < hits; ++k) {  // a third surface, apart from both layers, counts in neither
+    if (!apart(z[k], znear))
+      near_dist = std::min(near_dist, dist[k]);
+    else if (!apart(z[k], zfar))
+      far_dist = std::min(far_dist, dist[k]);
+  }
   if (near_dist + far_dist > width) return false;
   // The far layer's hits whose surface could be extrapolated; those without a slope (at the image border, next
   // to another hole or edge) only when there is no other.
