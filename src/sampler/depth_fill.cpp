@@ -78,7 +78,7 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
   double zfar = 0, near_dist = 1e30, far_dist = 1e30;
   for (int k = 0; k < hits; ++k)
     if (apart(z[k], znear) && (zfar == 0 || z[k] < zfar)) zfar = z[k];
-  if (zfar == 0) return false;  // no edge across the hole
+  if (zfar == 0) return false;      // no edge across the hole
   for (int k = 0; k < hits; ++k) {  // a third surface, apart from both layers, counts in neither
     if (!apart(z[k], znear))
       near_dist = std::min(near_dist, dist[k]);
