@@ -1,4 +1,4 @@
-// Push-pull hole filling in log depth, limited to a Chebyshev distance from usable depth.
+// Push-pull hole filling in log depth, limited to a Chebyshev distance from usable depth, with a far-side mode.
 #include "sampler/depth_fill.h"
 
 #include <ATen/Parallel.h>
@@ -41,9 +41,9 @@ double upsample(const Level& coarse, int64_t i, int64_t j) {
 // is the nearest hit it does separate, with the hits not separated from that one (not the farthest surface: a ray
 // through a gap between objects may reach a third). When a far layer exists and the hole is a strip at most
 // `width` steps across (nearest near hit + nearest far hit along the 8 rays, so a strip of w missing pixels across
-// an axis-aligned edge counts w + 1), the pixel takes the inverse-distance mean, in log
-// depth, of the far layer. Otherwise it returns false and the blend stays: holes with no edge across them, and
-// wide holes between surfaces, such as a receding street whose "far side" is a whole region.
+// an axis-aligned edge counts w + 1), the pixel takes the inverse-distance mean, in log depth, of the far layer.
+// Otherwise it returns false and the blend stays: holes with no edge across them, and wide holes between
+// surfaces, such as a receding street whose "far side" is a whole region.
 bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int64_t W, int64_t i, int64_t j,
                         int64_t reach, int64_t width, double& log_out) {
   static constexpr int kDi[8] = {-1, -1, -1, 0, 0, 1, 1, 1}, kDj[8] = {-1, 0, 1, -1, 1, -1, 0, 1};

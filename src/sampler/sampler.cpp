@@ -78,12 +78,13 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           Range::between(0, 256));
   v.field("fill_mode", fill_mode,
           "with fill_px: blend fills each hole from all around it (push-pull); far gives a pixel whose hole is a "
-          "strip across a depth edge (at most fill_far_width wide) the depth of the edge's far side (the shadow a "
+          "narrow strip across a depth edge (see fill_far_width) the depth of the edge's far side (the shadow a "
           "stereo or time-of-flight sensor leaves behind an occluder is background), other holes as blend",
           {"blend", "far"});
   v.field("fill_far_width", fill_far_width,
-          "fill_mode far: the widest strip, in pixels from the near surface to the far one, filled from the far "
-          "side (a wider hole between two surfaces, such as a receding street, is blended)",
+          "fill_mode far: the widest strip filled from the far side, in steps from the near surface to the far one "
+          "along the 8 pixel directions (w missing pixels across an axis-aligned edge count w + 1); a wider hole "
+          "between two surfaces, such as a receding street, is blended",
           Range::between(2, 256));
   v.require("fill_mode", fill_mode == "blend" || fill_px > 0, "far needs sampler.fill_px > 0");
 }

@@ -44,8 +44,9 @@ struct SamplerOptions {
   // depth is).
   int64_t fill_px = 0;
   // With fill_px: "blend" fills every hole from all around it; "far" gives a hole that is a strip at most
-  // fill_far_width pixels across a depth edge the far side's depth (a sensor's shadow behind an occluder), so the
-  // fill does not bridge the two surfaces.
+  // fill_far_width steps across a depth edge (along the 8 pixel directions, near surface to far; w missing pixels
+  // count w + 1) the far side's depth (a sensor's shadow behind an occluder), so the fill does not bridge the two
+  // surfaces.
   std::string fill_mode = "blend";
   int64_t fill_far_width = 10;
   // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
