@@ -58,7 +58,7 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
     for (int64_t s = 1; s <= reach; ++s) {
       const int64_t a = i + s * kDi[k], b = j + s * kDj[k];
       if (a < 0 || b < 0 || a >= H || b >= W) break;
-      if (!ok(a, b)) continue;
+      if (usable[a * W + b] == 0) continue;  // still inside the hole
       const double iz = 1.0 / depth[a * W + b];
       double slope = 0;  // change of inverse depth per step outward along the ray
       sloped[hits] = false;
