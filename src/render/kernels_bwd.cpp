@@ -26,13 +26,14 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
                       const int32_t* last, int32_t max_last, T* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
   Group<T> groups[kMaxGroups];
+  const GroupLast group_last(last);
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const T* rec = local + i * kRec;
     LaneSums<T> sums{};
     int64_t ys, ye, g0, g1;
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
       Splat<T> s = bwd_splat(rec);
-      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+      const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups);
       for (int k = 0; k < n; ++k) bwd_group(s, groups[k], st, last, int32_t(i), sums);
     }
     sums.reduce(out + i * kGrad2d);
@@ -44,16 +45,19 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
                                   float* st, const int32_t* last, int32_t max_last, float* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   Group<float> groups[kMaxGroups];
+  const GroupLast group_last(last);
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const float* rec = local + i * kRec;
     float* slot = out + i * kGrad2d;
     int64_t ys, ye, g0, g1;
-    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+    Splat<float> s = bwd_splat(rec);
+    const int n = pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)
+                      ? collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups)
+                      : 0;
+    if (n == 0) {
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;
     }
-    Splat<float> s = bwd_splat(rec);
-    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
     const Avx2Splat a = avx2_splat(s, kBwdCh);
     Avx2Sums g[2];
     g[0].zero(), g[1].zero();
@@ -72,17 +76,20 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   Job jobs[kTile];
   TileRows rows;
+  const GroupLast group_last(last);
   for (int64_t i = max_last - 1; i >= 0; --i) {
     const float* rec = local + i * kRec;
     float* slot = out + i * kGrad2d;
     int64_t ys, ye, g0, g1;
-    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+    Splat<float> s = bwd_splat(rec);
+    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1))
+      tile_rows(s.prepare(), x0, y0, ys, ye, g0, g1, live_for_avx512(group_last, int32_t(i)), rows);
+    else
+      rows.groups[0] = rows.groups[1] = 0;
+    if ((rows.groups[0] | rows.groups[1]) == 0) {
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;
     }
-    Splat<float> s = bwd_splat(rec);
-    s.prepare();
-    tile_rows(s, x0, y0, ys, ye, g0, g1, rows);
     const Avx512Splat a = avx512_splat(s, kBwdCh);
     if (g1 - g0 == 2) {
       Avx512Sums g;

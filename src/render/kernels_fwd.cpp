@@ -151,22 +151,25 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
                       int32_t* last, const CameraParams& cam, T* best = nullptr) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<T> groups[kMaxGroups];
+  LiveGroups live = unstopped_groups(st);
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const T* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<T> s = fwd_splat(rec);
-    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, live, groups);
     const DepthPlane<T> plane = kPlane ? depth_plane(s, cam) : DepthPlane<T>{};
+    int stops = 0;
     if constexpr (kMaxWeight) {
       T m = 0;
       auto keep_max = [&m](T w) { m = std::max(m, w); };
       for (int k = 0; k < n; ++k)
-        active -= fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), keep_max);
+        stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), keep_max);
       best[i] = m;
     } else {
-      for (int k = 0; k < n; ++k) active -= fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1));
+      for (int k = 0; k < n; ++k) stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1));
     }
+    if (stops > 0) active -= stops, live = unstopped_groups(st);
   }
 }
 
@@ -179,26 +182,30 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
   fwd_init(x0, y0, x1, y1, st, last);
   Job jobs[kTile];
   TileRows rows;
+  LiveGroups live = unstopped_groups_avx512(st);
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
     s.prepare();
-    tile_rows(s, x0, y0, ys, ye, g0, g1, rows);
+    tile_rows(s, x0, y0, ys, ye, g0, g1, live, rows);
+    if ((rows.groups[0] | rows.groups[1]) == 0) continue;
     const int32_t id = int32_t(i + 1);
     const Avx512Splat a = avx512_splat(s, kChannels);
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
+    int stops;
     if (g1 - g0 == 2) {
       const int n = row_jobs(rows, x0, jobs);
-      active -= fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, jobs, n, st, last, id);
-      continue;
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, jobs, n, st, last, id);
+    } else {
+      Group<float> odd;
+      bool has_odd;
+      const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, jobs, n, st, last, id);
+      if (has_odd) stops += fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id);
     }
-    Group<float> odd;
-    bool has_odd;
-    const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
-    active -= fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, jobs, n, st, last, id);
-    if (has_odd) active -= fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id);
+    if (stops > 0) active -= stops, live = unstopped_groups_avx512(st);
   }
 }
 
@@ -207,19 +214,22 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
                                   float* st, int32_t* last, const CameraParams& cam) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<float> groups[kMaxGroups];
+  LiveGroups live = unstopped_groups(st);
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
   for (int64_t i = 0; i < count && active > 0; ++i) {
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
-    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, groups);
+    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, live, groups);
+    if (n == 0) continue;
     const Avx2Splat a = avx2_splat(s, kChannels);  // broadcasts only the channels composited
     const Avx2Plane plane = kPlane ? avx2_plane(depth_plane(s, cam)) : Avx2Plane{};
     const int32_t id = int32_t(i + 1);
-    int k = 0;
-    for (; k + 4 <= n; k += 4) active -= fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id);
-    for (; k + 2 <= n; k += 2) active -= fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id);
-    if (k < n) active -= fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    int k = 0, stops = 0;
+    for (; k + 4 <= n; k += 4) stops += fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    for (; k + 2 <= n; k += 2) stops += fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    if (k < n) stops += fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    if (stops > 0) active -= stops, live = unstopped_groups(st);
   }
 }
 #endif

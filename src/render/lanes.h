@@ -124,29 +124,6 @@ template <class T>
 ISPLAT_INLINE int lane_set(const Group<T>& q) {
   return (q.p0 / kLanes) & 1;
 }
-constexpr int kMaxGroups = kTile * kTile / kLanes;
-
-// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit, in row-major order. Branch-free
-// compaction (each candidate is written, the count advances only if it passes), so no mispredictions.
-template <class T>
-ISPLAT_INLINE int collect_groups(const Splat<T>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
-                                 int64_t g1, Group<T>* out) {
-  int n = 0;
-  const int32_t xb0 = int32_t(x0 + g0 * kLanes), p00 = int32_t(g0 * kLanes - y0 * kTile);
-  if (g1 - g0 == 1) {  // one group per row: the box's rows are tight, so every row is kept
-    for (int64_t py = ys; py < ye; ++py) out[n++] = {make_row(s, py), xb0, p00 + int32_t(py * kTile)};
-    return n;
-  }
-  for (int64_t py = ys; py < ye; ++py) {
-    const Row<T> r = make_row(s, py);
-    const int32_t p0 = p00 + int32_t(py * kTile);
-    out[n] = {r, xb0, p0};
-    n += group_may_hit(s, r, xb0) ? 1 : 0;
-    out[n] = {r, xb0 + kLanes, p0 + kLanes};
-    n += group_may_hit(s, r, xb0 + kLanes) ? 1 : 0;
-  }
-  return n;
-}
 
 // Forward state of a tile's pixels: T and 7 accumulated channels. A pixel that has stopped keeps −T
 // (T > 0 always), so one plane holds both.
@@ -169,6 +146,80 @@ ISPLAT_INLINE int fwd_at(int p, int plane) {
 }
 ISPLAT_INLINE int bwd_at(int p, int plane) {
   return plane_at<kBwdPlanes>(p, plane);
+}
+
+constexpr int kMaxGroups = kTile * kTile / kLanes;
+
+// The groups of a tile whose pixels a Gaussian can still change: bit r of half[h] is row r's left (h = 0) or
+// right (h = 1) group. Forward: a pixel of the group has not stopped. Backward: a pixel of the group has its
+// last contributor behind the current Gaussian. A group outside the set has every lane masked off, so dropping
+// it never changes a result; it only saves the work.
+struct LiveGroups {
+  unsigned half[2] = {0xffffu, 0xffffu};
+  bool has(int64_t row, int64_t h) const { return (half[h] >> row) & 1u; }
+};
+
+// Forward: the groups with a pixel that has not stopped (T > 0 in the T plane; stopped and outside pixels hold
+// a negative value).
+template <class T>
+ISPLAT_INLINE LiveGroups unstopped_groups(const T* st) {
+  LiveGroups live;
+  live.half[0] = live.half[1] = 0;
+  for (int r = 0; r < kTile; ++r)
+    for (int h = 0; h < 2; ++h) {
+      bool any = false;
+      for (int l = 0; l < kLanes; ++l) any |= st[fwd_at(r * kTile + h * kLanes + l, kPlT)] > T(0);
+      live.half[h] |= unsigned(any) << r;
+    }
+  return live;
+}
+
+// Backward: per group, the largest `last` of its pixels (0 for pixels outside the image).
+struct GroupLast {
+  alignas(64) int32_t half[2][kTile];
+  explicit GroupLast(const int32_t* last) {
+    for (int r = 0; r < kTile; ++r)
+      for (int h = 0; h < 2; ++h) {
+        const int32_t* l = last + r * kTile + h * kLanes;
+        half[h][r] = *std::max_element(l, l + kLanes);
+      }
+  }
+  // The groups where Gaussian i (tile-local, 0-based) lies in front of some pixel's last contributor.
+  LiveGroups live_for(int32_t i) const {
+    LiveGroups live;
+    for (int h = 0; h < 2; ++h) {
+      unsigned m = 0;
+      for (int r = 0; r < kTile; ++r) m |= unsigned(half[h][r] > i) << r;
+      live.half[h] = m;
+    }
+    return live;
+  }
+};
+
+// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit and are live, in row-major order.
+// Branch-free compaction (each candidate is written, the count advances only if it passes), so no
+// mispredictions. `y0` is the tile's first row, so row py is bit py − y0 of `live`.
+template <class T>
+ISPLAT_INLINE int collect_groups(const Splat<T>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
+                                 int64_t g1, const LiveGroups& live, Group<T>* out) {
+  int n = 0;
+  const int32_t xb0 = int32_t(x0 + g0 * kLanes), p00 = int32_t(g0 * kLanes - y0 * kTile);
+  if (g1 - g0 == 1) {  // one group per row: the box's rows are tight, so every live row is kept
+    for (int64_t py = ys; py < ye; ++py) {
+      out[n] = {make_row(s, py), xb0, p00 + int32_t(py * kTile)};
+      n += live.has(py - y0, g0) ? 1 : 0;
+    }
+    return n;
+  }
+  for (int64_t py = ys; py < ye; ++py) {
+    const Row<T> r = make_row(s, py);
+    const int32_t p0 = p00 + int32_t(py * kTile);
+    out[n] = {r, xb0, p0};
+    n += live.has(py - y0, 0) & group_may_hit(s, r, xb0) ? 1 : 0;
+    out[n] = {r, xb0 + kLanes, p0 + kLanes};
+    n += live.has(py - y0, 1) & group_may_hit(s, r, xb0 + kLanes) ? 1 : 0;
+  }
+  return n;
 }
 
 // Lane sums of one Gaussian's backward: 10 quantities × 8 lanes in two sets, one per half of the tile's rows

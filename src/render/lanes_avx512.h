@@ -67,16 +67,16 @@ struct Job {
   __mmask16 lanes;
 };
 
-// A Gaussian's terms of the tile's 16 rows (make_row's, computed as one vector) and which groups it may hit
+// A Gaussian's terms of the tile's 16 rows (make_row's, computed as one vector) and which live groups it may hit
 // (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
-// or not never changes a result.
+// or not never changes a result; nor does dropping a group that is not live (LiveGroups).
 struct TileRows {
   alignas(64) float dy[kTile], cdy[kTile], bdy[kTile], cdy2[kTile];
   unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
   Row<float> row(int r) const { return {dy[r], cdy[r], bdy[r], cdy2[r]}; }
 };
 ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
-                             int64_t g1, TileRows& t) {
+                             int64_t g1, const LiveGroups& live, TileRows& t) {
   const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512 dy =  // T(py) + T(0.5) − v, with py = y0 + lane exactly
       _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(y0)), lane), _mm512_set1_ps(0.5f)),
@@ -94,8 +94,29 @@ ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int6
     const __m512 q =
         _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(A, dx), dx), cdy2)),
                       _mm512_mul_ps(dx, bdy));
-    t.groups[g] = rows & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.cut_wide), _CMP_LE_OQ));
+    t.groups[g] = rows & live.half[g] & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.cut_wide), _CMP_LE_OQ));
   }
+}
+
+// unstopped_groups on vectors: one tile row's T plane per register.
+ISPLAT_AVX512 LiveGroups unstopped_groups_avx512(const float* st) {
+  unsigned m[2] = {0, 0};
+  for (int r = 0; r < kTile; ++r) {
+    const unsigned lanes =
+        _mm512_cmp_ps_mask(_mm512_loadu_ps(st + fwd_at(r * kTile, kPlT)), _mm512_setzero_ps(), _CMP_GT_OQ);
+    m[0] |= unsigned((lanes & 0x00ffu) != 0) << r, m[1] |= unsigned((lanes & 0xff00u) != 0) << r;
+  }
+  LiveGroups live;
+  live.half[0] = m[0], live.half[1] = m[1];
+  return live;
+}
+
+// GroupLast::live_for on vectors.
+ISPLAT_AVX512 LiveGroups live_for_avx512(const GroupLast& gl, int32_t i) {
+  const __m512i at = _mm512_set1_epi32(i);
+  LiveGroups live;
+  for (int h = 0; h < 2; ++h) live.half[h] = _mm512_cmpgt_epi32_mask(_mm512_load_si512(gl.half[h]), at);
+  return live;
 }
 
 // Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
