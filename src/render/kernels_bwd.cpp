@@ -131,18 +131,22 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     std::fill(last, last + kPix, 0);
     // Pixels outside the image keep last = 0 (never a contributor) and T = 1 (their masked lanes divide by it).
     for (int p = 0; p < kPix; ++p) st[bwd_at(p, kPbT)] = 1;
+    // Row by row, plane by plane: each inner loop runs over contiguous values, so it vectorizes.
+    const int64_t w = x1 - x0;
+    const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
     int32_t max_last = 0;
-    for (int64_t py = y0; py < y1; ++py)
-      for (int64_t px = x0; px < x1; ++px) {
-        const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        st[bwd_at(p, kPbT)] = final_T[o];
-        const T dc[kBwdCh] = {g_rgb[o], g_rgb[HW + o], g_rgb[2 * HW + o], g_depth[o], g_alpha[o]};
-        for (int c = 0; c < kBwdCh; ++c) st[bwd_at(p, kPbDC + c)] = dc[c];
-        // Behind the last contributor lies the background (zero for depth and alpha).
-        st[bwd_at(p, kPbS)] = dc[0] * T(background[0]) + dc[1] * T(background[1]) + dc[2] * T(background[2]);
-        last[p] = n_contrib[o];
-        max_last = std::max(max_last, last[p]);
-      }
+    for (int64_t py = y0; py < y1; ++py) {
+      const int r = int(py - y0);
+      T* plane = st + bwd_at(r * kTile, 0);  // plane k of this row: plane[k * kTile + lane]
+      const int64_t o = py * W + x0;
+      const T* dc[kBwdCh] = {g_rgb + o, g_rgb + HW + o, g_rgb + 2 * HW + o, g_depth + o, g_alpha + o};
+      std::copy_n(final_T + o, w, plane + kPbT * kTile);
+      for (int c = 0; c < kBwdCh; ++c) std::copy_n(dc[c], w, plane + (kPbDC + c) * kTile);
+      // Behind the last contributor lies the background (zero for depth and alpha).
+      for (int64_t l = 0; l < w; ++l) plane[kPbS * kTile + l] = dc[0][l] * bg[0] + dc[1][l] * bg[1] + dc[2][l] * bg[2];
+      std::copy_n(n_contrib + o, w, last + r * kTile);
+      for (int64_t l = 0; l < w; ++l) max_last = std::max(max_last, last[r * kTile + l]);
+    }
     tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
             slots + begin * kGrad2d);
   });

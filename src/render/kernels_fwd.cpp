@@ -272,18 +272,21 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
     T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data(), cam);
-    for (int64_t py = y0; py < y1; ++py)
-      for (int64_t px = x0; px < x1; ++px) {
-        const int64_t p = (py - y0) * kTile + (px - x0), o = py * W + px;
-        const T t = std::abs(st[fwd_at(p, kPlT)]);  // stopped pixels hold −T
-        for (int c = 0; c < 3; ++c) rgb[c * HW + o] = st[fwd_at(p, kPlAcc + c)] + t * bg[c];
-        alpha_out[o] = 1 - t;
-        depth_out[o] = st[fwd_at(p, kPlAcc + 3)];
-        if (normal_out)
-          for (int c = 0; c < 3; ++c) normal_out[c * HW + o] = st[fwd_at(p, kPlAcc + 4 + c)];
-        final_T[o] = t;
-        n_contrib[o] = scratch.last[p];
-      }
+    // Row by row, plane by plane: each inner loop runs over contiguous values, so it vectorizes.
+    const int64_t w = x1 - x0;
+    for (int64_t py = y0; py < y1; ++py) {
+      const int r = int(py - y0);
+      const T* plane = st + fwd_at(r * kTile, 0);  // plane k of this row: plane[k * kTile + lane]
+      const int64_t o = py * W + x0;
+      for (int64_t l = 0; l < w; ++l) final_T[o + l] = std::abs(plane[kPlT * kTile + l]);  // stopped pixels hold −T
+      for (int64_t l = 0; l < w; ++l) alpha_out[o + l] = 1 - final_T[o + l];
+      for (int c = 0; c < 3; ++c)
+        for (int64_t l = 0; l < w; ++l) rgb[c * HW + o + l] = plane[(kPlAcc + c) * kTile + l] + final_T[o + l] * bg[c];
+      std::copy_n(plane + (kPlAcc + 3) * kTile, w, depth_out + o);
+      if (normal_out)
+        for (int c = 0; c < 3; ++c) std::copy_n(plane + (kPlAcc + 4 + c) * kTile, w, normal_out + c * HW + o);
+      std::copy_n(scratch.last.data() + r * kTile, w, n_contrib + o);
+    }
   });
 }
 

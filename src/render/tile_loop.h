@@ -44,8 +44,12 @@ struct TileScratch {
   // The tile's records gathered into one contiguous array, in list order (cache friendly).
   const T* gather(const T* packed, const int32_t* ids, int64_t count) {
     records.resize(size_t(std::max<int64_t>(count, 1) * kRec));
-    for (int64_t i = 0; i < count; ++i)
+    constexpr int64_t kAhead = 8;  // records requested ahead: the reads are random, so their misses overlap
+    for (int64_t i = 0; i < std::min(count, kAhead); ++i) __builtin_prefetch(packed + int64_t(ids[i]) * kRec);
+    for (int64_t i = 0; i < count; ++i) {
+      if (i + kAhead < count) __builtin_prefetch(packed + int64_t(ids[i + kAhead]) * kRec);
       std::memcpy(records.data() + i * kRec, packed + int64_t(ids[i]) * kRec, sizeof(T) * kRec);
+    }
     return records.data();
   }
   // Per-pixel state: `planes` values per pixel, laid out as fwd_at / bwd_at say.
