@@ -429,6 +429,57 @@ TEST_CASE("render: bit-identical results with 1 and 2 threads", "[render]") {
   CHECK(results[0][1].max().item<float>() > 0.5f);
 }
 
+TEST_CASE("render: tile binning lists each tile's Gaussians by (depth, id), whatever the thread count", "[render]") {
+  // 20000 Gaussians (several compaction blocks), some culled, and 2000 exact copies so that depths tie.
+  const Camera cam = make_camera(200, 136, 150.0, 150.0, 0.0, true, torch::kFloat32);
+  Gaussians g = random_scene(18000, cam, 21, 1.6).to(torch::kFloat32);
+  const Tensor copies = torch::arange(0, 18000, 9);
+  for (Tensor* t : {&g.means, &g.scales, &g.quats, &g.colors, &g.opacities})
+    *t = torch::cat({*t, t->index_select(0, copies)}).contiguous();
+  const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, cam.width, cam.height);
+  const splat::Projection proj = splat::project_fwd(g.means, g.scales, g.quats, g.colors, g.opacities, cp, {});
+  const int64_t n = g.means.size(0), tiles_x = cp.tiles_x(), tiles = tiles_x * cp.tiles_y();
+  const float* rec = proj.packed.data_ptr<float>();
+  const int32_t* rect = proj.rects.data_ptr<int32_t>();
+
+  // Reference: for every tile, the ids whose rectangle covers it, sorted by (depth, id).
+  std::vector<std::vector<int32_t>> expected(static_cast<size_t>(tiles));
+  int64_t culled = 0;
+  for (int64_t i = 0; i < n; ++i) {
+    const int32_t* r = rect + 4 * i;
+    culled += !(r[0] < r[2] && r[1] < r[3]);
+    for (int32_t ty = r[1]; ty < r[3]; ++ty)
+      for (int32_t tx = r[0]; tx < r[2]; ++tx) expected[size_t(ty * tiles_x + tx)].push_back(int32_t(i));
+  }
+  for (auto& list : expected)
+    std::stable_sort(list.begin(), list.end(), [&](int32_t a, int32_t b) {
+      return rec[a * splat::kRec + splat::kDepth] < rec[b * splat::kRec + splat::kDepth];
+    });
+  CHECK(culled > 1000);
+  int64_t ties = 0;
+  for (const auto& list : expected)
+    for (size_t k = 1; k < list.size(); ++k)
+      ties += rec[list[k] * splat::kRec + splat::kDepth] == rec[list[k - 1] * splat::kRec + splat::kDepth];
+  CHECK(ties > 100);
+
+  const int before = at::get_num_threads();
+  for (int threads : {1, 2, 3}) {
+    CAPTURE(threads);
+    at::set_num_threads(threads);
+    const splat::TileBins bins = splat::bin_tiles(proj, cp);
+    const int64_t* offs = bins.tile_offsets.data_ptr<int64_t>();
+    const int32_t* ids = bins.isect_ids.data_ptr<int32_t>();
+    REQUIRE(bins.tile_offsets.numel() == tiles + 1);
+    CHECK(offs[0] == 0);
+    int64_t wrong = 0;
+    for (int64_t t = 0; t < tiles; ++t)
+      wrong += std::vector<int32_t>(ids + offs[t], ids + offs[t + 1]) != expected[size_t(t)];
+    CHECK(wrong == 0);
+    CHECK(offs[tiles] == bins.intersections());
+  }
+  at::set_num_threads(before);
+}
+
 TEST_CASE("render: options read and write through the config schema", "[render]") {
   const auto json = config_to_json(RenderOptions{});
   CHECK(json["background"].get<std::vector<double>>() == std::vector<double>{0.0, 0.0, 0.0});

@@ -1,9 +1,14 @@
-// Tile binning (depth sort, counting pass, prefix sum, fill) and front-to-back rasterization, parallel over tiles.
+// Tile binning (compaction with tile counts, depth sort, offsets, fill) and front-to-back rasterization, parallel over
+// tiles.
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstring>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "render/kernels.h"
@@ -13,30 +18,39 @@
 namespace isplat::splat {
 namespace {
 
-// Stable LSD radix sort of (key, value) pairs by key, 8 bits per pass; passes where all keys agree are skipped.
+// A buffer of n values left uninitialized (std::vector would zero it first).
+template <class V>
+std::unique_ptr<V[]> uninit(int64_t n) {
+  return std::unique_ptr<V[]>(new V[size_t(std::max<int64_t>(n, 1))]);
+}
+
+// Stable LSD radix sort of n (key, value) pairs by key, 8 bits per pass. All passes' histograms come from one
+// read; a pass whose digit is the same for every key is skipped.
 template <class K>
-void radix_sort(std::vector<K>& keys, std::vector<int32_t>& vals) {
-  const size_t n = keys.size();
-  std::vector<K> k2(n);
-  std::vector<int32_t> v2(n);
-  for (int shift = 0; shift < int(8 * sizeof(K)); shift += 8) {
-    size_t count[256] = {0};
-    for (size_t i = 0; i < n; ++i) ++count[(keys[i] >> shift) & 0xff];
-    if (n == 0 || count[(keys[0] >> shift) & 0xff] == n) continue;
-    size_t sum = 0;
-    for (auto& c : count) {
-      const size_t tmp = c;
-      c = sum;
-      sum += tmp;
+void radix_sort(K* keys, int32_t* vals, int64_t n) {
+  constexpr int kPasses = int(sizeof(K));
+  std::vector<std::array<int64_t, 256>> count(kPasses);
+  for (auto& c : count) c.fill(0);
+  for (int64_t i = 0; i < n; ++i)
+    for (int d = 0; d < kPasses; ++d) ++count[d][(keys[i] >> (8 * d)) & 0xff];
+  auto k2 = uninit<K>(n);
+  auto v2 = uninit<int32_t>(n);
+  K* kin = keys;
+  int32_t* vin = vals;
+  K* kout = k2.get();
+  int32_t* vout = v2.get();
+  for (int d = 0; d < kPasses; ++d) {
+    auto& c = count[d];
+    if (n == 0 || c[(kin[0] >> (8 * d)) & 0xff] == n) continue;
+    int64_t sum = 0;
+    for (auto& x : c) sum += std::exchange(x, sum);
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t at = c[(kin[i] >> (8 * d)) & 0xff]++;
+      kout[at] = kin[i], vout[at] = vin[i];
     }
-    for (size_t i = 0; i < n; ++i) {
-      const size_t d = count[(keys[i] >> shift) & 0xff]++;
-      k2[d] = keys[i];
-      v2[d] = vals[i];
-    }
-    keys.swap(k2);
-    vals.swap(v2);
+    std::swap(kin, kout), std::swap(vin, vout);
   }
+  if (kin != keys) std::copy_n(kin, n, keys), std::copy_n(vin, n, vals);
 }
 
 // Depth keys whose unsigned order is the order of positive depths.
@@ -55,71 +69,85 @@ template <class T>
 TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const CameraParams& cam) {
   using Key = decltype(depth_key(T(0)));
   const int64_t tiles_x = cam.tiles_x(), tiles = tiles_x * cam.tiles_y();
-
-  // Visible Gaussians sorted by (depth, id): filling tiles in this order leaves every tile list sorted.
-  // Compaction in fixed blocks (count, prefix sum, fill), so the order never depends on the thread count.
-  // Few parallel regions on purpose: on a busy machine each one can wait for a descheduled thread.
-  const int64_t block = 65536, blocks = (n + block - 1) / block;
+  const int64_t threads = std::max<int64_t>(1, at::get_num_threads());
   auto visible_in = [&](int64_t i) {
     const int32_t* r = rects + 4 * i;
     return r[0] < r[2] && r[1] < r[3];
   };
+  // Few parallel regions on purpose: on a busy machine each one can wait for a descheduled thread.
+
+  // 1. The visible Gaussians in id order, compacted in fixed blocks (count, prefix sum, fill), so the order never
+  // depends on the thread count. The fill also counts each tile's intersections, per thread (integer sums, so
+  // the totals are exact whichever thread counted what).
+  const int64_t block = 8192, blocks = (n + block - 1) / block;
   std::vector<int64_t> block_start(size_t(blocks) + 1, 0);
-  for (int64_t i = 0; i < n; ++i) block_start[i / block + 1] += visible_in(i);  // one sequential scan
+  at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+    for (int64_t b = b0; b < b1; ++b)
+      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i) block_start[b + 1] += visible_in(i);
+  });
   for (int64_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
   const int64_t visible = block_start[blocks];
-  std::vector<Key> keys(static_cast<size_t>(visible));
-  std::vector<int32_t> order(static_cast<size_t>(visible));
+  auto keys = uninit<Key>(visible);
+  auto order = uninit<int32_t>(visible);
+  std::vector<int64_t> per_thread(size_t(threads * tiles), 0);
   at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
+    int64_t* h = per_thread.data() + std::min<int64_t>(at::get_thread_num(), threads - 1) * tiles;
     for (int64_t b = b0; b < b1; ++b) {
       int64_t k = block_start[b];
-      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
-        if (visible_in(i)) keys[k] = depth_key(packed[i * kRec + kDepth]), order[k++] = int32_t(i);
-    }
-  });
-  radix_sort(keys, order);
-
-  // Chunks of the sorted list, each with its own tile histogram: at most 64, so the histograms stay
-  // O(tiles); the result is the same for any chunking (each tile list is in sorted order). The counting
-  // pass also copies the rectangles into sorted order, so the fill pass reads them sequentially.
-  const int64_t chunks = std::clamp<int64_t>((visible + 4095) / 4096, 1, 64);
-  const int64_t chunk = (visible + chunks - 1) / chunks;
-  std::vector<int64_t> hist(size_t(chunks * tiles), 0);
-  std::vector<int32_t> sorted_rects(size_t(visible) * 4);
-  at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
-    for (int64_t c = c0; c < c1; ++c) {
-      int64_t* h = hist.data() + c * tiles;
-      for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
-        int32_t* r = &sorted_rects[4 * k];
-        std::memcpy(r, rects + 4 * int64_t(order[k]), 16);
+      for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
+        if (!visible_in(i)) continue;
+        keys[k] = depth_key(packed[i * kRec + kDepth]), order[k++] = int32_t(i);
+        const int32_t* r = rects + 4 * i;
         for (int32_t ty = r[1]; ty < r[3]; ++ty)
           for (int32_t tx = r[0]; tx < r[2]; ++tx) ++h[ty * tiles_x + tx];
       }
     }
   });
+
+  // 2. Sorted by (depth, id): the sort is stable and the ids ascend. Filling the tiles in this order leaves
+  // every tile list sorted. The rectangles are copied into sorted order (the reads are random, so in
+  // parallel), and the fill reads them sequentially.
+  radix_sort(keys.get(), order.get(), visible);
+  auto sorted_rects = uninit<int32_t>(4 * visible);
+  at::parallel_for(0, visible, 4096, [&](int64_t k0, int64_t k1) {
+    for (int64_t k = k0; k < k1; ++k) std::memcpy(&sorted_rects[4 * k], rects + 4 * int64_t(order[k]), 16);
+  });
+
+  // 3. Tile offsets from the counts.
   TileBins bins;
   bins.tile_offsets = torch::empty({tiles + 1}, torch::kInt64);
   int64_t* offs = bins.tile_offsets.data_ptr<int64_t>();
   int64_t total = 0;
-  for (int64_t t = 0; t < tiles; ++t) {  // prefix sum; hist becomes each chunk's write cursor
+  for (int64_t t = 0; t < tiles; ++t) {
     offs[t] = total;
-    for (int64_t c = 0; c < chunks; ++c) {
-      const int64_t cnt = hist[c * tiles + t];
-      hist[c * tiles + t] = total;
-      total += cnt;
-    }
+    for (int64_t w = 0; w < threads; ++w) total += per_thread[w * tiles + t];
   }
   offs[tiles] = total;
   bins.isect_ids = torch::empty({total}, torch::kInt32);
   int32_t* ids = bins.isect_ids.data_ptr<int32_t>();
-  at::parallel_for(0, chunks, 1, [&](int64_t c0, int64_t c1) {
-    for (int64_t c = c0; c < c1; ++c) {
-      int64_t* cursor = hist.data() + c * tiles;
-      for (int64_t k = c * chunk; k < std::min(visible, (c + 1) * chunk); ++k) {
+
+  // 4. The fill, in sorted order. Each worker owns a range of tiles holding about an equal share of the
+  // intersections, scans the whole sorted list and writes only into its own tiles: no two workers share a
+  // cursor, and each tile's list is written in sorted order by one worker.
+  const int64_t workers = std::max<int64_t>(1, std::min<int64_t>(threads, tiles));
+  std::vector<int64_t> cursor(offs, offs + tiles);
+  at::parallel_for(0, workers, 1, [&](int64_t w0, int64_t w1) {
+    for (int64_t w = w0; w < w1; ++w) {
+      // Tiles [ta, tb): the first tile whose list starts at or after the worker's share of the total.
+      auto first_tile_at = [&](int64_t share) {
+        return int64_t(std::lower_bound(offs, offs + tiles, total * share / workers) - offs);
+      };
+      const int64_t ta = w == 0 ? 0 : first_tile_at(w), tb = w + 1 == workers ? tiles : first_tile_at(w + 1);
+      if (ta >= tb) continue;
+      const int64_t ya = ta / tiles_x, yb = (tb - 1) / tiles_x + 1;  // tile rows the range touches
+      for (int64_t k = 0; k < visible; ++k) {
         const int32_t id = order[k];
         const int32_t* r = &sorted_rects[4 * k];
-        for (int32_t ty = r[1]; ty < r[3]; ++ty)
-          for (int32_t tx = r[0]; tx < r[2]; ++tx) ids[cursor[ty * tiles_x + tx]++] = id;
+        const int64_t y_lo = std::max<int64_t>(r[1], ya), y_hi = std::min<int64_t>(r[3], yb);
+        for (int64_t ty = y_lo; ty < y_hi; ++ty) {
+          const int64_t lo = std::max(ty * tiles_x + r[0], ta), hi = std::min(ty * tiles_x + r[2], tb);
+          for (int64_t t = lo; t < hi; ++t) ids[cursor[t]++] = id;
+        }
       }
     }
   });
