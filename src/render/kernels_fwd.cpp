@@ -1,4 +1,4 @@
-// Tile binning (compaction with tile counts, depth sort, offsets, fill) and front-to-back rasterization, parallel over
+// Tile binning (compaction with tile counts, depth sort, offsets, fill) and front-to-back rasterization.
 // tiles.
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
