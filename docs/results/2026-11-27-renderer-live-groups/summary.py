@@ -11,7 +11,7 @@ PHASES = ["fwd", "fb", "proj", "bin", "rast", "rbwd", "pbwd"]
 def parse(path):
     rows, current = {}, None
     for line in Path(path).read_text().splitlines():
-        m = re.match(r"## round (\d+) (old|new)", line)
+        m = re.match(r"## round (\d+) (\w+)", line)
         if m:
             current = (int(m.group(1)), m.group(2))
         elif line.startswith("|"):
