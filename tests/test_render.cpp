@@ -26,6 +26,12 @@ namespace {
 
 const auto kF64 = torch::kFloat64;
 
+// Restores LibTorch's thread count when a test that changes it ends, failed assertions included.
+struct ThreadCountGuard {
+  const int before = at::get_num_threads();
+  ~ThreadCountGuard() { at::set_num_threads(before); }
+};
+
 // K with skew and a non-trivial pose, so projection and Jacobian exercise every term.
 Camera make_camera(int64_t W, int64_t H, double fx, double fy, double skew, bool posed, torch::Dtype dt = kF64) {
   auto K = torch::tensor({fx, skew, 0.5 * W + 0.3, 0.0, fy, 0.5 * H - 0.2, 0.0, 0.0, 1.0}, kF64).reshape({3, 3});
@@ -414,13 +420,14 @@ TEST_CASE("render: bit-identical results with 1 and 2 threads", "[render]") {
   const Camera cam = make_camera(160, 120, 130.0, 130.0, 0.3, true, torch::kFloat32);
   const Gaussians scene = random_scene(3000, cam, 5).to(torch::kFloat32);
   const Weights w = random_weights(120, 160, 6, torch::kFloat32);
-  const int before = at::get_num_threads();
   std::vector<std::vector<Tensor>> results;
-  for (int threads : {1, 2}) {
-    at::set_num_threads(threads);
-    results.push_back(outputs_and_grads(scene, cam, w));
+  {
+    const ThreadCountGuard guard;
+    for (int threads : {1, 2}) {
+      at::set_num_threads(threads);
+      results.push_back(outputs_and_grads(scene, cam, w));
+    }
   }
-  at::set_num_threads(before);
   REQUIRE(results[0].size() == results[1].size());
   for (size_t k = 0; k < results[0].size(); ++k) {
     CAPTURE(k);
@@ -430,8 +437,11 @@ TEST_CASE("render: bit-identical results with 1 and 2 threads", "[render]") {
 }
 
 TEST_CASE("render: tile binning lists each tile's Gaussians by (depth, id), whatever the thread count", "[render]") {
-  // 20000 Gaussians (several compaction blocks), some culled, and 2000 exact copies so that depths tie.
-  const Camera cam = make_camera(200, 136, 150.0, 150.0, 0.0, true, torch::kFloat32);
+  // 20000 Gaussians (several compaction blocks), some culled, and 2000 exact copies so that depths tie; on a
+  // 117-tile image, and on a 2-tile one where threads outnumber tiles.
+  const auto [W, H] = GENERATE(std::pair<int64_t, int64_t>{200, 136}, std::pair<int64_t, int64_t>{24, 16});
+  CAPTURE(W, H);
+  const Camera cam = make_camera(W, H, 0.75 * double(W), 0.75 * double(W), 0.0, true, torch::kFloat32);
   Gaussians g = random_scene(18000, cam, 21, 1.6).to(torch::kFloat32);
   const Tensor copies = torch::arange(0, 18000, 9);
   for (Tensor* t : {&g.means, &g.scales, &g.quats, &g.colors, &g.opacities})
@@ -462,7 +472,7 @@ TEST_CASE("render: tile binning lists each tile's Gaussians by (depth, id), what
       ties += rec[list[k] * splat::kRec + splat::kDepth] == rec[list[k - 1] * splat::kRec + splat::kDepth];
   CHECK(ties > 100);
 
-  const int before = at::get_num_threads();
+  const ThreadCountGuard guard;
   for (int threads : {1, 2, 3}) {
     CAPTURE(threads);
     at::set_num_threads(threads);
@@ -477,7 +487,6 @@ TEST_CASE("render: tile binning lists each tile's Gaussians by (depth, id), what
     CHECK(wrong == 0);
     CHECK(offs[tiles] == bins.intersections());
   }
-  at::set_num_threads(before);
 }
 
 TEST_CASE("render: options read and write through the config schema", "[render]") {
@@ -509,9 +518,10 @@ std::vector<splat::Simd> simd_levels() {
 TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]") {
   // Double precision (the finite-difference and reference tests) always takes the portable loops; this ties
   // the float AVX2 and AVX-512 loops to them. Large and small splats, so that Gaussians cover odd and even
-  // numbers of 8-pixel groups (AVX-512 pairs them and finishes an odd one on the AVX2 rule).
-  const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, torch::kFloat32);
-  const Weights w = random_weights(80, 96, 16, torch::kFloat32);
+  // numbers of 8-pixel groups (AVX-512 pairs them and finishes an odd one on the AVX2 rule). 100x84 leaves the
+  // last tile column and row partial.
+  const Camera cam = make_camera(100, 84, 80.0, 80.0, 0.3, true, torch::kFloat32);
+  const Weights w = random_weights(84, 100, 16, torch::kFloat32);
   for (bool large : {false, true}) {
     CAPTURE(large);
     const Gaussians scene =

@@ -1,5 +1,4 @@
 // Tile binning (compaction with tile counts, depth sort, offsets, fill) and front-to-back rasterization.
-// tiles.
 #include <ATen/Dispatch.h>
 #include <ATen/Parallel.h>
 
@@ -11,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.h"
 #include "render/kernels.h"
 #include "render/lanes_avx512.h"
 #include "render/tile_loop.h"
@@ -74,7 +74,8 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
     const int32_t* r = rects + 4 * i;
     return r[0] < r[2] && r[1] < r[3];
   };
-  // Few parallel regions on purpose: on a busy machine each one can wait for a descheduled thread.
+  // Four parallel regions (block counts, compaction, rectangle gather, fill), no more: on a busy machine each one
+  // can wait for a descheduled thread.
 
   // 1. The visible Gaussians in id order, compacted in fixed blocks (count, prefix sum, fill), so the order never
   // depends on the thread count. The fill also counts each tile's intersections, per thread (integer sums, so
@@ -91,7 +92,11 @@ TileBins bin_tiles_impl(const T* packed, const int32_t* rects, int64_t n, const 
   auto order = uninit<int32_t>(visible);
   std::vector<int64_t> per_thread(size_t(threads * tiles), 0);
   at::parallel_for(0, blocks, 1, [&](int64_t b0, int64_t b1) {
-    int64_t* h = per_thread.data() + std::min<int64_t>(at::get_thread_num(), threads - 1) * tiles;
+    // A team never has more threads than get_num_threads(), and a nested or inline call runs as thread 0, so no
+    // two threads share a row.
+    const int64_t thread = at::get_thread_num();
+    ISPLAT_CHECK(thread >= 0 && thread < threads, "bin_tiles: thread ", thread, " of ", threads);
+    int64_t* h = per_thread.data() + thread * tiles;
     for (int64_t b = b0; b < b1; ++b) {
       int64_t k = block_start[b];
       for (int64_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {

@@ -155,7 +155,7 @@ constexpr int kMaxGroups = kTile * kTile / kLanes;
 // last contributor behind the current Gaussian. A group outside the set has every lane masked off, so dropping
 // it never changes a result; it only saves the work.
 struct LiveGroups {
-  unsigned half[2] = {0xffffu, 0xffffu};
+  unsigned half[2] = {0, 0};
   bool has(int64_t row, int64_t h) const { return (half[h] >> row) & 1u; }
 };
 
@@ -164,7 +164,6 @@ struct LiveGroups {
 template <class T>
 ISPLAT_INLINE LiveGroups unstopped_groups(const T* st) {
   LiveGroups live;
-  live.half[0] = live.half[1] = 0;
   for (int r = 0; r < kTile; ++r)
     for (int h = 0; h < 2; ++h) {
       bool any = false;
