@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <new>
 #include <vector>
 
 #include "render/kernels.h"
@@ -35,11 +36,33 @@ ISPLAT_INLINE bool pixel_box(const T* rec, int64_t x0, int64_t y0, int64_t x1, i
   return true;
 }
 
+// An allocator of 64-byte aligned storage: a tile row's plane (16 floats) is then one cache line, so vector loads
+// and stores of it never straddle two lines, and a gathered float record is one line too. (malloc aligns to 16.)
+template <class V>
+struct LineAligned {
+  using value_type = V;
+  LineAligned() = default;
+  template <class U>
+  LineAligned(const LineAligned<U>&) {}
+  V* allocate(size_t n) { return static_cast<V*>(::operator new(n * sizeof(V), std::align_val_t(64))); }
+  void deallocate(V* p, size_t) { ::operator delete(p, std::align_val_t(64)); }
+  template <class U>
+  bool operator==(const LineAligned<U>&) const {
+    return true;
+  }
+  template <class U>
+  bool operator!=(const LineAligned<U>&) const {
+    return false;
+  }
+};
+template <class V>
+using LineVector = std::vector<V, LineAligned<V>>;
+
 // Per-thread buffers reused across the tiles a thread renders.
 template <class T>
 struct TileScratch {
-  std::vector<T> records, state;
-  std::vector<int32_t> last = std::vector<int32_t>(kPix);
+  LineVector<T> records, state;
+  LineVector<int32_t> last = LineVector<int32_t>(kPix);
 
   // The tile's records gathered into one contiguous array, in list order (cache friendly).
   const T* gather(const T* packed, const int32_t* ids, int64_t count) {
