@@ -29,8 +29,7 @@ std::unique_ptr<V[]> uninit(int64_t n) {
 template <class K>
 void radix_sort(K* keys, int32_t* vals, int64_t n) {
   constexpr int kPasses = int(sizeof(K));
-  std::vector<std::array<int64_t, 256>> count(kPasses);
-  for (auto& c : count) c.fill(0);
+  std::array<std::array<int64_t, 256>, kPasses> count{};
   for (int64_t i = 0; i < n; ++i)
     for (int d = 0; d < kPasses; ++d) ++count[d][(keys[i] >> (8 * d)) & 0xff];
   auto k2 = uninit<K>(n);
