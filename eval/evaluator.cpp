@@ -171,6 +171,7 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
   j.erase("name");
   j["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
   j["scoring.crack_holes"] = scoring.crack_holes;
+  j["scoring.crack_side"] = scoring.crack_side;
   return j;
 }
 
@@ -276,6 +277,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
       StabilityOptions so;
       so.edge_margin = config_.scoring.crack_edge_margin;
       so.holes_break = config_.scoring.crack_holes;
+      so.crack_side = parse_crack_side(config_.scoring.crack_side);
       r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, so);
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
@@ -397,6 +399,9 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     notes_.push_back(
         "cracks count smooth neighbour pairs with a hole on either side as broken "
         "(scoring.crack_holes): holes and jumps together");
+  if (config_.scoring.crack_side != "any")
+    notes_.push_back(cat("cracks count only broken pairs that err ", config_.scoring.crack_side,
+                         " than the reference depth (scoring.crack_side)"));
   // Every checkpoint must exist before anything is scored: a typo or a row still training must not surface an hour
   // into a run.
   if (!pairs_only)

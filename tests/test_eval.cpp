@@ -617,6 +617,9 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
     EvalConfig holes = c;
     holes.scoring.crack_holes = true;
     CHECK_THROWS_WITH(Evaluator(holes).run(), Catch::Contains("scoring.crack_holes"));
+    EvalConfig side = c;
+    side.scoring.crack_side = "nearer";
+    CHECK_THROWS_WITH(Evaluator(side).run(), Catch::Contains("scoring.crack_side"));
   }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));

@@ -170,6 +170,31 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   CHECK(crack_rate(flat, holed, ref, full, holes) == Approx(8.0 / 180.0));
   CHECK(std::isnan(crack_rate(flat, torch::zeros({1, H, W}), ref, torch::zeros({H, W}), holes)));
   CHECK(crack_rate(flat, torch::zeros({1, H, W}), ref, full, holes) == 1.0);  // all empty: every pair broken
+
+  // crack_side splits the broken pairs by where the deviant pixel errs. On the 2 m plane, column 2 is drawn
+  // nearer (1.5 m: a fringe) and column 7 farther (3 m: seen through): 2 x 10 broken pairs each side.
+  auto sided = torch::full({1, H, W}, 2.0);
+  sided.narrow(2, 2, 1).fill_(1.5);
+  sided.narrow(2, 7, 1).fill_(3.0);
+  StabilityOptions nearer, farther;
+  nearer.crack_side = CrackSide::nearer;
+  farther.crack_side = CrackSide::farther;
+  CHECK(crack_rate(sided, opaque, ref, full) == Approx(40.0 / 180.0));
+  CHECK(crack_rate(sided, opaque, ref, full, nearer) == Approx(20.0 / 180.0));
+  CHECK(crack_rate(sided, opaque, ref, full, farther) == Approx(20.0 / 180.0));
+  // The deviant pixel decides, relative to its own reference: on a reference ramp 2 | 2.01, a render 2 | 2.2 errs
+  // farther at the second pixel, even though the first is the nearer of the two.
+  const auto ramp_ref = torch::tensor({2.0, 2.01}).reshape({1, 2}), pair_mask = torch::ones({1, 2});
+  const auto ramp = torch::tensor({2.0, 2.2}).reshape({1, 1, 2}), ramp_alpha = torch::ones({1, 1, 2});
+  CHECK(crack_rate(ramp, ramp_alpha, ramp_ref, pair_mask, farther) == 1.0);
+  CHECK(crack_rate(ramp, ramp_alpha, ramp_ref, pair_mask, nearer) == 0.0);
+  // With holes_break a hole errs farther: nothing is drawn there.
+  StabilityOptions holes_nearer = nearer, holes_farther = farther;
+  holes_nearer.holes_break = holes_farther.holes_break = true;
+  CHECK(crack_rate(flat, holed, ref, full, holes_nearer) == 0.0);
+  CHECK(crack_rate(flat, holed, ref, full, holes_farther) == Approx(8.0 / 180.0));
+  CHECK(parse_crack_side("nearer") == CrackSide::nearer);
+  CHECK_THROWS_WITH(parse_crack_side("front"), Catch::Contains("'front'"));
 }
 
 TEST_CASE("stability: normal incoherence is 0 on a coherent plane and the tilt on a checkerboard", "[metrics]") {

@@ -218,6 +218,18 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   // Faces alone never reach the step's columns; the represented area is the surface's, once.
   CHECK(((faces.uv.select(1, 0) - 32).abs() < 0.5).sum().item<int64_t>() == 0);
   CHECK(s.area.sum().item<double>() == Approx(faces.area.sum().item<double>()).epsilon(1e-4));
+  // edge_scale shrinks the edge supports' footprints (area by its square, against the faces'), at the same places,
+  // and the represented area is still the surface's.
+  o.edge_scale = 0.5;
+  const Supports small = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(torch::equal(small.uv, s.uv));
+  const auto ratio = (small.area / s.area).to(torch::kDouble);
+  const double edge_ratio = ratio[0].item<double>(), face_ratio = ratio[s.count() - 1].item<double>();
+  CHECK(edge_ratio / face_ratio == Approx(0.25).epsilon(1e-4));
+  CHECK(ratio.narrow(0, 0, edges).sub(edge_ratio).abs().max().item<double>() < 1e-4 * edge_ratio);
+  CHECK(small.area.sum().item<double>() == Approx(s.area.sum().item<double>()).epsilon(1e-4));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.0}}, "test"),
+                    Catch::Contains("edge_scale"));
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",

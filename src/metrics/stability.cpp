@@ -53,6 +53,13 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
   return in ? static_cast<double>(holes) / static_cast<double>(in) : kNaN;
 }
 
+CrackSide parse_crack_side(const std::string& name) {
+  if (name == "any") return CrackSide::any;
+  if (name == "nearer") return CrackSide::nearer;
+  ISPLAT_CHECK(name == "farther", "crack side: unknown '", name, "' (any | nearer | farther)");
+  return CrackSide::farther;
+}
+
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& o) {
   ISPLAT_CHECK(mask.dim() == 2, "crack_rate: mask must be [H,W], got ", mask.sizes());
@@ -78,12 +85,15 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
         if (std::abs(pr[p] - pr[q]) >= o.smooth_jump * zr) continue;  // the reference itself has an edge
         if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
         ++pairs;
-        if (hole(p) || hole(q)) {  // only reached with holes_break
-          ++cracks;
+        if (hole(p) || hole(q)) {  // only reached with holes_break; nothing drawn errs farther
+          cracks += o.crack_side != CrackSide::nearer;
           continue;
         }
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
-        cracks += std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq);
+        if (!(std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq))) continue;
+        const double ep = zp / pr[p] - 1, eq = zq / pr[q] - 1;
+        const bool nearer = (std::abs(ep) >= std::abs(eq) ? ep : eq) < 0;
+        cracks += o.crack_side == CrackSide::any || nearer == (o.crack_side == CrackSide::nearer);
       }
     }
   return pairs ? static_cast<double>(cracks) / static_cast<double>(pairs) : kNaN;

@@ -3,7 +3,14 @@
 #pragma once
 #include <torch/types.h>
 
+#include <string>
+
 namespace isplat {
+
+// Which broken pairs crack_rate counts, by the side the render errs to at the pair's deviant pixel (the one whose
+// rendered depth is relatively farther from the reference): a nearer surface drawn over it (a fringe, a floater, a
+// silhouette drawn too wide) or a farther one seen through it (a tear, a silhouette drawn too narrow).
+enum class CrackSide { any, nearer, farther };
 
 struct StabilityOptions {
   double hole_alpha = 0.5;    // a pixel is a hole when its rendered alpha stays below this
@@ -12,7 +19,11 @@ struct StabilityOptions {
   double planar_deg = 2.0;    // reference normals of neighbours within this angle mark a planar surface
   int64_t edge_margin = 0;    // crack_rate skips pairs within this many pixels of a reference depth edge
   bool holes_break = false;   // crack_rate counts a pair with a hole on either side as broken, instead of skipping it
+  CrackSide crack_side = CrackSide::any;  // crack_rate counts only the broken pairs that err to this side
 };
+
+// "any" | "nearer" | "farther"; anything else fails naming the value.
+CrackSide parse_crack_side(const std::string& name);
 
 // Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
 // NaN when the mask is empty.
@@ -24,7 +35,9 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // counts them), unless holes_break: then such a pair counts as broken, so a method cannot avoid cracks by
 // leaving the gap empty. With edge_margin > 0, pairs with a pixel within that many pixels (Chebyshev) of a reference
 // depth edge (a neighbour jump >= crack_jump·z, or valid next to invalid) are skipped too: what remains are
-// cracks in surfaces, not silhouettes drawn a pixel or two off. NaN when no pair qualifies.
+// cracks in surfaces, not silhouettes drawn a pixel or two off. crack_side splits the broken pairs by the side their
+// deviant pixel errs to (the denominator stays every qualifying pair, so nearer + farther = any); a hole counted by
+// holes_break errs farther (nothing is drawn there). NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 

@@ -71,6 +71,11 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area sampling elsewhere); 0 = the edge pixels only",
           Range::between(0, 16));
   v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
+  v.field("edge_scale", edge_scale,
+          "area mode with edge_supports: the footprint (base scale) of each edge support as a multiple of a pixel's; "
+          "faces reach the edge pixels' centres, so a smaller one only closes the half-pixel gap beyond them and "
+          "draws silhouettes less wide (1 = a whole pixel, as in pixel mode)",
+          Range::between(0.05, 4.0));
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
@@ -717,6 +722,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       write_pixel_supports(g, o, spread(edges, ne), ne);
+      if (options.edge_scale != 1.0) s.area.narrow(0, 0, ne).mul_(options.edge_scale * options.edge_scale);
     }
     const double face_total =
         sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
