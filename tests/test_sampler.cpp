@@ -230,6 +230,9 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   CHECK(small.area.sum().item<double>() == Approx(s.area.sum().item<double>()).epsilon(1e-4));
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.0}}, "test"),
                     Catch::Contains("edge_scale"));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(
+                        nlohmann::json{{"edge_supports", true}, {"edge_band", 2}, {"edge_scale", 0.5}}, "test"),
+                    Catch::Contains("edge_band = 0"));
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",

@@ -76,6 +76,8 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "faces reach the edge pixels' centres, so a smaller one only closes the half-pixel gap beyond them and "
           "draws silhouettes less wide (1 = a whole pixel, as in pixel mode)",
           Range::between(0.05, 4.0));
+  v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
+            "needs sampler.edge_band = 0 (faces stay out of a band, so shrunk band supports would leave gaps)");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "

@@ -41,7 +41,7 @@ struct SamplerOptions {
   int64_t edge_band = 0;
   // With edge_supports: each edge support's footprint (the scale of its base Gaussian) is this times a pixel's,
   // before the areas are rescaled to the surface's total. Faces reach the edge pixels' centres, so an edge support
-  // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode.
+  // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
   double edge_scale = 1.0;
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
