@@ -145,8 +145,8 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "cracks count a smooth neighbour pair with a hole (alpha < 0.5) on either side as broken, instead of "
           "skipping it, so leaving a tear empty is no escape from the measure (false = the default measure)");
   v.field("crack_side", crack_side,
-          "cracks count only the broken pairs whose deviant pixel (the one farther from the reference depth, "
-          "relatively) renders nearer than the reference (a surface drawn over it: fringes, floaters, silhouettes "
+          "cracks count only the broken pairs whose deviant pixel (the one with the larger relative depth error) "
+          "renders nearer than the reference (a surface drawn over it: fringes, floaters, silhouettes "
           "too wide) or farther (one seen through it: tears, silhouettes too narrow; holes with crack_holes); any = "
           "both, the default measure; nearer + farther = any on the same pairs",
           {"any", "nearer", "farther"});

@@ -182,8 +182,8 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   CHECK(crack_rate(sided, opaque, ref, full) == Approx(40.0 / 180.0));
   CHECK(crack_rate(sided, opaque, ref, full, nearer) == Approx(20.0 / 180.0));
   CHECK(crack_rate(sided, opaque, ref, full, farther) == Approx(20.0 / 180.0));
-  // The deviant pixel decides, relative to its own reference: on a reference ramp 2 | 2.01, a render 2 | 2.2 errs
-  // farther at the second pixel, even though the first is the nearer of the two.
+  // The deviant pixel decides, not which of the two renders nearer: on a reference ramp 2 | 2.01, a render 2 | 2.2
+  // errs farther at the second pixel, though the first is the nearer of the two.
   const auto ramp_ref = torch::tensor({2.0, 2.01}).reshape({1, 2}), pair_mask = torch::ones({1, 2});
   const auto ramp = torch::tensor({2.0, 2.2}).reshape({1, 1, 2}), ramp_alpha = torch::ones({1, 1, 2});
   CHECK(crack_rate(ramp, ramp_alpha, ramp_ref, pair_mask, farther) == 1.0);

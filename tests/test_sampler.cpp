@@ -228,11 +228,27 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   CHECK(edge_ratio / face_ratio == Approx(0.25).epsilon(1e-4));
   CHECK(ratio.narrow(0, 0, edges).sub(edge_ratio).abs().max().item<double>() < 1e-4 * edge_ratio);
   CHECK(small.area.sum().item<double>() == Approx(s.area.sum().item<double>()).epsilon(1e-4));
+  // edge_scale_at = near shrinks only the near side of the step (column 31, at 2 m beside 6 m); the far side
+  // (column 32) and the image border keep a whole pixel's footprint.
+  o.edge_scale_at = "near";
+  const Supports near = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(torch::equal(near.uv, s.uv));
+  const auto near_ratio = (near.area / s.area).to(torch::kDouble);
+  const double face_near = near_ratio[s.count() - 1].item<double>();
+  const auto u_edge = s.uv.select(1, 0).narrow(0, 0, edges), v_edge = s.uv.select(1, 1).narrow(0, 0, edges);
+  const auto col31 = (u_edge - 31.5).abs().lt(1e-4) & (v_edge > 1) & (v_edge < H - 1),
+             rest = (u_edge - 31.5).abs().ge(1e-4);
+  REQUIRE(col31.sum().item<int64_t>() == H - 2);
+  const auto edge_near = near_ratio.narrow(0, 0, edges) / face_near;
+  CHECK((edge_near.masked_select(col31) - 0.25).abs().max().item<double>() < 1e-4);
+  CHECK((edge_near.masked_select(rest) - 1.0).abs().max().item<double>() < 1e-4);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.0}}, "test"),
                     Catch::Contains("edge_scale"));
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(
                         nlohmann::json{{"edge_supports", true}, {"edge_band", 2}, {"edge_scale", 0.5}}, "test"),
                     Catch::Contains("edge_band = 0"));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.5}}, "test"),
+                    Catch::Contains("edge_supports = true"));
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",

@@ -7,8 +7,8 @@
 
 namespace isplat {
 
-// Which broken pairs crack_rate counts, by the side the render errs to at the pair's deviant pixel (the one whose
-// rendered depth is relatively farther from the reference): a nearer surface drawn over it (a fringe, a floater, a
+// Which broken pairs crack_rate counts, by the side the render errs to at the pair's deviant pixel (the one with the
+// larger relative error of rendered against reference depth): a nearer surface drawn over it (a fringe, a floater, a
 // silhouette drawn too wide) or a farther one seen through it (a tear, a silhouette drawn too narrow).
 enum class CrackSide { any, nearer, farther };
 

@@ -76,6 +76,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "faces reach the edge pixels' centres, so a smaller one only closes the half-pixel gap beyond them and "
           "draws silhouettes less wide (1 = a whole pixel, as in pixel mode)",
           Range::between(0.05, 4.0));
+  v.field("edge_scale_at", edge_scale_at,
+          "with edge_scale: which edge supports it applies to: all, or near (only those on the near side of a depth "
+          "edge, whose footprints can spill onto the background; border and hole edges keep a whole pixel)",
+          {"all", "near"});
+  v.require("edge_scale", edge_scale == 1.0 || (mode == "area" && edge_supports),
+            "needs sampler.mode = area and sampler.edge_supports = true (it scales the edge supports)");
   v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
             "needs sampler.edge_band = 0 (faces stay out of a band, so shrunk band supports would leave gaps)");
   v.field("fill_px", fill_px,
@@ -572,6 +578,26 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
   return out;
 }
 
+// Edge supports 0..pixels.size()-1 stand for scale² of their area: all of them, or (near_only) those on the near side
+// of a depth edge, whose footprints can spill past a silhouette onto the background (a valid 8-neighbour lies
+// beyond a discontinuity behind them).
+void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double scale,
+                         bool near_only) {
+  const float f = static_cast<float>(scale * scale);
+  for (size_t k = 0; k < pixels.size(); ++k) {
+    const int64_t p = pixels[k], i = p / g.W, j = p % g.W;
+    bool near = !near_only;
+    for (int64_t di = -1; di <= 1 && !near; ++di)
+      for (int64_t dj = -1; dj <= 1 && !near; ++dj) {
+        const int64_t y = i + di, x = j + dj;
+        if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
+        const double zp = g.depth[p], zq = g.depth[y * g.W + x];
+        near = zq / zp >= discontinuity_threshold(0.5 * (zp + zq));
+      }
+    if (near) o.area[k] *= f;
+  }
+}
+
 // `count` of the pixels, spread evenly over the list (all of them when count equals its size).
 std::vector<int64_t> spread(const std::vector<int64_t>& pixels, int64_t count) {
   const int64_t size = static_cast<int64_t>(pixels.size());
@@ -723,8 +749,10 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     if (options.edge_supports) {
       const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
-      write_pixel_supports(g, o, spread(edges, ne), ne);
-      if (options.edge_scale != 1.0) s.area.narrow(0, 0, ne).mul_(options.edge_scale * options.edge_scale);
+      const std::vector<int64_t> chosen = spread(edges, ne);
+      write_pixel_supports(g, o, chosen, ne);
+      if (options.edge_scale != 1.0)
+        scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
     }
     const double face_total =
         sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),

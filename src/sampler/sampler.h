@@ -43,6 +43,7 @@ struct SamplerOptions {
   // before the areas are rescaled to the surface's total. Faces reach the edge pixels' centres, so an edge support
   // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
   double edge_scale = 1.0;
+  std::string edge_scale_at = "all";  // all | near: edge_scale on every edge support, or near silhouettes only
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).

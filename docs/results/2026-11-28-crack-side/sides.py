@@ -34,7 +34,7 @@ for s in sorted(d for d in os.listdir(ANY) if os.path.exists(f"{ANY}/{d}/results
         print("|---|---|---|---|---|---|---|")
         for name, _ in ROWS:
             m = [sum(data[name][k][c] for k in keys) / len(keys) for c in (1, 2, 3)]
-            diffs = ' | ' if name == 'full' else ' | '.join(
+            diffs = ' |  | ' if name == 'full' else ' | '.join(
                 interval([data['full'][k][c] - data[name][k][c] for k in keys]) for c in (1, 2, 3))
             print(f"| {name} | {m[0]:.3f} | {m[1]:.3f} | {m[2]:.3f} | {diffs} |")
         print()
