@@ -228,20 +228,38 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   CHECK(edge_ratio / face_ratio == Approx(0.25).epsilon(1e-4));
   CHECK(ratio.narrow(0, 0, edges).sub(edge_ratio).abs().max().item<double>() < 1e-4 * edge_ratio);
   CHECK(small.area.sum().item<double>() == Approx(s.area.sum().item<double>()).epsilon(1e-4));
-  // edge_scale_at = near shrinks only the near side of the step (column 31, at 2 m beside 6 m); the far side
-  // (column 32) and the image border keep a whole pixel's footprint.
+  // edge_scale_at = near shrinks only the near side of the step (column 31, at 2 m beside 6 m, its border pixels
+  // included); the far side (column 32) and the rest of the image border keep a whole pixel's footprint.
   o.edge_scale_at = "near";
   const Supports near = sample_supports(depth, ones(), K(), image(), o, 2);
   REQUIRE(torch::equal(near.uv, s.uv));
   const auto near_ratio = (near.area / s.area).to(torch::kDouble);
   const double face_near = near_ratio[s.count() - 1].item<double>();
   const auto u_edge = s.uv.select(1, 0).narrow(0, 0, edges), v_edge = s.uv.select(1, 1).narrow(0, 0, edges);
-  const auto col31 = (u_edge - 31.5).abs().lt(1e-4) & (v_edge > 1) & (v_edge < H - 1),
-             rest = (u_edge - 31.5).abs().ge(1e-4);
-  REQUIRE(col31.sum().item<int64_t>() == H - 2);
+  const auto col31 = (u_edge - 31.5).abs().lt(1e-4), rest = ~col31;
+  REQUIRE(col31.sum().item<int64_t>() == H);
   const auto edge_near = near_ratio.narrow(0, 0, edges) / face_near;
   CHECK((edge_near.masked_select(col31) - 0.25).abs().max().item<double>() < 1e-4);
   CHECK((edge_near.masked_select(rest) - 1.0).abs().max().item<double>() < 1e-4);
+  // Hole edges keep a whole pixel too, whatever depth the invalid pixels hold (here 60 m, behind the 6 m side).
+  auto valid = ones();
+  valid.narrow(1, 48, 2).zero_();
+  auto behind = depth.clone();
+  behind.narrow(1, 48, 2).fill_(60.0f);
+  SamplerOptions whole = o;
+  whole.edge_scale = 1.0;
+  whole.edge_scale_at = "all";
+  const Supports hw = sample_supports(behind, valid, K(), image(), whole, 2),
+                 hn = sample_supports(behind, valid, K(), image(), o, 2);
+  REQUIRE(torch::equal(hw.uv, hn.uv));
+  const auto hole_ratio = (hn.area / hw.area).to(torch::kDouble);
+  const auto hu = hw.uv.select(1, 0), on_centre = ((hw.uv - 0.5 - (hw.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto hole_edge = on_centre & ((hu - 47.5).abs().lt(1e-4) | (hu - 50.5).abs().lt(1e-4));
+  const auto near_edge = on_centre & (hu - 31.5).abs().lt(1e-4);
+  REQUIRE(hole_edge.sum().item<int64_t>() == 2 * H);
+  const double face_hole = hole_ratio[hw.count() - 1].item<double>();
+  CHECK((hole_ratio.masked_select(hole_edge) / face_hole - 1.0).abs().max().item<double>() < 1e-4);
+  CHECK((hole_ratio.masked_select(near_edge) / face_hole - 0.25).abs().max().item<double>() < 1e-4);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.0}}, "test"),
                     Catch::Contains("edge_scale"));
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(
@@ -249,6 +267,9 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
                     Catch::Contains("edge_band = 0"));
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.5}}, "test"),
                     Catch::Contains("edge_supports = true"));
+  CHECK_THROWS_WITH(
+      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_scale_at", "near"}}, "test"),
+      Catch::Contains("edge_scale_at"));
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",

@@ -80,6 +80,8 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "with edge_scale: which edge supports it applies to: all, or near (only those on the near side of a depth "
           "edge, whose footprints can spill onto the background; border and hole edges keep a whole pixel)",
           {"all", "near"});
+  v.require("edge_scale_at", edge_scale_at == "all" || edge_scale != 1.0,
+            "near needs sampler.edge_scale other than 1 (it chooses where edge_scale applies)");
   v.require("edge_scale", edge_scale == 1.0 || (mode == "area" && edge_supports),
             "needs sampler.mode = area and sampler.edge_supports = true (it scales the edge supports)");
   v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
