@@ -51,9 +51,6 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
   bool sloped[8];
   int hits = 0;
   const auto ok = [&](int64_t a, int64_t b) { return a >= 0 && b >= 0 && a < H && b < W && usable[a * W + b] != 0; };
-  const auto apart = [](double a, double b) {
-    return std::max(a, b) / std::min(a, b) >= discontinuity_threshold(0.5 * (a + b));
-  };
   for (int k = 0; k < 8; ++k)
     for (int64_t s = 1; s <= reach; ++s) {
       const int64_t a = i + s * kDi[k], b = j + s * kDj[k];
@@ -65,7 +62,7 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
       for (int64_t t = 1; t <= 2; ++t)
         if (ok(a + t * kDi[k], b + t * kDj[k])) {
           const double iz2 = 1.0 / depth[(a + t * kDi[k]) * W + (b + t * kDj[k])];
-          if (!apart(1.0 / iz, 1.0 / iz2)) slope = (iz2 - iz) / t, sloped[hits] = true;
+          if (!depths_apart(1.0 / iz, 1.0 / iz2)) slope = (iz2 - iz) / t, sloped[hits] = true;
           break;
         }
       // Back to (i, j), s steps inward; within a factor of 2 of the hit, so a curved surface cannot run away.
@@ -77,12 +74,12 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
   const double znear = *std::min_element(z, z + hits);
   double zfar = 0, near_dist = 1e30, far_dist = 1e30;
   for (int k = 0; k < hits; ++k)
-    if (apart(z[k], znear) && (zfar == 0 || z[k] < zfar)) zfar = z[k];
+    if (depths_apart(z[k], znear) && (zfar == 0 || z[k] < zfar)) zfar = z[k];
   if (zfar == 0) return false;      // no edge across the hole
   for (int k = 0; k < hits; ++k) {  // a third surface, apart from both layers, counts in neither
-    if (!apart(z[k], znear))
+    if (!depths_apart(z[k], znear))
       near_dist = std::min(near_dist, dist[k]);
-    else if (!apart(z[k], zfar))
+    else if (!depths_apart(z[k], zfar))
       far_dist = std::min(far_dist, dist[k]);
   }
   if (near_dist + far_dist > width) return false;
@@ -91,7 +88,7 @@ bool far_side_log_depth(const float* usable, const float* depth, int64_t H, int6
   double sum = 0, wsum = 0;
   for (int pass = 0; pass < 2 && wsum == 0; ++pass)
     for (int k = 0; k < hits; ++k)
-      if ((sloped[k] || pass == 1) && !apart(z[k], zfar)) sum += std::log(z[k]) / dist[k], wsum += 1 / dist[k];
+      if ((sloped[k] || pass == 1) && !depths_apart(z[k], zfar)) sum += std::log(z[k]) / dist[k], wsum += 1 / dist[k];
   log_out = sum / wsum;  // the hit zfar counts in the second pass
   return true;
 }

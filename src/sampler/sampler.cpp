@@ -109,6 +109,10 @@ double discontinuity_threshold(double z_mean) {
   return 1.05 + 0.05 * t;
 }
 
+bool depths_apart(double a, double b) {
+  return std::max(a, b) / std::min(a, b) >= discontinuity_threshold(0.5 * (a + b));
+}
+
 namespace {
 
 SamplerOptions without_fill(SamplerOptions o) {  // the options once fill_px has been applied
@@ -594,7 +598,7 @@ void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64
         const int64_t y = i + di, x = j + dj;
         if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
         const double zp = g.depth[p], zq = g.depth[y * g.W + x];
-        near = zq / zp >= discontinuity_threshold(0.5 * (zp + zq));
+        near = zq > zp && depths_apart(zp, zq);
       }
     if (near) o.area[k] *= f;
   }

@@ -89,4 +89,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
 // The release's discontinuity test: a triangle is rejected when zmax/zmin >= this threshold.
 double discontinuity_threshold(double z_mean);
 
+// That test for two depths: true when they lie on different surfaces (max/min >= the threshold at their mean).
+bool depths_apart(double a, double b);
+
 }  // namespace isplat
