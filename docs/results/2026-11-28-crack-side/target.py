@@ -1,6 +1,7 @@
 # Issue 17's target at [2,inf): each row minus pixel_supports and minus dense_decoder (two seeds averaged per pair),
 # holes and cracks in points, paired bootstrap 95% (2000 resamples, seed 0), 3 decimals.
-# Usage: python3 target.py [eval folder, default out/experiments/crack_side/any] [row=m1+m2 ...]
+# Usage: python3 target.py [eval folder, default out/experiments/crack_side/any] [row=m1+m2 ...]; rows the folder
+# did not score are left out.
 import json, os, sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from sides import interval as iv  # one bootstrap for both scripts
@@ -15,6 +16,8 @@ print("| set | row | holes − pixel | holes − dense | cracks − pixel | crac
 for s in ['rooms-heldout', 'courtyard-colmap', 'atrium-nerfstudio']:
     P = load(s, 'pixel_supports+pixel_supports_s1'); D = load(s, 'dense_decoder+dense_decoder_s1')
     for name, spec in ROWS:
+        if not all(os.path.exists(f"{root}/{s}/results_{m}.jsonl") for m in spec.split('+')):
+            continue  # a row this folder did not score
         A = load(s, spec); ks = [k for k in A if A[k]['bin'] == 3 and k in P and k in D]
         cells = [iv([100 * (A[k][f] - B[k][f]) for k in ks]) for f in ('hole_rate', 'crack_rate') for B in (P, D)]
         print(f"| {s} ({len(ks)} pairs) | {name} | " + " | ".join(cells) + " |")
