@@ -272,6 +272,102 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
       Catch::Contains("edge_scale_at"));
 }
 
+TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette, into their own surface", "[sampler]") {
+  // Columns 0..31 at 2 m, 32..64 at 6 m.
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);
+  const torch::Tensor img = image();
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  const Supports centred = sample_supports(depth, ones(), K(), img, o, 2);
+  o.edge_shift = 0.25;
+  const Supports shifted = sample_supports(depth, ones(), K(), img, o, 2);
+  REQUIRE(shifted.count() == centred.count());
+  const auto du = shifted.uv - centred.uv;
+  const auto moved = du.abs().gt(1e-6).any(1);
+  // Exactly the near side moves (column 31, 2 m beside 6 m), a quarter pixel away from the far side, keeping its
+  // depth, colour and footprint; the far side (column 32), the border and the faces stay where they were. Inside
+  // the image that is straight left; in the top and bottom rows the far side also lies diagonally, below or above.
+  const auto col31 = (centred.uv.select(1, 0) - 31.5).abs().lt(1e-4) &
+                     ((centred.uv - 0.5 - (centred.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  REQUIRE(col31.sum().item<int64_t>() == H);
+  CHECK(torch::equal(moved, col31));
+  const auto v = centred.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(H - 1.0);
+  REQUIRE(inside.sum().item<int64_t>() == H - 2);
+  CHECK((du.select(1, 0).masked_select(inside) + 0.25).abs().max().item<double>() < 1e-5);
+  CHECK(du.select(1, 1).masked_select(inside).abs().max().item<double>() < 1e-6);
+  CHECK((du.norm(2, 1).masked_select(col31) - 0.25).abs().max().item<double>() < 1e-5);
+  CHECK(torch::equal(shifted.depth, centred.depth));
+  CHECK(torch::equal(shifted.color, centred.color));
+  CHECK(torch::equal(shifted.area, centred.area));
+  // A corner: with row 0's columns 20..31 at 6 m too, the pixel at row 1, column 19 has one farther neighbour,
+  // diagonally up and right, and moves a quarter pixel diagonally down and left.
+  auto ledge = depth.clone();
+  ledge[0].narrow(0, 20, 12).fill_(6.0f);
+  o.edge_shift = 0.0;
+  const Supports lc = sample_supports(ledge, ones(), K(), img, o, 2);
+  o.edge_shift = 0.25;
+  const Supports ls = sample_supports(ledge, ones(), K(), img, o, 2);
+  const auto at = ((lc.uv.select(1, 0) - 19.5).abs().lt(1e-4) & (lc.uv.select(1, 1) - 1.5).abs().lt(1e-4)).nonzero();
+  REQUIRE(at.size(0) == 1);
+  const auto step = (ls.uv - lc.uv)[at[0][0].item<int64_t>()];
+  const double sx = step[0].item<double>(), sy = step[1].item<double>();
+  CHECK(sx == Approx(-0.25 / std::sqrt(2.0)).epsilon(1e-4));
+  CHECK(sy == Approx(0.25 / std::sqrt(2.0)).epsilon(1e-4));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_shift", 0.25}}, "test"),
+                    Catch::Contains("edge_supports = true"));
+  CHECK_THROWS_WITH(
+      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_shift", 0.6}}, "test"),
+      Catch::Contains("edge_shift"));
+}
+
+TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette", "[sampler]") {
+  // Columns 0..31 a flat 2 m; 32..64 a floor-like plane (inverse depth affine in the row), from 6 m up to 3.8 m,
+  // whose normal tilts away from the camera's axis.
+  auto depth = torch::full({H, W}, 2.0f);
+  const auto slope = 1.0 / (1.0 / 6.0 + 0.002 * torch::arange(H, torch::kDouble));
+  depth.narrow(1, 32, W - 32).copy_(slope.to(torch::kFloat).unsqueeze(1).expand({H, W - 32}));
+  const torch::Tensor img = image();
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  o.normals = true;
+  const Supports plain = sample_supports(depth, ones(), K(), img, o, 2);
+  o.edge_behind = 1;
+  const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
+  REQUIRE(s.count() == 4000);
+  // The last H supports continue the slope under column 31, the near side, one per row, at the farther
+  // neighbours' mean depth and colour and a pixel's footprint at that depth.
+  const auto b = torch::arange(4000 - H, 4000);
+  const auto buv = s.uv.index_select(0, b), bz = s.depth.index_select(0, b);
+  CHECK((buv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
+  CHECK((buv.select(1, 1) - (torch::arange(H, torch::kFloat) + 0.5)).abs().max().item<double>() < 1e-5);
+  for (int64_t i : {int64_t(1), int64_t(20), H - 2}) {
+    const double z = depth.select(1, 32).narrow(0, i - 1, 3).mean().item<double>();
+    CHECK(bz[i].item<double>() == Approx(z).epsilon(1e-5));
+    CHECK(s.area[4000 - H + i].item<double>() == Approx(z * z / (fx * fy)).epsilon(1e-4));
+    for (int c = 0; c < 3; ++c) {
+      const double mean = img[c].narrow(0, i - 1, 3).select(1, 32).mean().item<double>();
+      CHECK(s.color[4000 - H + i][c].item<double>() == Approx(mean).epsilon(1e-5));
+    }
+  }
+  // The visible supports still stand for the surface's area once; the hidden ones come on top.
+  CHECK(s.area.narrow(0, 0, 4000 - H).sum().item<double>() == Approx(plain.area.sum().item<double>()).epsilon(1e-4));
+  // Their normals are the slope's (as a face support's far from the edge), not the near plane's.
+  const auto far_face = (plain.uv.select(1, 0) > 50).nonzero()[0][0].item<int64_t>();
+  const auto slope_n = plain.normal[far_face], flat_n = plain.normal[0];
+  REQUIRE((slope_n - flat_n).abs().max().item<double>() > 0.01);
+  const auto bn = s.normal.index_select(0, b).narrow(0, 1, H - 2);
+  CHECK((bn - slope_n).abs().max().item<double>() < 1e-4);
+  // Two layers: the second one pixel further in, under column 30.
+  o.edge_behind = 2;
+  const Supports two = sample_supports(depth, ones(), K(), img, o, 2);
+  const auto tu = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 0);
+  CHECK(((tu - 31.5).abs() < 1e-5).sum().item<int64_t>() == H);
+  CHECK(((tu - 30.5).abs() < 1e-5).sum().item<int64_t>() == H - 2);  // the corner rows also step up or down
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind", 1}}, "test"),
+                    Catch::Contains("edge_supports = true"));
+}
+
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",
           "[sampler]") {
   auto depth = torch::full({H, W}, 6.0f);

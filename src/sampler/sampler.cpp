@@ -86,6 +86,21 @@ void SamplerOptions::visit(ConfigVisitor& v) {
             "needs sampler.mode = area and sampler.edge_supports = true (it scales the edge supports)");
   v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
             "needs sampler.edge_band = 0 (faces stay out of a band, so shrunk band supports would leave gaps)");
+  v.field("edge_shift", edge_shift,
+          "area mode with edge_supports: move each edge support on the near side of a depth edge this many pixels "
+          "away from the farther surface, keeping its depth, colour and footprint, so silhouettes spill less onto "
+          "the background (0 = at the pixel centre)",
+          Range::between(0.0, 0.5));
+  v.require("edge_shift", edge_shift == 0.0 || (mode == "area" && edge_supports && edge_band == 0),
+            "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0 (it moves the edge "
+            "supports)");
+  v.field("edge_behind", edge_behind,
+          "area mode with edge_supports: continue the farther surface under each near-side silhouette pixel with this "
+          "many supports, one pixel apart inwards, at the farther neighbours' depth and colour, so what a new view "
+          "uncovers beside a silhouette has surface (hidden in the source view; taken from the budget; 0 = off)",
+          Range::between(0, 4));
+  v.require("edge_behind", edge_behind == 0 || (mode == "area" && edge_supports && edge_band == 0),
+            "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
@@ -521,10 +536,12 @@ Output pointers(Supports& s) {
   return {s.uv.data_ptr<float>(), s.depth.data_ptr<float>(), s.color.data_ptr<float>(), s.area.data_ptr<float>()};
 }
 
-// Supports placed at pixels and on faces both stand for the surface: rescale so the areas sum to `total` once.
-void rescale_areas(Supports& s, double total) {
-  const double sum = s.area.sum().item<double>();
-  if (sum > 0) s.area.mul_(total / sum);
+// Supports placed at pixels and on faces both stand for the surface: rescale the first `count` (all when negative)
+// so their areas sum to `total` once.
+void rescale_areas(Supports& s, double total, int64_t count = -1) {
+  torch::Tensor a = count < 0 ? s.area : s.area.narrow(0, 0, count);
+  const double sum = a.sum().item<double>();
+  if (sum > 0) a.mul_(total / sum);
 }
 
 // Supports 0..count-1 at the centres of the given pixels (flat indices).
@@ -584,23 +601,110 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
   return out;
 }
 
+// True when edge pixel p lies on the near side of a depth edge: a valid 8-neighbour lies beyond a discontinuity
+// behind it, so its footprint can spill past the silhouette onto the background. `away` (may be null) gets the unit
+// image direction from p towards those farther neighbours (0, 0 when they surround it evenly).
+bool near_side(const Grid& g, int64_t p, double* away) {
+  const int64_t i = p / g.W, j = p % g.W;
+  bool near = false;
+  double dx = 0, dy = 0;
+  for (int64_t di = -1; di <= 1; ++di)
+    for (int64_t dj = -1; dj <= 1; ++dj) {
+      const int64_t y = i + di, x = j + dj;
+      if ((di == 0 && dj == 0) || y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
+      const double zp = g.depth[p], zq = g.depth[y * g.W + x];
+      if (zq > zp && depths_apart(zp, zq)) {
+        near = true;
+        const double len = std::sqrt(double(di * di + dj * dj));
+        dx += dj / len, dy += di / len;
+        if (!away) return true;
+      }
+    }
+  if (away) {
+    const double len = std::sqrt(dx * dx + dy * dy);
+    away[0] = len > 1e-9 ? dx / len : 0.0, away[1] = len > 1e-9 ? dy / len : 0.0;
+  }
+  return near;
+}
+
 // Edge supports 0..pixels.size()-1 stand for scale² of their area: all of them, or (near_only) those on the near side
-// of a depth edge, whose footprints can spill past a silhouette onto the background (a valid 8-neighbour lies
-// beyond a discontinuity behind them).
+// of a depth edge (near_side).
 void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double scale,
                          bool near_only) {
   const float f = static_cast<float>(scale * scale);
+  for (size_t k = 0; k < pixels.size(); ++k)
+    if (!near_only || near_side(g, pixels[k], nullptr)) o.area[k] *= f;
+}
+
+// Edge supports on the near side of a depth edge move `shift` pixels away from the farther neighbours, into their
+// own surface, keeping their depth and footprint: the silhouette's outermost Gaussians then reach that much less far
+// onto the background. Depth and colour stay the pixel centre's, read before the move.
+void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift) {
   for (size_t k = 0; k < pixels.size(); ++k) {
-    const int64_t p = pixels[k], i = p / g.W, j = p % g.W;
-    bool near = !near_only;
-    for (int64_t di = -1; di <= 1 && !near; ++di)
-      for (int64_t dj = -1; dj <= 1 && !near; ++dj) {
-        const int64_t y = i + di, x = j + dj;
-        if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
-        const double zp = g.depth[p], zq = g.depth[y * g.W + x];
-        near = zq > zp && depths_apart(zp, zq);
+    double away[2];
+    if (!near_side(g, pixels[k], away) || (away[0] == 0.0 && away[1] == 0.0)) continue;
+    o.uv[2 * k] -= static_cast<float>(shift * away[0]);
+    o.uv[2 * k + 1] -= static_cast<float>(shift * away[1]);
+  }
+}
+
+// Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), `layers`
+// places one pixel apart from its centre inwards, away from the farther neighbours, at their mean depth and colour.
+struct Behind {
+  std::vector<double> u, v;
+  std::vector<float> depth, color;  // colour: 3 per place
+  std::vector<int64_t> from;        // the farther neighbour whose surface it continues (its normal is used)
+};
+Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t layers) {
+  Behind b;
+  const int64_t HW = g.H * g.W;
+  for (int64_t p : edges) {
+    double away[2];
+    if (!near_side(g, p, away)) continue;
+    const int64_t i = p / g.W, j = p % g.W;
+    double z = 0, c[3] = {0, 0, 0}, farthest = 0;
+    int64_t count = 0, from = p;
+    for (int64_t di = -1; di <= 1; ++di)
+      for (int64_t dj = -1; dj <= 1; ++dj) {
+        const int64_t y = i + di, x = j + dj, q = y * g.W + x;
+        if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
+        if (!(g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q]))) continue;
+        z += g.depth[q], ++count;
+        for (int k = 0; k < 3; ++k) c[k] += g.image[k * HW + q];
+        if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
       }
-    if (near) o.area[k] *= f;
+    for (int64_t s = 0; s < layers; ++s) {
+      b.u.push_back(std::clamp(j + 0.5 - s * away[0], 0.0, double(g.W)));
+      b.v.push_back(std::clamp(i + 0.5 - s * away[1], 0.0, double(g.H)));
+      b.depth.push_back(static_cast<float>(z / count));
+      for (int k = 0; k < 3; ++k) b.color.push_back(static_cast<float>(c[k] / count));
+      b.from.push_back(from);
+    }
+  }
+  return b;
+}
+
+// Writes places [0, count) of `b` as supports first.. with a pixel's footprint at their depth (they stand for
+// hidden surface, so they stay out of the visible surface's area total).
+void write_behind(const Grid& g, const Output& o, const Behind& b, int64_t count, int64_t first) {
+  for (int64_t k = 0; k < count; ++k) {
+    const int64_t t = first + k;
+    o.uv[2 * t] = static_cast<float>(b.u[k]), o.uv[2 * t + 1] = static_cast<float>(b.v[k]);
+    o.depth[t] = b.depth[k];
+    for (int c = 0; c < 3; ++c) o.color[3 * t + c] = b.color[3 * k + c];
+    o.area[t] = static_cast<float>(double(b.depth[k]) * b.depth[k] / (g.fx * g.fy));
+  }
+}
+
+// Behind supports first..first+count-1 take the normal of the farther pixel they continue, not the near surface's
+// at their place.
+void behind_normals(const Grid& g, Supports& s, const Behind& b, int64_t count, int64_t first) {
+  float* n = s.normal.data_ptr<float>();
+  TriangleCrosses tc(g);
+  for (int64_t k = 0; k < count; ++k) {
+    const int64_t q = b.from[k], i = q / g.W, first_row = std::max<int64_t>(i - 1, 0);
+    tc.reset(first_row, std::max<int64_t>(std::min(i, g.H - 2) - first_row + 1, 0));  // the quads vertex_normal reads
+    vertex_normal(g, tc, i, q % g.W, n + 3 * (first + k));
   }
 }
 
@@ -749,9 +853,10 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     Supports s = allocate(n);
     const Output o = pointers(s);
     std::vector<float> area = triangle_areas(g);
-    int64_t ne = 0;
+    int64_t ne = 0, nb = 0;
     double total = 0;
     for (float a : area) total += a;  // the whole surface, before a band takes triangles from the faces
+    Behind behind;
     if (options.edge_supports) {
       const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
@@ -759,12 +864,21 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       write_pixel_supports(g, o, chosen, ne);
       if (options.edge_scale != 1.0)
         scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
+      if (options.edge_shift > 0) shift_edge_supports(g, o, chosen, options.edge_shift);
+      if (options.edge_behind > 0) {
+        behind = behind_places(g, chosen, options.edge_behind);
+        nb = std::min<int64_t>(static_cast<int64_t>(behind.depth.size()), n / 2 - ne);
+      }
     }
     const double face_total =
-        sample_faces(g, std::move(area), n - ne, seed, o, ne, weight.empty() ? nullptr : weight.data(),
+        sample_faces(g, std::move(area), n - ne - nb, seed, o, ne, weight.empty() ? nullptr : weight.data(),
                      options.image_share, options.pixel_floor, options.placement);
-    if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total);
-    if (options.normals) write_normals(g, s);
+    if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total, n - nb);
+    write_behind(g, o, behind, nb, n - nb);
+    if (options.normals) {
+      write_normals(g, s);
+      behind_normals(g, s, behind, nb, n - nb);
+    }
     return s;
   }
   ISPLAT_CHECK(options.mode == "vertex_face", "sampler.mode: unknown '", options.mode,

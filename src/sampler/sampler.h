@@ -44,6 +44,12 @@ struct SamplerOptions {
   // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
   double edge_scale = 1.0;
   std::string edge_scale_at = "all";  // all | near: edge_scale on every edge support, or near silhouettes only
+  // With edge_supports: edge supports on the near side of a depth edge sit this many pixels from their pixel centre,
+  // away from the farther neighbours (same depth, colour and footprint). 0 = at the centre. Needs edge_band = 0.
+  double edge_shift = 0.0;
+  // With edge_supports: supports that continue the farther surface under each near-side silhouette pixel, this many
+  // pixels deep (at the farther neighbours' depth and colour; hidden in the source view). 0 = off.
+  int64_t edge_behind = 0;
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).
