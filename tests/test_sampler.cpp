@@ -335,14 +335,15 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   o.edge_behind = 1;
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   REQUIRE(s.count() == 4000);
-  // The last H supports continue the slope under column 31, the near side, one per row, at the farther
-  // neighbours' mean depth and colour and a pixel's footprint at that depth.
+  // The last H supports continue the slope under column 31, the near side, one per row: at the plane's own depth
+  // there (each farther neighbour's surface extrapolated as a plane), the farther neighbours' mean colour and a
+  // pixel's footprint at that depth.
   const auto b = torch::arange(4000 - H, 4000);
   const auto buv = s.uv.index_select(0, b), bz = s.depth.index_select(0, b);
   CHECK((buv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
   CHECK((buv.select(1, 1) - (torch::arange(H, torch::kFloat) + 0.5)).abs().max().item<double>() < 1e-5);
   for (int64_t i : {int64_t(1), int64_t(20), H - 2}) {
-    const double z = depth.select(1, 32).narrow(0, i - 1, 3).mean().item<double>();
+    const double z = slope[i].item<double>();
     CHECK(bz[i].item<double>() == Approx(z).epsilon(1e-5));
     CHECK(s.area[4000 - H + i].item<double>() == Approx(z * z / (fx * fy)).epsilon(1e-4));
     for (int c = 0; c < 3; ++c) {
@@ -363,7 +364,11 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const Supports two = sample_supports(depth, ones(), K(), img, o, 2);
   const auto tu = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 0);
   CHECK(((tu - 31.5).abs() < 1e-5).sum().item<int64_t>() == H);
-  CHECK(((tu - 30.5).abs() < 1e-5).sum().item<int64_t>() == H - 2);  // the corner rows also step up or down
+  const auto second = (tu - 30.5).abs() < 1e-5;
+  CHECK(second.sum().item<int64_t>() == H - 2);  // the corner rows also step up or down
+  const auto tz = two.depth.narrow(0, 4000 - 2 * H, 2 * H).masked_select(second);
+  const auto rows = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 1).masked_select(second).floor().to(torch::kLong);
+  CHECK((tz.to(torch::kDouble) / slope.index_select(0, rows) - 1).abs().max().item<double>() < 1e-5);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind", 1}}, "test"),
                     Catch::Contains("edge_supports = true"));
 }

@@ -648,8 +648,29 @@ void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64
   }
 }
 
+// Inverse depth of the surface through valid pixel q, extrapolated as a plane to image point (u, v): its gradient
+// along each axis comes from the neighbour on the side away from pixel p (the other side when that one is missing or
+// across a discontinuity; flat when both are).
+double extrapolated_inverse_depth(const Grid& g, int64_t q, int64_t p, double u, double v) {
+  const int64_t qi = q / g.W, qj = q % g.W, pi = p / g.W, pj = p % g.W;
+  const double wq = 1.0 / g.depth[q];
+  auto slope = [&](int64_t di, int64_t dj) {  // di, dj: a unit step along one axis
+    for (int sgn : {1, -1}) {
+      const int64_t y = qi + sgn * di, x = qj + sgn * dj;
+      if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
+      if (depths_apart(g.depth[q], g.depth[y * g.W + x])) continue;
+      return (1.0 / g.depth[y * g.W + x] - wq) * sgn;
+    }
+    return 0.0;
+  };
+  const int64_t away_i = qi >= pi ? 1 : -1, away_j = qj >= pj ? 1 : -1;
+  return wq + slope(0, away_j) * away_j * (u - (qj + 0.5)) + slope(away_i, 0) * away_i * (v - (qi + 0.5));
+}
+
 // Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), `layers`
-// places one pixel apart from its centre inwards, away from the farther neighbours, at their mean depth and colour.
+// places one pixel apart from its centre inwards, away from the farther neighbours. Each farther neighbour's surface
+// is extrapolated there as a plane (or kept at its depth where that would come as near as the silhouette); the
+// place takes their mean depth and their mean colour.
 struct Behind {
   std::vector<double> u, v;
   std::vector<float> depth, color;  // colour: 3 per place
@@ -658,26 +679,37 @@ struct Behind {
 Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t layers) {
   Behind b;
   const int64_t HW = g.H * g.W;
+  std::vector<int64_t> far;
   for (int64_t p : edges) {
     double away[2];
     if (!near_side(g, p, away)) continue;
     const int64_t i = p / g.W, j = p % g.W;
-    double z = 0, c[3] = {0, 0, 0}, farthest = 0;
-    int64_t count = 0, from = p;
+    far.clear();
+    double c[3] = {0, 0, 0}, farthest = 0;
+    int64_t from = p;
     for (int64_t di = -1; di <= 1; ++di)
       for (int64_t dj = -1; dj <= 1; ++dj) {
         const int64_t y = i + di, x = j + dj, q = y * g.W + x;
         if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
         if (!(g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q]))) continue;
-        z += g.depth[q], ++count;
+        far.push_back(q);
         for (int k = 0; k < 3; ++k) c[k] += g.image[k * HW + q];
         if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
       }
+    const double n = static_cast<double>(far.size());
     for (int64_t s = 0; s < layers; ++s) {
-      b.u.push_back(std::clamp(j + 0.5 - s * away[0], 0.0, double(g.W)));
-      b.v.push_back(std::clamp(i + 0.5 - s * away[1], 0.0, double(g.H)));
-      b.depth.push_back(static_cast<float>(z / count));
-      for (int k = 0; k < 3; ++k) b.color.push_back(static_cast<float>(c[k] / count));
+      const double u = std::clamp(j + 0.5 - s * away[0], 0.0, double(g.W)),
+                   v = std::clamp(i + 0.5 - s * away[1], 0.0, double(g.H));
+      double z = 0;
+      for (int64_t q : far) {
+        const double w = extrapolated_inverse_depth(g, q, p, u, v);
+        const bool behind = w > 0 && 1.0 / w > g.depth[p] && depths_apart(g.depth[p], 1.0 / w);
+        z += behind ? 1.0 / w : g.depth[q];
+      }
+      b.u.push_back(u);
+      b.v.push_back(v);
+      b.depth.push_back(static_cast<float>(z / n));
+      for (int k = 0; k < 3; ++k) b.color.push_back(static_cast<float>(c[k] / n));
       b.from.push_back(from);
     }
   }
