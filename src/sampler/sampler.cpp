@@ -94,11 +94,13 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.require("edge_shift", edge_shift == 0.0 || (mode == "area" && edge_supports && edge_band == 0),
             "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0 (it moves the edge "
             "supports)");
-  v.field("edge_behind", edge_behind,
-          "area mode with edge_supports: continue the farther surface under each near-side silhouette pixel with this "
-          "many supports, one pixel apart inwards, at the farther neighbours' depth and colour, so what a new view "
-          "uncovers beside a silhouette has surface (hidden in the source view; taken from the budget; 0 = off)",
-          Range::between(0, 4));
+  v.field(
+      "edge_behind", edge_behind,
+      "area mode with edge_supports: continue the farther surface under each near-side silhouette pixel with this "
+      "many supports, one pixel apart inwards, on the farther neighbours' surfaces extrapolated as planes, in their "
+      "colour, so what a new view uncovers beside a silhouette has surface (hidden in the source view; taken from "
+      "the budget; 0 = off)",
+      Range::between(0, 4));
   v.require("edge_behind", edge_behind == 0 || (mode == "area" && edge_supports && edge_band == 0),
             "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0");
   v.field("fill_px", fill_px,
@@ -601,30 +603,32 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
   return out;
 }
 
-// True when edge pixel p lies on the near side of a depth edge: a valid 8-neighbour lies beyond a discontinuity
-// behind it, so its footprint can spill past the silhouette onto the background. `away` (may be null) gets the unit
-// image direction from p towards those farther neighbours (0, 0 when they surround it evenly).
-bool near_side(const Grid& g, int64_t p, double* away) {
+// The valid 8-neighbours of pixel p that lie beyond a depth discontinuity behind it, into `out`.
+void farther_neighbours(const Grid& g, int64_t p, std::vector<int64_t>& out) {
+  out.clear();
   const int64_t i = p / g.W, j = p % g.W;
-  bool near = false;
-  double dx = 0, dy = 0;
   for (int64_t di = -1; di <= 1; ++di)
     for (int64_t dj = -1; dj <= 1; ++dj) {
-      const int64_t y = i + di, x = j + dj;
-      if ((di == 0 && dj == 0) || y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[y * g.W + x] == 0.0f) continue;
-      const double zp = g.depth[p], zq = g.depth[y * g.W + x];
-      if (zq > zp && depths_apart(zp, zq)) {
-        near = true;
-        const double len = std::sqrt(double(di * di + dj * dj));
-        dx += dj / len, dy += di / len;
-        if (!away) return true;
-      }
+      const int64_t y = i + di, x = j + dj, q = y * g.W + x;
+      if ((di == 0 && dj == 0) || y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
+      if (g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q])) out.push_back(q);
     }
-  if (away) {
-    const double len = std::sqrt(dx * dx + dy * dy);
-    away[0] = len > 1e-9 ? dx / len : 0.0, away[1] = len > 1e-9 ? dy / len : 0.0;
+}
+
+// True when edge pixel p lies on the near side of a depth edge (it has farther neighbours), so its footprint can
+// spill past the silhouette onto the background. `away` gets the unit image direction from p towards those
+// neighbours (0, 0 when they surround it evenly).
+bool near_side(const Grid& g, int64_t p, std::vector<int64_t>& far, double* away) {
+  farther_neighbours(g, p, far);
+  double dx = 0, dy = 0;
+  for (int64_t q : far) {
+    const int64_t di = q / g.W - p / g.W, dj = q % g.W - p % g.W;
+    const double len = std::sqrt(double(di * di + dj * dj));
+    dx += dj / len, dy += di / len;
   }
-  return near;
+  const double len = std::sqrt(dx * dx + dy * dy);
+  away[0] = len > 1e-9 ? dx / len : 0.0, away[1] = len > 1e-9 ? dy / len : 0.0;
+  return !far.empty();
 }
 
 // Edge supports 0..pixels.size()-1 stand for scale² of their area: all of them, or (near_only) those on the near side
@@ -632,17 +636,21 @@ bool near_side(const Grid& g, int64_t p, double* away) {
 void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double scale,
                          bool near_only) {
   const float f = static_cast<float>(scale * scale);
-  for (size_t k = 0; k < pixels.size(); ++k)
-    if (!near_only || near_side(g, pixels[k], nullptr)) o.area[k] *= f;
+  std::vector<int64_t> far;
+  for (size_t k = 0; k < pixels.size(); ++k) {
+    if (near_only) farther_neighbours(g, pixels[k], far);
+    if (!near_only || !far.empty()) o.area[k] *= f;
+  }
 }
 
 // Edge supports on the near side of a depth edge move `shift` pixels away from the farther neighbours, into their
 // own surface, keeping their depth and footprint: the silhouette's outermost Gaussians then reach that much less far
 // onto the background. Depth and colour stay the pixel centre's, read before the move.
 void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift) {
+  std::vector<int64_t> far;
   for (size_t k = 0; k < pixels.size(); ++k) {
     double away[2];
-    if (!near_side(g, pixels[k], away) || (away[0] == 0.0 && away[1] == 0.0)) continue;
+    if (!near_side(g, pixels[k], far, away) || (away[0] == 0.0 && away[1] == 0.0)) continue;
     o.uv[2 * k] -= static_cast<float>(shift * away[0]);
     o.uv[2 * k + 1] -= static_cast<float>(shift * away[1]);
   }
@@ -682,20 +690,14 @@ Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t l
   std::vector<int64_t> far;
   for (int64_t p : edges) {
     double away[2];
-    if (!near_side(g, p, away)) continue;
+    if (!near_side(g, p, far, away)) continue;
     const int64_t i = p / g.W, j = p % g.W;
-    far.clear();
     double c[3] = {0, 0, 0}, farthest = 0;
     int64_t from = p;
-    for (int64_t di = -1; di <= 1; ++di)
-      for (int64_t dj = -1; dj <= 1; ++dj) {
-        const int64_t y = i + di, x = j + dj, q = y * g.W + x;
-        if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
-        if (!(g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q]))) continue;
-        far.push_back(q);
-        for (int k = 0; k < 3; ++k) c[k] += g.image[k * HW + q];
-        if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
-      }
+    for (int64_t q : far) {
+      for (int k = 0; k < 3; ++k) c[k] += g.image[k * HW + q];
+      if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
+    }
     const double n = static_cast<double>(far.size());
     for (int64_t s = 0; s < layers; ++s) {
       const double u = std::clamp(j + 0.5 - s * away[0], 0.0, double(g.W)),
