@@ -322,11 +322,12 @@ TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette,
 }
 
 TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette", "[sampler]") {
-  // Columns 0..31 a flat 2 m; 32..64 a floor-like plane (inverse depth affine in the row), from 6 m up to 3.8 m,
-  // whose normal tilts away from the camera's axis.
+  // Columns 0..31 a flat 2 m; 32..64 a tilted plane (inverse depth affine in the row and the column), 7.4 m at
+  // most, whose normal turns away from the camera's axis.
+  auto plane = [](double i, double j) { return 1.0 / (1.0 / 6.0 + 0.002 * i - 0.001 * (j - 32)); };
   auto depth = torch::full({H, W}, 2.0f);
-  const auto slope = 1.0 / (1.0 / 6.0 + 0.002 * torch::arange(H, torch::kDouble));
-  depth.narrow(1, 32, W - 32).copy_(slope.to(torch::kFloat).unsqueeze(1).expand({H, W - 32}));
+  for (int64_t i = 0; i < H; ++i)
+    for (int64_t j = 32; j < W; ++j) depth[i][j] = float(plane(i, j));
   const torch::Tensor img = image();
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
@@ -335,15 +336,15 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   o.edge_behind = 1;
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   REQUIRE(s.count() == 4000);
-  // The last H supports continue the slope under column 31, the near side, one per row: at the plane's own depth
-  // there (each farther neighbour's surface extrapolated as a plane), the farther neighbours' mean colour and a
-  // pixel's footprint at that depth.
+  // The last H supports continue the plane under column 31, the near side, one per row: at the plane's own depth
+  // there (each farther neighbour's surface extrapolated), the farther neighbours' mean colour and a pixel's
+  // footprint at that depth.
   const auto b = torch::arange(4000 - H, 4000);
   const auto buv = s.uv.index_select(0, b), bz = s.depth.index_select(0, b);
   CHECK((buv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
   CHECK((buv.select(1, 1) - (torch::arange(H, torch::kFloat) + 0.5)).abs().max().item<double>() < 1e-5);
   for (int64_t i : {int64_t(1), int64_t(20), H - 2}) {
-    const double z = slope[i].item<double>();
+    const double z = plane(i, 31);
     CHECK(bz[i].item<double>() == Approx(z).epsilon(1e-5));
     CHECK(s.area[4000 - H + i].item<double>() == Approx(z * z / (fx * fy)).epsilon(1e-4));
     for (int c = 0; c < 3; ++c) {
@@ -353,13 +354,13 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   }
   // The visible supports still stand for the surface's area once; the hidden ones come on top.
   CHECK(s.area.narrow(0, 0, 4000 - H).sum().item<double>() == Approx(plain.area.sum().item<double>()).epsilon(1e-4));
-  // Their normals are the slope's (as a face support's far from the edge), not the near plane's.
+  // Their normals are the plane's (as a face support's far from the edge), not the near plane's.
   const auto far_face = (plain.uv.select(1, 0) > 50).nonzero()[0][0].item<int64_t>();
   const auto slope_n = plain.normal[far_face], flat_n = plain.normal[0];
   REQUIRE((slope_n - flat_n).abs().max().item<double>() > 0.01);
   const auto bn = s.normal.index_select(0, b).narrow(0, 1, H - 2);
   CHECK((bn - slope_n).abs().max().item<double>() < 1e-4);
-  // Two layers: the second one pixel further in, under column 30.
+  // Two layers: the second one pixel further in, under column 30, where the plane lies deeper in.
   o.edge_behind = 2;
   const Supports two = sample_supports(depth, ones(), K(), img, o, 2);
   const auto tu = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 0);
@@ -367,10 +368,66 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const auto second = (tu - 30.5).abs() < 1e-5;
   CHECK(second.sum().item<int64_t>() == H - 2);  // the corner rows also step up or down
   const auto tz = two.depth.narrow(0, 4000 - 2 * H, 2 * H).masked_select(second);
-  const auto rows = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 1).masked_select(second).floor().to(torch::kLong);
-  CHECK((tz.to(torch::kDouble) / slope.index_select(0, rows) - 1).abs().max().item<double>() < 1e-5);
+  const auto rows = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 1).masked_select(second).floor();
+  const auto want = 1.0 / (1.0 / 6.0 + 0.002 * rows.to(torch::kDouble) + 0.002);
+  CHECK((tz.to(torch::kDouble) / want - 1).abs().max().item<double>() < 1e-5);
+  // At most half the budget goes to edge and hidden supports; a tight budget thins the hidden ones evenly, so every
+  // row keeps some (318 edge supports leave 182 of the 192 places of four layers; in the corner rows the places
+  // leave the image after two).
+  o.edge_behind = 4;
+  o.budget = 1000;
+  const Supports tight = sample_supports(depth, ones(), K(), img, o, 2);
+  const auto tv = tight.uv.narrow(0, 1000 - 182, 182).select(1, 1).floor().to(torch::kLong);
+  CHECK((tight.depth.narrow(0, 1000 - 182, 182) > 3.0).all().item<bool>());  // the plane: 3.7 m and more
+  CHECK(std::get<0>(at::_unique(tv)).size(0) == H);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind", 1}}, "test"),
                     Catch::Contains("edge_supports = true"));
+}
+
+TEST_CASE("sampler: edge_behind stays hidden: thin lines, and planes that come as near as the silhouette",
+          "[sampler]") {
+  const torch::Tensor img = image();
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  o.edge_behind = 3;
+  auto hidden = [&](const torch::Tensor& depth, const torch::Tensor& valid, int64_t places) {
+    const Supports s = sample_supports(depth, valid, K(), img, o, 2);
+    return std::make_pair(s.uv.narrow(0, 4000 - places, places), s.depth.narrow(0, 4000 - places, places));
+  };
+  // A line one pixel wide (column 20 at 2 m before 6 m): farther on both sides, so one place per pixel, under it.
+  auto line = torch::full({H, W}, 6.0f);
+  line.select(1, 20).fill_(2.0f);
+  {
+    const auto [uv, z] = hidden(line, ones(), H + 1);
+    CHECK(((uv.narrow(0, 1, H).select(1, 0) - 20.5).abs() < 1e-5).all().item<bool>());
+    CHECK((z.narrow(0, 1, H) == 6.0f).all().item<bool>());
+    // The support before them is not hidden under the line: H places in all, not more.
+    CHECK_FALSE((std::abs(uv[0][0].item<double>() - 20.5) < 1e-5 && z[0].item<double>() == 6.0));
+  }
+  // Two pixels wide (columns 20 and 21): each side's places stop after two, at the far side of the strip.
+  auto strip = torch::full({H, W}, 6.0f);
+  strip.narrow(1, 20, 2).fill_(2.0f);
+  {
+    const auto [uv, z] = hidden(strip, ones(), 4 * H);
+    CHECK((uv.select(1, 0) >= 20.0).all().item<bool>());
+    CHECK((uv.select(1, 0) < 22.0).all().item<bool>());
+    CHECK((z == 6.0f).all().item<bool>());
+  }
+  // A plane that rises towards the silhouette (2.13 m at column 32, extrapolated to 2.07 m under column 31, not
+  // apart from its 2 m): each farther neighbour keeps its own depth there. Columns 41.. are invalid.
+  auto rise = torch::full({H, W}, 2.0f);
+  auto valid = ones();
+  for (int64_t j = 32; j < W; ++j)
+    if (j <= 40)
+      rise.select(1, j).fill_(float(1.0 / (0.47 - 0.012 * (j - 32))));
+    else
+      valid.select(1, j).zero_();
+  o.edge_behind = 1;
+  {
+    const auto [uv, z] = hidden(rise, valid, H);
+    CHECK((uv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
+    CHECK((z / (1.0 / 0.47) - 1).abs().max().item<double>() < 1e-5);
+  }
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numeric>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -675,10 +676,12 @@ double extrapolated_inverse_depth(const Grid& g, int64_t q, int64_t p, double u,
   return wq + slope(0, away_j) * away_j * (u - (qj + 0.5)) + slope(away_i, 0) * away_i * (v - (qi + 0.5));
 }
 
-// Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), `layers`
+// Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), up to `layers`
 // places one pixel apart from its centre inwards, away from the farther neighbours. Each farther neighbour's surface
-// is extrapolated there as a plane (or kept at its depth where that would come as near as the silhouette); the
-// place takes their mean depth and their mean colour.
+// is extrapolated as a plane to the place (or kept at its own depth where the plane would come as near as the pixel
+// over the place); the place takes their mean depth and their mean colour. Layering stops where the place would
+// not be hidden: beyond the image, over an invalid pixel or one not nearer than it, or (after the first) where the
+// farther neighbours surround the pixel evenly, as on a line one pixel wide.
 struct Behind {
   std::vector<double> u, v;
   std::vector<float> depth, color;  // colour: 3 per place
@@ -699,23 +702,38 @@ Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t l
       if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
     }
     const double n = static_cast<double>(far.size());
-    for (int64_t s = 0; s < layers; ++s) {
-      const double u = std::clamp(j + 0.5 - s * away[0], 0.0, double(g.W)),
-                   v = std::clamp(i + 0.5 - s * away[1], 0.0, double(g.H));
+    const int64_t deepest = away[0] == 0.0 && away[1] == 0.0 ? 1 : layers;
+    for (int64_t s = 0; s < deepest; ++s) {
+      const double u = j + 0.5 - s * away[0], v = i + 0.5 - s * away[1];
+      const int64_t x = static_cast<int64_t>(std::floor(u)), y = static_cast<int64_t>(std::floor(v));
+      if (x < 0 || y < 0 || x >= g.W || y >= g.H || g.valid[y * g.W + x] == 0.0f) break;
+      const double over = g.depth[y * g.W + x];  // the visible surface at the place
       double z = 0;
       for (int64_t q : far) {
         const double w = extrapolated_inverse_depth(g, q, p, u, v);
-        const bool behind = w > 0 && 1.0 / w > g.depth[p] && depths_apart(g.depth[p], 1.0 / w);
-        z += behind ? 1.0 / w : g.depth[q];
+        const bool hidden = w > 0 && 1.0 / w > over && depths_apart(over, 1.0 / w);
+        z += hidden ? 1.0 / w : g.depth[q];
       }
+      z /= n;
+      if (!(z > over && depths_apart(over, z))) break;
       b.u.push_back(u);
       b.v.push_back(v);
-      b.depth.push_back(static_cast<float>(z / n));
+      b.depth.push_back(static_cast<float>(z));
       for (int k = 0; k < 3; ++k) b.color.push_back(static_cast<float>(c[k] / n));
       b.from.push_back(from);
     }
   }
   return b;
+}
+
+// The places of `b` at `indices`, in that order.
+Behind select_places(const Behind& b, const std::vector<int64_t>& indices) {
+  Behind out;
+  for (int64_t k : indices) {
+    out.u.push_back(b.u[k]), out.v.push_back(b.v[k]), out.depth.push_back(b.depth[k]), out.from.push_back(b.from[k]);
+    for (int c = 0; c < 3; ++c) out.color.push_back(b.color[3 * k + c]);
+  }
+  return out;
 }
 
 // Writes places [0, count) of `b` as supports first.. with a pixel's footprint at their depth (they stand for
@@ -735,9 +753,11 @@ void write_behind(const Grid& g, const Output& o, const Behind& b, int64_t count
 void behind_normals(const Grid& g, Supports& s, const Behind& b, int64_t count, int64_t first) {
   float* n = s.normal.data_ptr<float>();
   TriangleCrosses tc(g);
+  int64_t rows_at = -1;
   for (int64_t k = 0; k < count; ++k) {
     const int64_t q = b.from[k], i = q / g.W, first_row = std::max<int64_t>(i - 1, 0);
-    tc.reset(first_row, std::max<int64_t>(std::min(i, g.H - 2) - first_row + 1, 0));  // the quads vertex_normal reads
+    if (first_row != rows_at)  // the quads vertex_normal reads; consecutive places mostly share them
+      tc.reset(first_row, std::max<int64_t>(std::min(i, g.H - 2) - first_row + 1, 0)), rows_at = first_row;
     vertex_normal(g, tc, i, q % g.W, n + 3 * (first + k));
   }
 }
@@ -899,9 +919,15 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       if (options.edge_scale != 1.0)
         scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
       if (options.edge_shift > 0) shift_edge_supports(g, o, chosen, options.edge_shift);
-      if (options.edge_behind > 0) {
+      if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
         behind = behind_places(g, chosen, options.edge_behind);
-        nb = std::min<int64_t>(static_cast<int64_t>(behind.depth.size()), n / 2 - ne);
+        const int64_t places = static_cast<int64_t>(behind.depth.size());
+        nb = std::min<int64_t>(places, n / 2 - ne);
+        if (nb < places) {
+          std::vector<int64_t> all(static_cast<size_t>(places));
+          std::iota(all.begin(), all.end(), int64_t(0));
+          behind = select_places(behind, spread(all, nb));
+        }
       }
     }
     const double face_total =

@@ -47,8 +47,9 @@ struct SamplerOptions {
   // With edge_supports: edge supports on the near side of a depth edge sit this many pixels from their pixel centre,
   // away from the farther neighbours (same depth, colour and footprint). 0 = at the centre. Needs edge_band = 0.
   double edge_shift = 0.0;
-  // With edge_supports: supports that continue the farther surface under each near-side silhouette pixel, this many
-  // pixels deep (at the farther neighbours' depth and colour; hidden in the source view). 0 = off.
+  // With edge_supports: supports that continue the farther surface under each near-side silhouette pixel, up to
+  // this many pixels deep while they stay hidden in the source view (on the farther neighbours' surfaces extrapolated
+  // as planes, in their colour). 0 = off. Needs edge_band = 0.
   int64_t edge_behind = 0;
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
