@@ -446,12 +446,14 @@ class TriangleCrosses {
  public:
   explicit TriangleCrosses(const Grid& g) : g_(g), Wq_(g.W - 1) {}
   void reset(int64_t first_row, int64_t rows) {
-    first_ = first_row;
+    first_ = first_row, rows_ = rows;
     cross_.resize(static_cast<size_t>(rows * Wq_ * 6));
     state_.assign(static_cast<size_t>(rows * Wq_ * 2), kUnknown);
   }
   // Null where triangle_cross rejects the triangle.
   const double* at(int64_t i, int64_t j, int t) {
+    ISPLAT_CHECK(i >= first_ && i < first_ + rows_ && j >= 0 && j < Wq_, "sampler: quad (", i, ", ", j,
+                 ") outside the cached rows [", first_, ", ", first_ + rows_, ")");
     const int64_t q = ((i - first_) * Wq_ + j) * 2 + t;
     if (state_[q] == kUnknown) state_[q] = triangle_cross(g_, i, j, t, &cross_[3 * q]) ? kAccepted : kRejected;
     return state_[q] == kAccepted ? &cross_[3 * q] : nullptr;
@@ -460,7 +462,7 @@ class TriangleCrosses {
  private:
   enum : uint8_t { kUnknown, kAccepted, kRejected };
   const Grid& g_;
-  int64_t Wq_, first_ = 0;
+  int64_t Wq_, first_ = 0, rows_ = 0;
   std::vector<double> cross_;
   std::vector<uint8_t> state_;
 };
@@ -753,11 +755,12 @@ void write_behind(const Grid& g, const Output& o, const Behind& b, int64_t count
 void behind_normals(const Grid& g, Supports& s, const Behind& b, int64_t count, int64_t first) {
   float* n = s.normal.data_ptr<float>();
   TriangleCrosses tc(g);
-  int64_t rows_at = -1;
+  int64_t first_at = -1, rows_at = -1;
   for (int64_t k = 0; k < count; ++k) {
+    // The quad rows vertex_normal reads for pixel row i; consecutive places mostly share them.
     const int64_t q = b.from[k], i = q / g.W, first_row = std::max<int64_t>(i - 1, 0);
-    if (first_row != rows_at)  // the quads vertex_normal reads; consecutive places mostly share them
-      tc.reset(first_row, std::max<int64_t>(std::min(i, g.H - 2) - first_row + 1, 0)), rows_at = first_row;
+    const int64_t rows = std::max<int64_t>(std::min(i, g.H - 2) - first_row + 1, 0);
+    if (first_row != first_at || rows != rows_at) tc.reset(first_row, rows), first_at = first_row, rows_at = rows;
     vertex_normal(g, tc, i, q % g.W, n + 3 * (first + k));
   }
 }
