@@ -430,6 +430,34 @@ TEST_CASE("sampler: edge_behind stays hidden: thin lines, and planes that come a
   }
 }
 
+TEST_CASE("sampler: pixel mode takes edge_shift and edge_behind too", "[sampler]") {
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);  // the step between columns 31 and 32
+  const torch::Tensor img = image();
+  SamplerOptions o;
+  o.mode = "pixel";
+  const Supports plain = sample_supports(depth, ones(), K(), img, o, 2);
+  REQUIRE(plain.count() == H * W);
+  o.edge_behind = 1;
+  o.edge_shift = 0.5;
+  o.normals = true;
+  const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
+  // One hidden support per row on top, under column 31 at the far side's 6 m.
+  REQUIRE(s.count() == H * W + H);
+  CHECK((s.uv.narrow(0, H * W, H).select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
+  CHECK((s.depth.narrow(0, H * W, H) == 6.0f).all().item<bool>());
+  // The near side's pixel supports move half a pixel left (inside the image), the others stay at their centres.
+  const auto du = s.uv.narrow(0, 0, H * W) - plain.uv;
+  const auto moved = du.abs().gt(1e-6).any(1);
+  const auto col31 = (plain.uv.select(1, 0) - 31.5).abs().lt(1e-4);
+  CHECK(torch::equal(moved, col31));
+  const auto v = plain.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(H - 1.0);
+  CHECK((du.select(1, 0).masked_select(inside) + 0.5).abs().max().item<double>() < 1e-5);
+  CHECK(torch::equal(s.depth.narrow(0, 0, H * W), plain.depth));
+  CHECK_NOTHROW(config_from_json<SamplerOptions>(
+      nlohmann::json{{"mode", "pixel"}, {"edge_behind", 2}, {"edge_shift", 0.5}}, "test"));
+}
+
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",
           "[sampler]") {
   auto depth = torch::full({H, W}, 6.0f);

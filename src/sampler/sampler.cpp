@@ -88,22 +88,23 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
             "needs sampler.edge_band = 0 (faces stay out of a band, so shrunk band supports would leave gaps)");
   v.field("edge_shift", edge_shift,
-          "area mode with edge_supports: move each edge support on the near side of a depth edge this many pixels "
-          "away from the farther surface, keeping its depth, colour and footprint, so silhouettes spill less onto "
-          "the background (0 = at the pixel centre)",
+          "area mode with edge_supports, or pixel mode: move each support at a depth edge's near side (area: the "
+          "edge supports) this many pixels away from the farther surface, keeping its depth, colour and footprint, "
+          "so silhouettes spill less onto the background (0 = at the pixel centre)",
           Range::between(0.0, 0.5));
-  v.require("edge_shift", edge_shift == 0.0 || (mode == "area" && edge_supports && edge_band == 0),
-            "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0 (it moves the edge "
-            "supports)");
-  v.field(
-      "edge_behind", edge_behind,
-      "area mode with edge_supports: continue the farther surface under each near-side silhouette pixel with this "
-      "many supports, one pixel apart inwards, on the farther neighbours' surfaces extrapolated as planes, in their "
-      "colour, so what a new view uncovers beside a silhouette has surface (hidden in the source view; taken from "
-      "the budget; 0 = off)",
-      Range::between(0, 4));
-  v.require("edge_behind", edge_behind == 0 || (mode == "area" && edge_supports && edge_band == 0),
-            "needs sampler.mode = area, sampler.edge_supports = true and sampler.edge_band = 0");
+  v.require("edge_shift", edge_shift == 0.0 || mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0),
+            "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and "
+            "sampler.edge_band = 0 (it moves the supports at depth edges)");
+  v.field("edge_behind", edge_behind,
+          "area mode with edge_supports, or pixel mode: continue the farther surface under each near-side "
+          "silhouette pixel with up to this many supports, one pixel apart inwards while they stay hidden, on the "
+          "farther neighbours' surfaces extrapolated as planes, in their colour, so what a new view uncovers beside "
+          "a silhouette has surface (area mode: taken from the budget, at most half of it with the edge supports; "
+          "pixel mode: on top of one per pixel; 0 = off)",
+          Range::between(0, 4));
+  v.require("edge_behind", edge_behind == 0 || mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0),
+            "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and "
+            "sampler.edge_band = 0");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
@@ -898,9 +899,24 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     for (int64_t p = 0; p < g.H * g.W; ++p)
       if (g.valid[p] != 0.0f) idx.push_back(p);
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
-    Supports s = allocate(static_cast<int64_t>(idx.size()));
-    write_pixel_supports(g, pointers(s), idx, static_cast<int64_t>(idx.size()));
-    if (options.normals) write_normals(g, s);
+    Behind behind;  // pixel mode has no budget: hidden supports come on top of one support per pixel
+    if (options.edge_behind > 0) {
+      std::vector<int64_t> near, far;
+      double away[2];
+      for (int64_t p : idx)
+        if (near_side(g, p, far, away)) near.push_back(p);
+      behind = behind_places(g, near, options.edge_behind);
+    }
+    const int64_t nv = static_cast<int64_t>(idx.size()), nb = static_cast<int64_t>(behind.depth.size());
+    Supports s = allocate(nv + nb);
+    const Output o = pointers(s);
+    write_pixel_supports(g, o, idx, nv);
+    if (options.edge_shift > 0) shift_edge_supports(g, o, idx, options.edge_shift);
+    write_behind(g, o, behind, nb, nv);
+    if (options.normals) {
+      write_normals(g, s);
+      behind_normals(g, s, behind, nb, nv);
+    }
     return s;
   }
   std::vector<float> weight;

@@ -44,12 +44,13 @@ struct SamplerOptions {
   // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
   double edge_scale = 1.0;
   std::string edge_scale_at = "all";  // all | near: edge_scale on every edge support, or near silhouettes only
-  // With edge_supports: edge supports on the near side of a depth edge sit this many pixels from their pixel centre,
-  // away from the farther neighbours (same depth, colour and footprint). 0 = at the centre. Needs edge_band = 0.
+  // With edge_supports (or in pixel mode): supports on the near side of a depth edge sit this many pixels from their
+  // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre. Area mode
+  // needs edge_band = 0.
   double edge_shift = 0.0;
-  // With edge_supports: supports that continue the farther surface under each near-side silhouette pixel, up to
-  // this many pixels deep while they stay hidden in the source view (on the farther neighbours' surfaces extrapolated
-  // as planes, in their colour). 0 = off. Needs edge_band = 0.
+  // With edge_supports (or in pixel mode, on top of one per pixel): supports that continue the farther surface under
+  // each near-side silhouette pixel, up to this many pixels deep while they stay hidden in the source view (on the
+  // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off. Area mode needs edge_band = 0.
   int64_t edge_behind = 0;
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
