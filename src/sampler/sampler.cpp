@@ -105,6 +105,11 @@ void SamplerOptions::visit(ConfigVisitor& v) {
   v.require("edge_behind", edge_behind == 0 || mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0),
             "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and "
             "sampler.edge_band = 0");
+  v.field("edge_behind_start", edge_behind_start,
+          "with edge_behind: how many pixels in from the edge pixel's centre the first hidden support sits (0 = "
+          "under the edge pixel, which a view near the source partly sees through)",
+          Range::between(0, 2));
+  v.require("edge_behind_start", edge_behind_start == 0 || edge_behind > 0, "needs sampler.edge_behind > 0");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
@@ -690,7 +695,7 @@ struct Behind {
   std::vector<float> depth, color;  // colour: 3 per place
   std::vector<int64_t> from;        // the farther neighbour whose surface it continues (its normal is used)
 };
-Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t layers) {
+Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t layers, int64_t start) {
   Behind b;
   const int64_t HW = g.H * g.W;
   std::vector<int64_t> far;
@@ -705,8 +710,8 @@ Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t l
       if (g.depth[q] > farthest) farthest = g.depth[q], from = q;
     }
     const double n = static_cast<double>(far.size());
-    const int64_t deepest = away[0] == 0.0 && away[1] == 0.0 ? 1 : layers;
-    for (int64_t s = 0; s < deepest; ++s) {
+    const bool flat = away[0] == 0.0 && away[1] == 0.0;  // no inward direction: one place, under the pixel
+    for (int64_t s = flat ? 0 : start; s < (flat ? 1 : start + layers); ++s) {
       const double u = j + 0.5 - s * away[0], v = i + 0.5 - s * away[1];
       const int64_t x = static_cast<int64_t>(std::floor(u)), y = static_cast<int64_t>(std::floor(v));
       if (x < 0 || y < 0 || x >= g.W || y >= g.H || g.valid[y * g.W + x] == 0.0f) break;
@@ -905,7 +910,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       double away[2];
       for (int64_t p : idx)
         if (near_side(g, p, far, away)) near.push_back(p);
-      behind = behind_places(g, near, options.edge_behind);
+      behind = behind_places(g, near, options.edge_behind, options.edge_behind_start);
     }
     const int64_t nv = static_cast<int64_t>(idx.size()), nb = static_cast<int64_t>(behind.depth.size());
     Supports s = allocate(nv + nb);
@@ -939,7 +944,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
         scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
       if (options.edge_shift > 0) shift_edge_supports(g, o, chosen, options.edge_shift);
       if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
-        behind = behind_places(g, chosen, options.edge_behind);
+        behind = behind_places(g, chosen, options.edge_behind, options.edge_behind_start);
         const int64_t places = static_cast<int64_t>(behind.depth.size());
         nb = std::min<int64_t>(places, n / 2 - ne);
         if (nb < places) {
