@@ -685,11 +685,11 @@ double extrapolated_inverse_depth(const Grid& g, int64_t q, int64_t p, double u,
 }
 
 // Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), up to `layers`
-// places one pixel apart, from `start` pixels in from its centre, going inwards, away from the farther neighbours. Each farther neighbour's surface
-// is extrapolated as a plane to the place (or kept at its own depth where the plane would come as near as the pixel
-// over the place); the place takes their mean depth and their mean colour. Layering stops where the place would
-// not be hidden: beyond the image, over an invalid pixel or one not nearer than it, or (after the first) where the
-// farther neighbours surround the pixel evenly, as on a line one pixel wide.
+// places one pixel apart, from `start` pixels in from its centre, going inwards, away from the farther neighbours. Each
+// farther neighbour's surface is extrapolated as a plane to the place (or kept at its own depth where the plane would
+// come as near as the pixel over the place); the place takes their mean depth and their mean colour. Layering stops
+// where the place would not be hidden: beyond the image, over an invalid pixel or one not nearer than it, or (after the
+// first) where the farther neighbours surround the pixel evenly, as on a line one pixel wide.
 struct Behind {
   std::vector<double> u, v;
   std::vector<float> depth, color;  // colour: 3 per place
