@@ -684,22 +684,23 @@ double extrapolated_inverse_depth(const Grid& g, int64_t q, int64_t p, double u,
   return wq + slope(0, away_j) * away_j * (u - (qj + 0.5)) + slope(away_i, 0) * away_i * (v - (qi + 0.5));
 }
 
-// Where the farther surface continues under a silhouette: for each near-side edge pixel (near_side), up to `layers`
-// places one pixel apart, from `start` pixels in from its centre, going inwards, away from the farther neighbours. Each
-// farther neighbour's surface is extrapolated as a plane to the place (or kept at its own depth where the plane would
-// come as near as the pixel over the place); the place takes their mean depth and their mean colour. Layering stops
-// where the place would not be hidden: beyond the image, over an invalid pixel or one not nearer than it, or (after the
-// first) where the farther neighbours surround the pixel evenly, as on a line one pixel wide.
+// Where the farther surface continues under a silhouette: for each of `pixels` on the near side of a depth edge
+// (near_side; the others are skipped), up to `layers` places one pixel apart, from `start` pixels in from its
+// centre, going inwards, away from the farther neighbours. Each farther neighbour's surface is extrapolated as a
+// plane to the place (or kept at its own depth where the plane would come as near as the pixel over the place); the
+// place takes their mean depth and their mean colour. Layering stops where the place would not be hidden: beyond the
+// image, over an invalid pixel or one not nearer than it, or (after the first) where the farther neighbours surround
+// the pixel evenly, as on a line one pixel wide.
 struct Behind {
   std::vector<double> u, v;
   std::vector<float> depth, color;  // colour: 3 per place
   std::vector<int64_t> from;        // the farther neighbour whose surface it continues (its normal is used)
 };
-Behind behind_places(const Grid& g, const std::vector<int64_t>& edges, int64_t layers, int64_t start) {
+Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t layers, int64_t start) {
   Behind b;
   const int64_t HW = g.H * g.W;
   std::vector<int64_t> far;
-  for (int64_t p : edges) {
+  for (int64_t p : pixels) {
     double away[2];
     if (!near_side(g, p, far, away)) continue;
     const int64_t i = p / g.W, j = p % g.W;
@@ -905,13 +906,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       if (g.valid[p] != 0.0f) idx.push_back(p);
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
     Behind behind;  // pixel mode has no budget: hidden supports come on top of one support per pixel
-    if (options.edge_behind > 0) {
-      std::vector<int64_t> near, far;
-      double away[2];
-      for (int64_t p : idx)
-        if (near_side(g, p, far, away)) near.push_back(p);
-      behind = behind_places(g, near, options.edge_behind, options.edge_behind_start);
-    }
+    if (options.edge_behind > 0) behind = behind_places(g, idx, options.edge_behind, options.edge_behind_start);
     const int64_t nv = static_cast<int64_t>(idx.size()), nb = static_cast<int64_t>(behind.depth.size());
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);
