@@ -118,6 +118,35 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
   }
 }
 
+TEST_CASE("model: decoder.behind = keep_base leaves the hidden supports at their base Gaussians", "[model]") {
+  torch::manual_seed(5);
+  auto image = torch::rand({3, H, W});
+  const Camera cam = camera(0.0);
+  ModelOptions o = test::tiny_model_options();
+  o.sampler.mode = "pixel";
+  o.sampler.edge_behind = 1;  // the box's silhouette has a wall behind it
+  InfiniSplat shared(o);
+  {
+    torch::NoGradGuard g;
+    shared->decoder->head->weight.normal_(0, 0.1);
+    shared->decoder->head->bias.normal_(0, 0.1);
+  }
+  o.decoder.behind = "keep_base";
+  InfiniSplat keep(o);
+  {
+    torch::NoGradGuard g;
+    for (auto& p : keep->named_parameters()) p.value().copy_(shared->named_parameters()[p.key()]);
+  }
+  const Prediction a = shared->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
+  const Prediction b = keep->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
+  const int64_t n = a.supports.count(), nb = b.supports.behind;
+  REQUIRE(nb > 0);
+  CHECK(a.supports.behind == nb);
+  CHECK(torch::equal(a.delta.narrow(0, 0, n - nb), b.delta.narrow(0, 0, n - nb)));
+  CHECK(b.delta.narrow(0, n - nb, nb).abs().max().item<float>() == 0.0f);
+  CHECK(a.delta.narrow(0, n - nb, nb).abs().max().item<float>() > 0.0f);
+}
+
 TEST_CASE("model: NaN depth holes are masked, all-invalid depth and tiny images are errors", "[model]") {
   InfiniSplat m(test::tiny_model_options());
   const Camera cam = camera(0.0);

@@ -336,6 +336,8 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   o.edge_behind = 1;
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   REQUIRE(s.count() == 4000);
+  CHECK(plain.behind == 0);
+  CHECK(s.behind == H);  // the decoder can tell them apart (decoder.behind)
   // The last H supports continue the plane under column 31, the near side, one per row: at the plane's own depth
   // there (each farther neighbour's surface extrapolated), the farther neighbours' mean colour and a pixel's
   // footprint at that depth.
@@ -380,6 +382,7 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const auto tv = tight.uv.narrow(0, 1000 - 182, 182).select(1, 1).floor().to(torch::kLong);
   CHECK((tight.depth.narrow(0, 1000 - 182, 182) > 3.0).all().item<bool>());  // the plane: 3.7 m and more
   CHECK(std::get<0>(at::_unique(tv)).size(0) == H);
+  CHECK(tight.behind == 182);
   // edge_behind_start = 1: the same layers, one pixel further in (under columns 30 and 29), on the plane.
   o.edge_behind = 2;
   o.budget = 4000;
@@ -459,6 +462,8 @@ TEST_CASE("sampler: pixel mode takes edge_shift and edge_behind too", "[sampler]
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   // One hidden support per row on top, under column 31 at the far side's 6 m.
   REQUIRE(s.count() == H * W + H);
+  CHECK(s.behind == H);
+  CHECK(plain.behind == 0);
   CHECK((s.uv.narrow(0, H * W, H).select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
   CHECK((s.depth.narrow(0, H * W, H) == 6.0f).all().item<bool>());
   // The near side's pixel supports move half a pixel left (inside the image), the others stay at their centres.

@@ -53,7 +53,7 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
     const EncoderFeatures f = encoder->forward(image.unsqueeze(0));
     p.timings_ms["encoder"] = ms_since(t0);
     t0 = std::chrono::steady_clock::now();
-    p.delta = decode(f, p.supports.uv, W, H);
+    p.delta = decode(f, p.supports.uv, W, H, p.supports.behind);
     p.timings_ms["decoder"] = ms_since(t0);
   }
   t0 = std::chrono::steady_clock::now();
@@ -62,11 +62,14 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
   return p;
 }
 
-torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width,
-                                      int64_t height) {
+torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width, int64_t height,
+                                      int64_t behind) {
   ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
-  return decoder ? decoder->forward(uv, width, height, f)
-                 : sample_features(dense->forward(f, width, height), uv, width, height);
+  torch::Tensor delta = decoder ? decoder->forward(uv, width, height, f, behind)
+                                : sample_features(dense->forward(f, width, height), uv, width, height);
+  if (options.decoder.behind != "keep_base" || behind == 0) return delta;
+  const int64_t n = delta.size(0);  // the hidden supports keep their base Gaussian
+  return torch::cat({delta.narrow(0, 0, n - behind), torch::zeros({behind, delta.size(1)}, delta.options())}, 0);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

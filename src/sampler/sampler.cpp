@@ -913,6 +913,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     write_pixel_supports(g, o, idx, nv);
     if (options.edge_shift > 0) shift_edge_supports(g, o, idx, options.edge_shift);
     write_behind(g, o, behind, nb, nv);
+    s.behind = nb;
     if (options.normals) {
       write_normals(g, s);
       behind_normals(g, s, behind, nb, nv);
@@ -954,6 +955,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
                      options.image_share, options.pixel_floor, options.placement);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total, n - nb);
     write_behind(g, o, behind, nb, n - nb);
+    s.behind = nb;
     if (options.normals) {
       write_normals(g, s);
       behind_normals(g, s, behind, nb, n - nb);

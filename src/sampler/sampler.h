@@ -78,6 +78,7 @@ struct Supports {
   torch::Tensor color;   // [N,3] sRGB in [0,1]
   torch::Tensor area;    // [N] surface area each support stands for, m² (area mode: total / N)
   torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera; only with options.normals
+  int64_t behind = 0;    // the last `behind` supports are hidden surface under near-side silhouettes (edge_behind)
   int64_t count() const { return uv.size(0); }
 };
 
