@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <random>
+#include <thread>
 
 #include "core/config.h"
 #include "eval/evaluator.h"
@@ -16,6 +17,7 @@
 #include "support/test_util.h"
 #include "support/tiny_dataset.h"
 #include "support/tiny_model.h"
+#include "train/data_parallel.h"
 
 using namespace isplat;
 namespace fs = std::filesystem;
@@ -96,6 +98,39 @@ TEST_CASE("dist: 2 ranks x batch 1 equal 1 rank x batch 2, and a resumed 2-rank 
   REQUIRE(train_ranks(2, cfg, cat(five, " --resume auto --set train.out=", dir, "/split"), dir + "/b.log") == 0);
   CHECK(load_checkpoint(dir + "/split/checkpoints/last.safetensors").step() == 5);
   CHECK(max_relative_difference(model_of(dir + "/straight"), model_of(dir + "/split")) == 0.0);
+}
+
+TEST_CASE("dist: a parameter one rank's batch did not reach is averaged with that rank's zero", "[dist]") {
+  // decoder.behind_code gets no gradient on a rank whose images have no silhouettes; the ranks must still send
+  // the same gradient list (else the all-reduce buffers differ in size).
+  const int port = free_port();
+  std::vector<torch::Tensor> got(2);
+  std::vector<std::string> errors(2);
+  auto rank = [&](int r) {
+    try {
+      DistOptions o;
+      o.rank = r, o.world_size = 2, o.master_port = port, o.timeout_s = 30;
+      DataParallel dp(o);
+      auto a = torch::full({3}, 1.0f).requires_grad_(), b = torch::full({2}, 1.0f).requires_grad_();
+      auto frozen = torch::ones({2});  // no gradient anywhere: stays without one
+      (a * float(r + 1)).sum().backward();
+      if (r == 0) (b * 4.0f).sum().backward();
+      dp.average_gradients({a, b, frozen});
+      got[r] = torch::cat({a.grad(), b.grad()});
+      if (frozen.grad().defined()) errors[r] = "the frozen tensor got a gradient";
+    } catch (const std::exception& e) {
+      errors[r] = e.what();
+    }
+  };
+  std::thread r1(rank, 1);
+  rank(0);
+  r1.join();
+  INFO(errors[0] << " | " << errors[1]);
+  REQUIRE(errors[0].empty());
+  REQUIRE(errors[1].empty());
+  const auto want = torch::tensor({1.5f, 1.5f, 1.5f, 2.0f, 2.0f});  // a: (1 + 2) / 2; b: (4 + 0) / 2
+  CHECK(torch::equal(got[0], want));
+  CHECK(torch::equal(got[1], want));
 }
 
 TEST_CASE("dist: an unreachable store or a mismatched world size fails clearly within the timeout", "[dist]") {

@@ -25,10 +25,11 @@ void DecoderOptions::visit(ConfigVisitor& v) {
           Range::between(1, 16384));
   v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
   v.field("behind", behind,
-          "supports hidden under silhouettes (sampler.edge_behind) sit at a visible edge's image position, so they "
-          "read its features: shared gives them the same update (the paper's decoder sees only the position), "
-          "keep_base none (they keep their base Gaussian), code adds a learned vector (zero at the start) to their "
-          "fused feature, so the MLP can update them apart",
+          "supports hidden under silhouettes (sampler.edge_behind > 0; otherwise this does nothing) sit at a visible "
+          "edge's image position, so they read its features: shared gives them the same update (the paper's "
+          "decoder sees only the position), keep_base gives them no update (they keep their base Gaussian), code "
+          "adds a learned vector (zero at the start) to their fused feature, so the MLP can update them apart; "
+          "only shared exports to ONNX",
           {"shared", "keep_base", "code"});
   v.require("behind", behind != "code" || mode == "implicit", "code needs decoder.mode = implicit");
 }

@@ -30,6 +30,8 @@ InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o) {
   if (o.decoder.mode == "dense") dense = register_module("dense", DenseHead(dd, cd));
   if (o.decoder.mode == "dense" && o.sampler.mode != "pixel")
     log_warn("decoder.mode = dense predicts per pixel; the paper's ablation pairs it with sampler.mode = pixel");
+  if (o.decoder.behind != "shared" && o.sampler.edge_behind == 0)
+    log_warn("decoder.behind = ", o.decoder.behind, " acts on hidden supports, and sampler.edge_behind = 0 makes none");
 }
 
 Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
@@ -65,11 +67,15 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
 torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width, int64_t height,
                                       int64_t behind) {
   ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
-  torch::Tensor delta = decoder ? decoder->forward(uv, width, height, f, behind)
-                                : sample_features(dense->forward(f, width, height), uv, width, height);
-  if (options.decoder.behind != "keep_base" || behind == 0) return delta;
-  const int64_t n = delta.size(0);  // the hidden supports keep their base Gaussian
-  return torch::cat({delta.narrow(0, 0, n - behind), torch::zeros({behind, delta.size(1)}, delta.options())}, 0);
+  ISPLAT_CHECK(behind >= 0 && behind <= uv.size(0), "model: ", behind, " hidden supports of ", uv.size(0));
+  auto run = [&](const torch::Tensor& at, int64_t hidden) {
+    return decoder ? decoder->forward(at, width, height, f, hidden)
+                   : sample_features(dense->forward(f, width, height), at, width, height);
+  };
+  if (options.decoder.behind != "keep_base" || behind == 0) return run(uv, behind);
+  // The hidden supports keep their base Gaussian: only the visible ones are decoded.
+  const torch::Tensor visible = run(uv.narrow(0, 0, uv.size(0) - behind), 0);
+  return torch::cat({visible, torch::zeros({behind, visible.size(1)}, visible.options())}, 0);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
