@@ -355,7 +355,6 @@ Scene build_desk(uint64_t seed) {
   Rng rng(seed);
   Scene s;
   s.style = "desk";
-  s.step_scale = 0.12;  // centimetre steps: a close-up capture
   const double W = rng.uniform(2.6, 3.4), D = rng.uniform(2.4, 3.0), H = rng.uniform(2.4, 2.8);
   const int floor_m = s.add_material(
       mat(rng, rng.pick(std::vector<Pattern>{Pattern::Wood, Pattern::Tiles}), rng.uniform(0.3, 0.6), 0.35, 0.8));
@@ -421,7 +420,6 @@ Scene build_street(uint64_t seed) {
   Rng rng(seed);
   Scene s;
   s.style = "street";
-  s.step_scale = 2.5;  // metre steps: a walk or a drive
   const double L = rng.uniform(60.0, 120.0), w = rng.uniform(10.0, 18.0);
   const int road = s.add_material(mat(rng, Pattern::Noise, rng.uniform(0.5, 2.0), 0.15, 0.35));
   const int pavement = s.add_material(
@@ -483,7 +481,6 @@ Scene build_hall(uint64_t seed) {
   Rng rng(seed);
   Scene s;
   s.style = "hall";
-  s.step_scale = 1.6;
   const double W = rng.uniform(14.0, 30.0), D = rng.uniform(20.0, 45.0), H = rng.uniform(6.0, 14.0);
   const int floor_m =
       s.add_material(mat(rng, rng.pick(std::vector<Pattern>{Pattern::Noise, Pattern::Tiles, Pattern::Stripes}),
@@ -559,7 +556,6 @@ Scene build_clutter(uint64_t seed, bool near_objects) {
   Scene s;
   s.style = near_objects ? "clutter_near" : "clutter";
   const double S = std::exp(rng.uniform(std::log(0.4), std::log(6.0)));  // scene scale: 1 = a room
-  s.step_scale = S;
   const double W = 12.0 * S, D = 24.0 * S;
   const std::vector<Pattern> all = {Pattern::Solid, Pattern::Checker, Pattern::Stripes, Pattern::Noise, Pattern::Bricks,
                                     Pattern::Wood,  Pattern::Tiles,   Pattern::Marble,  Pattern::Dots,  Pattern::Grid};

@@ -51,8 +51,7 @@ struct Hit {
 };
 
 struct Scene {
-  std::string style;        // "room", "courtyard", "atrium", "desk", "street"
-  double step_scale = 1.0;  // camera step lengths relative to a room walk (desk < 1 < street)
+  std::string style;  // "room", "courtyard", "atrium", "desk", "street"
   std::vector<Primitive> prims;
   std::vector<Material> materials;
   std::vector<PointLight> lights;
