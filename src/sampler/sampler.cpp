@@ -92,9 +92,13 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "edge supports) this many pixels away from the farther surface, keeping its depth, colour and footprint, "
           "so silhouettes spill less onto the background (0 = at the pixel centre)",
           Range::between(0.0, 0.5));
-  v.require("edge_shift", edge_shift == 0.0 || mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0),
-            "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and "
-            "sampler.edge_band = 0 (it moves the supports at depth edges)");
+  // edge_shift and edge_behind act on the supports at depth edges: every pixel's in pixel mode, the edge supports in
+  // area mode (without a band, whose supports tile the edge region).
+  const bool at_edges = mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0);
+  const char* at_edges_needs =
+      "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and sampler.edge_band = 0 "
+      "(it acts on the supports at depth edges)";
+  v.require("edge_shift", edge_shift == 0.0 || at_edges, at_edges_needs);
   v.field("edge_behind", edge_behind,
           "area mode with edge_supports, or pixel mode: continue the farther surface under each near-side "
           "silhouette pixel with up to this many supports, one pixel apart inwards while they stay hidden, on the "
@@ -102,9 +106,7 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "a silhouette has surface (area mode: taken from the budget, at most half of it with the edge supports; "
           "pixel mode: on top of one per pixel; 0 = off)",
           Range::between(0, 4));
-  v.require("edge_behind", edge_behind == 0 || mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0),
-            "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and "
-            "sampler.edge_band = 0");
+  v.require("edge_behind", edge_behind == 0 || at_edges, at_edges_needs);
   v.field("edge_behind_start", edge_behind_start,
           "with edge_behind: how many pixels in from the edge pixel's centre the first hidden support sits (0 = "
           "under the edge pixel, which a view near the source partly sees through)",
