@@ -515,6 +515,30 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   const auto few_centre = ((few.uv - 0.5 - (few.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
   CHECK(few_centre.sum().item<int64_t>() == 300);
   CHECK((few.uv.select(1, 1).masked_select(few_centre) > H - 3).any().item<bool>());
+  // With hidden surface and a shift: the band's near-side pixels (column 31) get the same hidden supports as without
+  // a band, last, and move half a pixel left as the edge supports do; the rest of the band stays on its centres.
+  o.budget = 4000;
+  o.edge_behind = 2;
+  o.edge_shift = 0.5;
+  const Supports behind = sample_supports(depth, ones(), K(), image(), o, 2);
+  no_band = o;
+  no_band.edge_band = 0;
+  const Supports behind_no_band = sample_supports(depth, ones(), K(), image(), no_band, 2);
+  REQUIRE(behind.count() == 4000);
+  REQUIRE(behind.behind > 0);
+  CHECK(behind.behind == behind_no_band.behind);
+  const int64_t nb = behind.behind;
+  CHECK(torch::equal(behind.uv.narrow(0, 4000 - nb, nb), behind_no_band.uv.narrow(0, 4000 - nb, nb)));
+  CHECK(torch::equal(behind.depth.narrow(0, 4000 - nb, nb), behind_no_band.depth.narrow(0, 4000 - nb, nb)));
+  CHECK((behind.depth.narrow(0, 4000 - nb, nb) == 6.0f).all().item<bool>());
+  const auto bu = behind.uv.narrow(0, 0, 4000 - nb).select(1, 0), bv = behind.uv.narrow(0, 0, 4000 - nb).select(1, 1);
+  const auto inside = (bv > 1.0) & (bv < H - 1.0);
+  CHECK(((bu - 31.0).abs().lt(1e-4) & inside).sum().item<int64_t>() == H - 2);
+  CHECK(((bu - 31.5).abs().lt(1e-4) & inside).sum().item<int64_t>() == 0);
+  CHECK_NOTHROW(config_from_json<SamplerOptions>(
+      nlohmann::json{{"edge_supports", true}, {"edge_band", 2}, {"edge_behind", 2}, {"edge_shift", 0.5}}, "test"));
+  for (double col : {29.5, 30.5, 32.5, 33.5, 34.5})
+    CHECK(((bu - col).abs().lt(1e-4) & inside).sum().item<int64_t>() == H - 2);
 }
 
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {

@@ -93,11 +93,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "so silhouettes spill less onto the background (0 = at the pixel centre)",
           Range::between(0.0, 0.5));
   // edge_shift and edge_behind act on the supports at depth edges: every pixel's in pixel mode, the edge supports in
-  // area mode (without a band, whose supports tile the edge region).
-  const bool at_edges = mode == "pixel" || (mode == "area" && edge_supports && edge_band == 0);
+  // area mode (with a band, its pixels beside a depth edge: band supports are a pixel apart, so a near-side one moved
+  // half a pixel in still overlaps the next).
+  const bool at_edges = mode == "pixel" || (mode == "area" && edge_supports);
   const char* at_edges_needs =
-      "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true and sampler.edge_band = 0 "
-      "(it acts on the supports at depth edges)";
+      "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true (it acts on the supports "
+      "at depth edges)";
   v.require("edge_shift", edge_shift == 0.0 || at_edges, at_edges_needs);
   v.field("edge_behind", edge_behind,
           "area mode with edge_supports, or pixel mode: continue the farther surface under each near-side "

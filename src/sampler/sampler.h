@@ -45,12 +45,11 @@ struct SamplerOptions {
   double edge_scale = 1.0;
   std::string edge_scale_at = "all";  // all | near: edge_scale on every edge support, or near silhouettes only
   // With edge_supports (or in pixel mode): supports on the near side of a depth edge sit this many pixels from their
-  // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre. Area mode
-  // needs edge_band = 0.
+  // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre.
   double edge_shift = 0.0;
   // With edge_supports (or in pixel mode, on top of one per pixel): supports that continue the farther surface under
   // each near-side silhouette pixel, up to this many pixels deep while they stay hidden in the source view (on the
-  // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off. Area mode needs edge_band = 0.
+  // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off.
   int64_t edge_behind = 0;
   // With edge_behind: how many pixels in from the edge pixel's centre the first hidden support sits (0 = under it).
   int64_t edge_behind_start = 0;
