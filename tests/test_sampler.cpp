@@ -541,6 +541,39 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
     CHECK(((bu - col).abs().lt(1e-4) & inside).sum().item<int64_t>() == H - 2);
 }
 
+TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges, over its own surface", "[sampler]") {
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);  // the near side is columns 0..31
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  o.edge_band = 2;
+  o.edge_band_at = "near";
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
+  REQUIRE(s.count() == 4000);
+  const auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
+  const auto on_centre = ((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto face = ~on_centre;
+  // Columns 29..31 (the near edge column and two steps into its surface) get a pixel-centre support on every row,
+  // and no face support lies between their centres ...
+  for (double col : {29.5, 30.5, 31.5}) CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == H);
+  CHECK((face & (u > 29.5 + 1e-4) & (u < 31.5 - 1e-4)).sum().item<int64_t>() == 0);
+  // ... while the far side and the border keep faces up to their edge pixels: faces between columns 32.5 and 34.5,
+  // and in the outer rows and columns away from the step.
+  CHECK((face & (u > 32.5 + 1e-4) & (u < 34.5 - 1e-4)).sum().item<int64_t>() > 0);
+  CHECK((face & (v > 0.5) & (v < 2.5) & (u > 40.0)).sum().item<int64_t>() > 0);
+  CHECK((face & (u > 0.5) & (u < 2.5)).sum().item<int64_t>() > 0);
+  CHECK(((u - 33.5).abs().lt(1e-4) & on_centre & (v > 1.0) & (v < H - 1.0)).sum().item<int64_t>() == 0);
+  // Fewer band supports than the whole band; the represented area is still the surface's, once.
+  o.edge_band_at = "all";
+  const Supports all = sample_supports(depth, ones(), K(), image(), o, 2);
+  CHECK(on_centre.sum().item<int64_t>() <
+        ((all.uv - 0.5 - (all.uv - 0.5).floor()).abs().lt(1e-6)).all(1).sum().item<int64_t>());
+  CHECK(s.area.sum().item<double>() == Approx(all.area.sum().item<double>()).epsilon(1e-4));
+  CHECK_THROWS_WITH(
+      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_band_at", "near"}}, "test"),
+      Catch::Contains("edge_band > 0"));
+}
+
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
   auto depth = torch::full({H, W}, 1.0f);
   depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40

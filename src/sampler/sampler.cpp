@@ -72,6 +72,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area sampling elsewhere); 0 = the edge pixels only",
           Range::between(0, 16));
   v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
+  v.field("edge_band_at", edge_band_at,
+          "with edge_band: widen every edge pixel (all: depth edges, holes, the border) or only the near side of "
+          "depth edges, over its own surface (near: the silhouettes whose footprints can spill onto a background; "
+          "far sides, holes and the border keep faces up to their edge supports)",
+          {"all", "near"});
+  v.require("edge_band_at", edge_band_at == "all" || edge_band > 0, "near needs sampler.edge_band > 0");
   v.field("edge_scale", edge_scale,
           "area mode with edge_supports: the footprint (base scale) of each edge support as a multiple of a pixel's; "
           "faces reach the edge pixels' centres, so a smaller one only closes the half-pixel gap beyond them and "
@@ -586,16 +592,61 @@ std::vector<int64_t> edge_pixels(const Grid& g, const std::vector<float>& area) 
   return out;
 }
 
-// The edge pixels widened by `band` pixels (Chebyshev) over valid pixels, row-major; the triangles whose three
-// vertices all lie in the band get area 0, so faces leave the band to its pixel supports. A band of more than
-// `max_pixels` would leave band pixels with neither kind of support, so the edge pixels alone are returned then.
-std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, int64_t max_pixels) {
+// The valid 8-neighbours of pixel p that lie beyond a depth discontinuity behind it, into `out`.
+void farther_neighbours(const Grid& g, int64_t p, std::vector<int64_t>& out) {
+  out.clear();
+  const int64_t i = p / g.W, j = p % g.W;
+  for (int64_t di = -1; di <= 1; ++di)
+    for (int64_t dj = -1; dj <= 1; ++dj) {
+      const int64_t y = i + di, x = j + dj, q = y * g.W + x;
+      if ((di == 0 && dj == 0) || y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
+      if (g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q])) out.push_back(q);
+    }
+}
+
+// The near-side edge pixels (those with farther neighbours) widened by `band` steps to 8-neighbours on the same
+// surface (valid, not apart in depth), as a mask; the other edge pixels are set in it as themselves.
+std::vector<uint8_t> near_band(const Grid& g, const std::vector<int64_t>& edges, int64_t band) {
+  const int64_t H = g.H, W = g.W;
+  std::vector<uint8_t> in(static_cast<size_t>(H * W), 0);
+  std::vector<int64_t> front, next, far;
+  for (int64_t p : edges) {
+    in[p] = 1;
+    farther_neighbours(g, p, far);
+    if (!far.empty()) front.push_back(p);
+  }
+  for (int64_t step = 0; step < band && !front.empty(); ++step, front.swap(next)) {
+    next.clear();
+    for (int64_t p : front)
+      for (int64_t di = -1; di <= 1; ++di)
+        for (int64_t dj = -1; dj <= 1; ++dj) {
+          const int64_t y = p / W + di, x = p % W + dj, q = y * W + x;
+          if (y < 0 || x < 0 || y >= H || x >= W || in[q] || g.valid[q] == 0.0f) continue;
+          if (depths_apart(g.depth[p], g.depth[q])) continue;
+          in[q] = 1;
+          next.push_back(q);
+        }
+  }
+  return in;
+}
+
+// The edge pixels widened by `band` pixels over valid pixels, row-major: all of them (Chebyshev), or (near_only)
+// the near side of depth edges over its own surface (near_band). The triangles whose three vertices all lie in the
+// band get area 0, so faces leave the band to its pixel supports. A band of more than `max_pixels` would leave band
+// pixels with neither kind of support, so the edge pixels alone are returned then.
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, bool near_only,
+                                      int64_t max_pixels) {
   const std::vector<int64_t> edges = edge_pixels(g, area);
   if (band <= 0) return edges;
   const int64_t H = g.H, W = g.W, Wq = W - 1;
-  std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0);
-  for (int64_t p : edges) edge[p] = 1;
-  const std::vector<uint8_t> in = dilate_square(edge, H, W, band);
+  std::vector<uint8_t> in;
+  if (near_only) {
+    in = near_band(g, edges, band);
+  } else {
+    std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0);
+    for (int64_t p : edges) edge[p] = 1;
+    in = dilate_square(edge, H, W, band);
+  }
   std::vector<int64_t> out;
   for (int64_t p = 0; p < H * W; ++p)
     if (in[p] && g.valid[p] != 0.0f) out.push_back(p);
@@ -613,18 +664,6 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
       }
   if (any_face) area = std::move(faces);  // a band over the whole image leaves the faces as they were
   return out;
-}
-
-// The valid 8-neighbours of pixel p that lie beyond a depth discontinuity behind it, into `out`.
-void farther_neighbours(const Grid& g, int64_t p, std::vector<int64_t>& out) {
-  out.clear();
-  const int64_t i = p / g.W, j = p % g.W;
-  for (int64_t di = -1; di <= 1; ++di)
-    for (int64_t dj = -1; dj <= 1; ++dj) {
-      const int64_t y = i + di, x = j + dj, q = y * g.W + x;
-      if ((di == 0 && dj == 0) || y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f) continue;
-      if (g.depth[q] > g.depth[p] && depths_apart(g.depth[p], g.depth[q])) out.push_back(q);
-    }
 }
 
 // True when edge pixel p lies on the near side of a depth edge (it has farther neighbours), so its footprint can
@@ -935,7 +974,8 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     for (float a : area) total += a;  // the whole surface, before a band takes triangles from the faces
     Behind behind;
     if (options.edge_supports) {
-      const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
+      const std::vector<int64_t> edges =
+          edge_band_pixels(g, area, options.edge_band, options.edge_band_at == "near", n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       const std::vector<int64_t> chosen = spread(edges, ne);
       write_pixel_supports(g, o, chosen, ne);

@@ -39,6 +39,10 @@ struct SamplerOptions {
   // support too, and triangles wholly inside that band get none, so silhouettes sit on pixel rays as in pixel
   // mode while surfaces keep area sampling. 0 = only the edge pixels themselves.
   int64_t edge_band = 0;
+  // all | near: the band widens every edge pixel (depth edges, holes, the border), or only the near side of depth
+  // edges, and then only over its own surface (steps that cross no discontinuity), so far sides, holes and the border
+  // keep faces up to their edge supports.
+  std::string edge_band_at = "all";
   // With edge_supports: each edge support's footprint (the scale of its base Gaussian) is this times a pixel's,
   // before the areas are rescaled to the surface's total. Faces reach the edge pixels' centres, so an edge support
   // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
