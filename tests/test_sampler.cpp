@@ -572,6 +572,26 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   CHECK_THROWS_WITH(
       config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_band_at", "near"}}, "test"),
       Catch::Contains("edge_band > 0"));
+  // The recipe's combination: hidden surface and the shift act on the near band's edge column as without a band.
+  o.edge_band_at = "near";
+  o.edge_behind = 3;
+  o.edge_shift = 0.5;
+  SamplerOptions no_band = o;
+  no_band.edge_band = 0;
+  no_band.edge_band_at = "all";
+  const Supports b = sample_supports(depth, ones(), K(), image(), o, 2);
+  const Supports nb = sample_supports(depth, ones(), K(), image(), no_band, 2);
+  REQUIRE(b.behind > 0);
+  CHECK(b.behind == nb.behind);
+  CHECK(torch::equal(b.uv.narrow(0, 4000 - b.behind, b.behind), nb.uv.narrow(0, 4000 - nb.behind, nb.behind)));
+  const auto bu = b.uv.narrow(0, 0, 4000 - b.behind).select(1, 0), bv = b.uv.narrow(0, 0, 4000 - b.behind).select(1, 1);
+  const auto inner = (bv > 1.0) & (bv < H - 1.0);
+  CHECK(((bu - 31.0).abs().lt(1e-4) & inner).sum().item<int64_t>() == H - 2);
+  CHECK(((bu - 30.5).abs().lt(1e-4) & inner).sum().item<int64_t>() == H - 2);
+  CHECK_NOTHROW(config_from_json<SamplerOptions>(
+      nlohmann::json{
+          {"edge_supports", true}, {"edge_band", 2}, {"edge_band_at", "near"}, {"edge_behind", 3}, {"edge_shift", 0.5}},
+      "test"));
 }
 
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
