@@ -31,6 +31,10 @@ SamplerOptions fixed(int64_t n) {
   o.budget = n;
   return o;
 }
+// [N] bool: which supports sit on a pixel centre (both coordinates at +0.5), as pixel and edge supports do.
+torch::Tensor on_pixel_centre(const torch::Tensor& uv) {
+  return ((uv - 0.5 - (uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+}
 // Counts of supports whose u falls in each of `bins` vertical strips.
 std::vector<double> column_histogram(const Supports& s, int bins) {
   std::vector<double> h(bins, 0.0);
@@ -214,7 +218,7 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   CHECK(missing == 0);
   // Edge pixels: 4 per row, plus the rest of the top and bottom rows.
   const int64_t edges = 4 * H + 2 * (W - 4);
-  CHECK(((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6).all(1)).sum().item<int64_t>() >= edges);
+  CHECK(on_pixel_centre(s.uv).sum().item<int64_t>() >= edges);
   // Faces alone never reach the step's columns; the represented area is the surface's, once.
   CHECK(((faces.uv.select(1, 0) - 32).abs() < 0.5).sum().item<int64_t>() == 0);
   CHECK(s.area.sum().item<double>() == Approx(faces.area.sum().item<double>()).epsilon(1e-4));
@@ -253,7 +257,7 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
                  hn = sample_supports(behind, valid, K(), image(), o, 2);
   REQUIRE(torch::equal(hw.uv, hn.uv));
   const auto hole_ratio = (hn.area / hw.area).to(torch::kDouble);
-  const auto hu = hw.uv.select(1, 0), on_centre = ((hw.uv - 0.5 - (hw.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto hu = hw.uv.select(1, 0), on_centre = on_pixel_centre(hw.uv);
   const auto hole_edge = on_centre & ((hu - 47.5).abs().lt(1e-4) | (hu - 50.5).abs().lt(1e-4));
   const auto near_edge = on_centre & (hu - 31.5).abs().lt(1e-4);
   REQUIRE(hole_edge.sum().item<int64_t>() == 2 * H);
@@ -288,8 +292,7 @@ TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette,
   // Exactly the near side moves (column 31, 2 m beside 6 m), a quarter pixel away from the far side, keeping its
   // depth, colour and footprint; the far side (column 32), the border and the faces stay where they were. Inside
   // the image that is straight left; in the top and bottom rows the far side also lies diagonally, below or above.
-  const auto col31 = (centred.uv.select(1, 0) - 31.5).abs().lt(1e-4) &
-                     ((centred.uv - 0.5 - (centred.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto col31 = (centred.uv.select(1, 0) - 31.5).abs().lt(1e-4) & on_pixel_centre(centred.uv);
   REQUIRE(col31.sum().item<int64_t>() == H);
   CHECK(torch::equal(moved, col31));
   const auto v = centred.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(H - 1.0);
@@ -489,12 +492,12 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
   REQUIRE(s.count() == 4000);
   const auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
-  const auto on_centre = ((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto on_centre = on_pixel_centre(s.uv);
   // Columns 29..34 (the step's two edge columns widened by 2) and the 3 outer columns and rows of the border
   // are a band: a pixel-centre support on every one of their pixels ...
   const int64_t band_pixels = H * (6 + 3 + 3) + 2 * 3 * (W - 12);
   CHECK(on_centre.sum().item<int64_t>() >= band_pixels);
-  CHECK(on_centre.sum().item<int64_t>() > edge_only.uv.sub(0.5).frac().abs().lt(1e-6).all(1).sum().item<int64_t>());
+  CHECK(on_centre.sum().item<int64_t>() > on_pixel_centre(edge_only.uv).sum().item<int64_t>());
   for (double col : {29.5, 30.5, 31.5, 32.5, 33.5, 34.5})
     CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == H);
   // ... and no face support inside it: faces stop at the band's pixel centres.
@@ -512,7 +515,7 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   SamplerOptions no_band = o;
   no_band.edge_band = 0;
   CHECK(torch::equal(few.uv, sample_supports(depth, ones(), K(), image(), no_band, 2).uv));
-  const auto few_centre = ((few.uv - 0.5 - (few.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto few_centre = on_pixel_centre(few.uv);
   CHECK(few_centre.sum().item<int64_t>() == 300);
   CHECK((few.uv.select(1, 1).masked_select(few_centre) > H - 3).any().item<bool>());
   // With hidden surface and a shift: the band's near-side pixels (column 31) get the same hidden supports as without
@@ -551,7 +554,7 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
   REQUIRE(s.count() == 4000);
   const auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
-  const auto on_centre = ((s.uv - 0.5 - (s.uv - 0.5).floor()).abs().lt(1e-6)).all(1);
+  const auto on_centre = on_pixel_centre(s.uv);
   const auto face = ~on_centre;
   // Columns 29..31 (the near edge column and two steps into its surface) get a pixel-centre support on every row,
   // and no face support lies between their centres ...
@@ -566,8 +569,7 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   // Fewer band supports than the whole band; the represented area is still the surface's, once.
   o.edge_band_at = "all";
   const Supports all = sample_supports(depth, ones(), K(), image(), o, 2);
-  CHECK(on_centre.sum().item<int64_t>() <
-        ((all.uv - 0.5 - (all.uv - 0.5).floor()).abs().lt(1e-6)).all(1).sum().item<int64_t>());
+  CHECK(on_centre.sum().item<int64_t>() < on_pixel_centre(all.uv).sum().item<int64_t>());
   CHECK(s.area.sum().item<double>() == Approx(all.area.sum().item<double>()).epsilon(1e-4));
   CHECK_THROWS_WITH(
       config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_band_at", "near"}}, "test"),
