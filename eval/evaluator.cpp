@@ -180,6 +180,7 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
 // a fingerprint (older runs) adopts the current checkpoint's; a stamp older than an option adopts its default.
 static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring) {
+  if (!mo.checkpoint.empty()) require_finished_run(mo.name, mo.checkpoint);  // before anything is stamped
   nlohmann::json now = stamp_options(mo, scoring);
   if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);

@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <filesystem>
 #include <functional>
 
 #include "core/error.h"
@@ -12,6 +13,7 @@
 #include "data/perturb.h"
 #include "decoder/composer.h"
 #include "geometry/color.h"
+#include "io/folder_lock.h"
 #include "model/model_io.h"
 #include "render/prune.h"
 #include "render/render.h"
@@ -120,6 +122,15 @@ class IdentityMethod final : public Method {
 };
 
 }  // namespace
+
+void require_finished_run(const std::string& method, const std::string& checkpoint) {
+  const std::filesystem::path folder = std::filesystem::path(checkpoint).parent_path();
+  if (folder.filename() != "checkpoints") return;  // a checkpoint outside a run folder
+  const std::string holder = folder_lock_holder(folder.parent_path().string());
+  ISPLAT_CHECK(holder.empty(), "method '", method, "': ", checkpoint, " belongs to a run that is still training (",
+               folder.parent_path().string(), " is locked by pid ", holder,
+               "); score it once the run has finished, or copy the checkpoint elsewhere to score it as it is");
+}
 
 std::unique_ptr<Method> make_method(const MethodOptions& o, const RenderOptions& r) {
   if (o.type == "model") return std::make_unique<ModelMethod>(o, r);

@@ -38,4 +38,9 @@ class Method {
 
 std::unique_ptr<Method> make_method(const MethodOptions& options, const RenderOptions& render);
 
+// Refuses (Error naming the method, the checkpoint and the pid) a checkpoint inside a run folder
+// (<run>/checkpoints/<file>) that a trainer still holds locked: its scores would be of an unfinished run, and
+// the fingerprint check would refuse to resume them once the run moved on.
+void require_finished_run(const std::string& method, const std::string& checkpoint);
+
 }  // namespace isplat

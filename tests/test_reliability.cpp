@@ -279,8 +279,18 @@ TEST_CASE("reliability: one trainer per run folder, unwritable folders and damag
     FolderLock first(dir);
     CHECK_THAT(error_of([&] { FolderLock second(dir); }),
                Catch::Contains(dir) && Catch::Contains(cat("pid ", getpid())));
+    // The evaluator refuses a checkpoint of a run that is still training, and only inside a run folder.
+    CHECK(folder_lock_holder(dir) == std::to_string(getpid()));
+    const std::string in_run = dir + "/checkpoints/last.safetensors";
+    CHECK_THAT(error_of([&] { require_finished_run("full_s3", in_run); }),
+               Catch::Contains("full_s3") && Catch::Contains(in_run) && Catch::Contains("still training") &&
+                   Catch::Contains(cat("pid ", getpid())));
+    CHECK_NOTHROW(require_finished_run("full_s3", dir + "/last.safetensors"));
   }
-  FolderLock again(dir);  // released with the first holder
+  CHECK(folder_lock_holder(dir).empty());  // released with its holder
+  CHECK_NOTHROW(require_finished_run("full_s3", dir + "/checkpoints/last.safetensors"));
+  CHECK(folder_lock_holder(test::temp_dir("rel_no_lock")).empty());  // no lock file at all
+  FolderLock again(dir);                                             // released with the first holder
 
   const auto data = test::make_tiny_dataset("rel_train", 8);
   const std::string run = test::temp_dir("rel_train_run");

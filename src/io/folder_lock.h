@@ -17,4 +17,8 @@ class FolderLock {
   int fd_ = -1;
 };
 
+// The pid (as the lock file records it, "?" if unreadable) of the process that holds <dir>/.lock, or "" when none
+// does: no lock file, or its holder has ended.
+std::string folder_lock_holder(const std::string& dir);
+
 }  // namespace isplat
