@@ -80,6 +80,101 @@ struct Scores {
   bool any = false;
 };
 
+// `v` with the pairs outside baseline bin `bin` set to NaN (bin < 0: all pairs).
+std::vector<double> in_bin(const std::vector<double>& v, const std::vector<int>& pair_bin, int bin) {
+  if (bin < 0) return v;
+  std::vector<double> out;
+  for (size_t k = 0; k < v.size(); ++k) out.push_back(pair_bin[k] == bin ? v[k] : NAN);
+  return out;
+}
+
+// One row of report.csv / report.json: a row's means on one bin and its differences to the reference.
+struct TableRow {
+  std::string row, label, bin;
+  int64_t pairs = 0;
+  double psnr = NAN, ssim = NAN, lpips = NAN, holes = NAN, cracks = NAN, normals = NAN;
+  Interval dp, dl, dh, dc;  // PSNR, LPIPS, holes, cracks minus the reference
+  std::string interval;     // what the intervals resample: "pairs" or "seeds and pairs"
+};
+
+void add_table_row(CsvTable& csv, nlohmann::ordered_json& js, const std::string& dataset, const std::string& variant,
+                   const std::string& reference, const std::string& lp, const TableRow& t) {
+  csv.rows.push_back({dataset,
+                      variant,
+                      t.row,
+                      t.bin,
+                      std::to_string(t.pairs),
+                      fmt(t.psnr, 4),
+                      fmt(t.ssim, 5),
+                      fmt(t.lpips, 5),
+                      fmt(t.dp.mean, 4),
+                      fmt(t.dp.lo, 4),
+                      fmt(t.dp.hi, 4),
+                      fmt(t.dl.mean, 5),
+                      fmt(t.dl.lo, 5),
+                      fmt(t.dl.hi, 5),
+                      fmt(t.holes, 4),
+                      fmt(t.cracks, 4),
+                      fmt(t.normals, 3),
+                      fmt(t.dh.mean, 4),
+                      fmt(t.dh.lo, 4),
+                      fmt(t.dh.hi, 4),
+                      fmt(t.dc.mean, 4),
+                      fmt(t.dc.lo, 4),
+                      fmt(t.dc.hi, 4),
+                      t.interval});
+  auto num = [](double x) { return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
+  js.push_back({{"dataset", dataset},
+                {"variant", variant},
+                {"row", t.row},
+                {"label", t.label},
+                {"bin", t.bin},
+                {"pairs", t.pairs},
+                {"psnr", num(t.psnr)},
+                {"ssim", num(t.ssim)},
+                {"lpips_" + lp, num(t.lpips)},
+                {"delta_psnr", num(t.dp.mean)},
+                {"delta_psnr_ci", {num(t.dp.lo), num(t.dp.hi)}},
+                {"delta_lpips", num(t.dl.mean)},
+                {"delta_lpips_ci", {num(t.dl.lo), num(t.dl.hi)}},
+                {"holes_pct", num(t.holes)},
+                {"cracks_pct", num(t.cracks)},
+                {"normals_deg", num(t.normals)},
+                {"delta_holes", num(t.dh.mean)},
+                {"delta_holes_ci", {num(t.dh.lo), num(t.dh.hi)}},
+                {"delta_cracks", num(t.dc.mean)},
+                {"delta_cracks_ci", {num(t.dc.lo), num(t.dc.hi)}},
+                {"reference", reference},
+                {"interval", t.interval}});
+}
+
+// A row over its training seeds against the reference's same seeds (mine[k] and ref[k] share seed k) on one bin:
+// means over the seeds, and seed-aware intervals (seed_paired_bootstrap).
+TableRow over_seeds(const std::vector<Scores>& mine, const std::vector<Scores>& ref, const std::vector<int>& pair_bin,
+                    int bin, int64_t resamples) {
+  TableRow t;
+  t.interval = "seeds and pairs";
+  auto per_seed = [&](const std::vector<Scores>& rows, std::vector<double> Scores::*m) {
+    std::vector<std::vector<double>> out;
+    for (const auto& s : rows) out.push_back(in_bin(s.*m, pair_bin, bin));
+    return out;
+  };
+  auto seed_mean = [&](std::vector<double> Scores::*m) {
+    double sum = 0;
+    for (const auto& v : per_seed(mine, m)) sum += mean_finite(v);
+    return sum / double(mine.size());
+  };
+  auto delta = [&](std::vector<double> Scores::*m) {
+    return seed_paired_bootstrap(per_seed(mine, m), per_seed(ref, m), resamples);
+  };
+  t.psnr = seed_mean(&Scores::psnr), t.ssim = seed_mean(&Scores::ssim), t.lpips = seed_mean(&Scores::lpips);
+  t.holes = seed_mean(&Scores::holes), t.cracks = seed_mean(&Scores::cracks), t.normals = seed_mean(&Scores::normals);
+  t.dp = delta(&Scores::psnr), t.dl = delta(&Scores::lpips), t.dh = delta(&Scores::holes),
+  t.dc = delta(&Scores::cracks);
+  t.pairs = t.dp.n;
+  return t;
+}
+
 }  // namespace
 
 Experiment::Experiment(ExperimentConfig config) : config_(std::move(config)) {
@@ -303,7 +398,8 @@ void Experiment::report() {
                 "delta_holes_hi",
                 "delta_cracks",
                 "delta_cracks_lo",
-                "delta_cracks_hi"};
+                "delta_cracks_hi",
+                "interval"};
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   std::vector<Chart> delta_charts;
 
@@ -339,12 +435,7 @@ void Experiment::report() {
       }
       return s;
     };
-    auto subset = [&](const std::vector<double>& v, int bin) {
-      if (bin < 0) return v;
-      std::vector<double> out;
-      for (size_t k = 0; k < v.size(); ++k) out.push_back(pair_bin[k] == bin ? v[k] : NAN);
-      return out;
-    };
+    auto subset = [&](const std::vector<double>& v, int bin) { return in_bin(v, pair_bin, bin); };
     md << "## " << ds.name << " (" << pairs.size() << " pairs; per bin:";
     for (size_t b = 0; b < bins.size(); ++b) md << " " << bins[b] << " " << m.bin_counts[b];
     md << ")\n\n";
@@ -353,9 +444,10 @@ void Experiment::report() {
       // Reference: the reference row's seeds, averaged per pair.
       const ExperimentRow& ref_row = row(config_.reference);
       std::vector<Scores> ref_seeds;
+      std::map<int64_t, Scores> ref_by_seed;
       for (const auto& run : runs(ref_row)) {
         Scores s = load(method_name(ref_row, run.seed, v));
-        if (s.any) ref_seeds.push_back(s);
+        if (s.any) ref_seeds.push_back(s), ref_by_seed[run.seed] = s;
       }
       if (ref_seeds.empty()) {
         md << "### " << v.name << "\n\nThe reference row `" << config_.reference
@@ -468,55 +560,13 @@ void Experiment::report() {
         }
         auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
                            const std::vector<double>& l, const Interval& ip, const Interval& il, const Stability& st) {
-          int64_t n = 0;
-          for (double x : p) n += std::isfinite(x);
-          csv.rows.push_back({ds.name,
-                              v.name,
-                              e.name,
-                              bin,
-                              std::to_string(n),
-                              fmt(mean_finite(p), 4),
-                              fmt(mean_finite(s), 5),
-                              fmt(mean_finite(l), 5),
-                              fmt(ip.mean, 4),
-                              fmt(ip.lo, 4),
-                              fmt(ip.hi, 4),
-                              fmt(il.mean, 5),
-                              fmt(il.lo, 5),
-                              fmt(il.hi, 5),
-                              fmt(st.holes, 4),
-                              fmt(st.cracks, 4),
-                              fmt(st.normals, 3),
-                              fmt(st.dh.mean, 4),
-                              fmt(st.dh.lo, 4),
-                              fmt(st.dh.hi, 4),
-                              fmt(st.dc.mean, 4),
-                              fmt(st.dc.lo, 4),
-                              fmt(st.dc.hi, 4)});
-          auto num = [](double x) {
-            return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
-          };
-          js.push_back({{"dataset", ds.name},
-                        {"variant", v.name},
-                        {"row", e.name},
-                        {"label", e.label},
-                        {"bin", bin},
-                        {"pairs", n},
-                        {"psnr", num(mean_finite(p))},
-                        {"ssim", num(mean_finite(s))},
-                        {"lpips_" + lp, num(mean_finite(l))},
-                        {"delta_psnr", num(ip.mean)},
-                        {"delta_psnr_ci", {num(ip.lo), num(ip.hi)}},
-                        {"delta_lpips", num(il.mean)},
-                        {"delta_lpips_ci", {num(il.lo), num(il.hi)}},
-                        {"holes_pct", num(st.holes)},
-                        {"cracks_pct", num(st.cracks)},
-                        {"normals_deg", num(st.normals)},
-                        {"delta_holes", num(st.dh.mean)},
-                        {"delta_holes_ci", {num(st.dh.lo), num(st.dh.hi)}},
-                        {"delta_cracks", num(st.dc.mean)},
-                        {"delta_cracks_ci", {num(st.dc.lo), num(st.dc.hi)}},
-                        {"reference", config_.reference}});
+          TableRow t{e.name, e.label, bin};
+          for (double x : p) t.pairs += std::isfinite(x);
+          t.psnr = mean_finite(p), t.ssim = mean_finite(s), t.lpips = mean_finite(l);
+          t.holes = st.holes, t.cracks = st.cracks, t.normals = st.normals;
+          t.dp = ip, t.dl = il, t.dh = st.dh, t.dc = st.dc;
+          t.interval = "pairs";
+          add_table_row(csv, js, ds.name, v.name, config_.reference, lp, t);
         };
         add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl, all);
         for (size_t b = 0; b < bins.size(); ++b) {
@@ -537,6 +587,43 @@ void Experiment::report() {
       }
       md << "\n";
       if (any_stability) md << stab.str() << "\n";
+      // Rows over their training seeds, seed k against the reference's seed k: the intervals resample seeds as
+      // well as pairs, so they hold training noise, which the per-run intervals above leave out.
+      std::ostringstream by_seed;
+      for (const auto& r : config_.rows) {
+        if (r.name == config_.reference || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
+        std::vector<Scores> mine, theirs;
+        std::string seeds;
+        for (const auto& run : runs(r)) {
+          const auto it = ref_by_seed.find(run.seed);
+          Scores s = it == ref_by_seed.end() ? Scores{} : load(method_name(r, run.seed, v));
+          if (!s.any) continue;
+          mine.push_back(s), theirs.push_back(it->second);
+          seeds += cat(seeds.empty() ? "" : "+", run.seed);
+        }
+        if (mine.size() < 2) continue;
+        const std::string name = cat(r.name, "@", v.name, " seeds ", seeds);
+        const TableRow all = over_seeds(mine, theirs, pair_bin, -1, config_.bootstrap);
+        const TableRow far = over_seeds(mine, theirs, pair_bin, last_bin, config_.bootstrap);
+        by_seed << "| " << name << " | " << fmt(all.psnr, 2) << " | " << interval_fmt(all.dp, 2) << " | "
+                << interval_fmt(all.dl, 3) << " | " << (far.dh.n ? interval_fmt(far.dh, 2) : "n/a") << " | "
+                << (far.dc.n ? interval_fmt(far.dc, 2) : "n/a") << " |\n";
+        for (int b = -1; b <= last_bin; ++b) {
+          TableRow t = b < 0 ? all : b == last_bin ? far : over_seeds(mine, theirs, pair_bin, b, config_.bootstrap);
+          t.row = name, t.label = r.label.empty() ? r.name : r.label;
+          t.bin = b < 0 ? "all" : bins[static_cast<size_t>(b)];
+          add_table_row(csv, js, ds.name, v.name, config_.reference, lp, t);
+        }
+      }
+      if (!by_seed.str().empty()) {
+        md << "Rows over their training seeds: seed k of a row against seed k of `" << config_.reference
+           << "`, averaged over the seeds both have; the interval resamples the seeds as well as the pairs, so it "
+              "holds training noise (with two seeds it is crude). Trust these over the per-run rows above:\n\n"
+              "| row | PSNR | ΔPSNR [95% CI] | ΔLPIPS [95% CI] | "
+           << bins[static_cast<size_t>(last_bin)] << " Δholes % [CI] | " << bins[static_cast<size_t>(last_bin)]
+           << " Δcracks % [CI] |\n|---|---|---|---|---|---|\n"
+           << by_seed.str() << "\n";
+      }
       if (any_stability && !unmeasured.empty()) {
         md << "Without holes and cracks (the method renders no alpha, like identity, or was scored before they were "
               "measured: delete its results_*.jsonl and stamp to score it again):";

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <map>
 
 #include "core/config.h"
 #include "eval/eval_config.h"
@@ -43,6 +44,39 @@ TEST_CASE("stats: paired bootstrap matches hand-computed cases", "[experiment][s
   CHECK_THROWS(paired_bootstrap({1, 2}, {1}, 100));
 }
 
+TEST_CASE("stats: seed-aware paired bootstrap resamples seeds as well as pairs", "[experiment][stats]") {
+  // Every pair of every seed differs by 1: the interval collapses onto it.
+  const Interval c = seed_paired_bootstrap({{3, 4}, {5, 6}}, {{2, 3}, {4, 5}}, 500);
+  CHECK(c.mean == Approx(1.0));
+  CHECK(c.lo == Approx(1.0));
+  CHECK(c.hi == Approx(1.0));
+  CHECK(c.n == 2);
+  // Seed 0 differs by 0 on every pair, seed 1 by 2: the pairs add no spread, and a resample of the two seeds
+  // averages 0, 1 or 2 with probabilities 1/4, 1/2, 1/4. So the 95% interval is [0, 2] (a pair-only interval of
+  // the seed-averaged differences would be [1, 1]) and the 40% interval is [1, 1].
+  const std::vector<std::vector<double>> a = {{0, 0, 0}, {2, 2, 2}}, zero = {{0, 0, 0}, {0, 0, 0}};
+  const Interval s = seed_paired_bootstrap(a, zero, 20000, 0.95, 5);
+  CHECK(s.mean == Approx(1.0));
+  CHECK(s.lo == Approx(0.0));
+  CHECK(s.hi == Approx(2.0));
+  CHECK_FALSE(s.excludes_zero());
+  const Interval narrow = seed_paired_bootstrap(a, zero, 40000, 0.4, 3);
+  CHECK(narrow.lo == Approx(1.0));
+  CHECK(narrow.hi == Approx(1.0));
+  // One seed is a plain paired bootstrap: d = {0, 0, 3} gives [0, 3] (see the case above).
+  const Interval one = seed_paired_bootstrap({{0, 0, 3}}, {{0, 0, 0}}, 20000, 0.95, 7);
+  CHECK(one.lo == Approx(0.0));
+  CHECK(one.hi == Approx(3.0));
+  // A pair with a non-finite value in any seed of either method is dropped from every seed.
+  const Interval f = seed_paired_bootstrap({{1, 5, 1}, {1, 1, 1}}, {{0, 0, 0}, {0, NAN, 0}}, 100);
+  CHECK(f.n == 2);
+  CHECK(f.mean == Approx(1.0));
+  // Seeds must match in number, and each seed must hold every pair.
+  CHECK_THROWS_WITH(seed_paired_bootstrap({{1}, {2}}, {{1}}, 100), Catch::Contains("2 and 1 seeds"));
+  CHECK_THROWS_WITH(seed_paired_bootstrap({{1, 2}, {2}}, {{1, 2}, {2, 3}}, 100), Catch::Contains("seed 1 has 1"));
+  CHECK_THROWS(seed_paired_bootstrap({}, {}, 100));
+}
+
 TEST_CASE("experiment: two rows trained, scored and reported end to end, then resumed", "[experiment]") {
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("experiment_data", 16);
@@ -80,6 +114,7 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   base.name = "base_gaussians";
   base.from = "full";
   base.checkpoint = "init";
+  base.seeds = {0, 1};  // the reference's two runs at initialisation: a row over two seeds that costs no training
   c.rows = {full, pixel, base};
   // A variant whose prior weights do not exist yet is skipped, not fatal.
   c.variants = {{"depth", {}, {}},
@@ -95,7 +130,7 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
     CHECK(fs::exists(fs::path(c.out) / f));
   const std::string md = test::read_bytes(c.out + "/report.md");
   CHECK_THAT(md, Catch::Contains("| pixel_supports@depth (w/o geometry-guided sampling) |"));
-  CHECK_THAT(md, Catch::Contains("| base_gaussians@depth"));
+  CHECK_THAT(md, Catch::Contains("| base_gaussians-s1@depth"));
   CHECK_THAT(md, Catch::Contains("full seed spread"));
   CHECK_THAT(md, !Catch::Contains("@rgb_later"));
   CHECK_THAT(md, Catch::Contains("| full_s1 | 3 |"));
@@ -111,6 +146,27 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
     if (r["row"] == "pixel_supports@depth" && r["bin"] == "all")
       has_holes = r["holes_pct"].is_number() && r["delta_holes"].is_number();
   CHECK(has_holes);
+  // A row with two seeds shared with the reference also gets a seed-aware row. Every pair is finite here, so
+  // its mean difference is the mean of its runs' differences to the reference's seed average.
+  CHECK_THAT(md, Catch::Contains("Rows over their training seeds"));
+  CHECK_THAT(md, Catch::Contains("| base_gaussians@depth seeds 0+1 |"));
+  CHECK_THAT(md, !Catch::Contains("pixel_supports@depth seeds"));  // one seed: no such row
+  std::map<std::string, nlohmann::json> all_bins;
+  for (const auto& r : js)
+    if (r["bin"] == "all" && r["variant"] == "depth") all_bins[r["row"].get<std::string>()] = r;
+  REQUIRE(all_bins.count("base_gaussians@depth seeds 0+1"));
+  const auto& over = all_bins["base_gaussians@depth seeds 0+1"];
+  CHECK(over["interval"] == "seeds and pairs");
+  CHECK(all_bins["base_gaussians-s0@depth"]["interval"] == "pairs");
+  const double runs_mean = (all_bins["base_gaussians-s0@depth"]["delta_psnr"].get<double>() +
+                            all_bins["base_gaussians-s1@depth"]["delta_psnr"].get<double>()) /
+                           2;
+  CHECK(over["delta_psnr"].get<double>() == Approx(runs_mean).margin(1e-9));
+  CHECK(over["delta_psnr_ci"][0].get<double>() <= over["delta_psnr"].get<double>());
+  CHECK(over["delta_psnr_ci"][1].get<double>() >= over["delta_psnr"].get<double>());
+  CHECK(over["psnr"].get<double>() == Approx((all_bins["base_gaussians-s0@depth"]["psnr"].get<double>() +
+                                              all_bins["base_gaussians-s1@depth"]["psnr"].get<double>()) /
+                                             2));
   // Resume: nothing is retrained (the run's log does not grow).
   const std::string log = test::read_bytes(c.out + "/runs/full_s0/train_log.jsonl");
   Experiment again(c);
