@@ -99,30 +99,16 @@ struct TableRow {
 
 void add_table_row(CsvTable& csv, nlohmann::ordered_json& js, const std::string& dataset, const std::string& variant,
                    const std::string& reference, const std::string& lp, const TableRow& t) {
-  csv.rows.push_back({dataset,
-                      variant,
-                      t.row,
-                      t.bin,
-                      std::to_string(t.pairs),
-                      fmt(t.psnr, 4),
-                      fmt(t.ssim, 5),
-                      fmt(t.lpips, 5),
-                      fmt(t.dp.mean, 4),
-                      fmt(t.dp.lo, 4),
-                      fmt(t.dp.hi, 4),
-                      fmt(t.dl.mean, 5),
-                      fmt(t.dl.lo, 5),
-                      fmt(t.dl.hi, 5),
-                      fmt(t.holes, 4),
-                      fmt(t.cracks, 4),
-                      fmt(t.normals, 3),
-                      fmt(t.dh.mean, 4),
-                      fmt(t.dh.lo, 4),
-                      fmt(t.dh.hi, 4),
-                      fmt(t.dc.mean, 4),
-                      fmt(t.dc.lo, 4),
-                      fmt(t.dc.hi, 4),
-                      t.interval});
+  std::vector<std::string> cells = {dataset,        variant,        t.row,          t.bin, std::to_string(t.pairs),
+                                    fmt(t.psnr, 4), fmt(t.ssim, 5), fmt(t.lpips, 5)};
+  auto add_interval = [&](const Interval& i, int digits) {
+    for (double x : {i.mean, i.lo, i.hi}) cells.push_back(fmt(x, digits));
+  };
+  add_interval(t.dp, 4), add_interval(t.dl, 5);
+  cells.insert(cells.end(), {fmt(t.holes, 4), fmt(t.cracks, 4), fmt(t.normals, 3)});
+  add_interval(t.dh, 4), add_interval(t.dc, 4);
+  cells.push_back(t.interval);
+  csv.rows.push_back(std::move(cells));
   auto num = [](double x) { return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
   js.push_back({{"dataset", dataset},
                 {"variant", variant},
@@ -560,7 +546,8 @@ void Experiment::report() {
         }
         auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
                            const std::vector<double>& l, const Interval& ip, const Interval& il, const Stability& st) {
-          TableRow t{e.name, e.label, bin};
+          TableRow t;
+          t.row = e.name, t.label = e.label, t.bin = bin;
           for (double x : p) t.pairs += std::isfinite(x);
           t.psnr = mean_finite(p), t.ssim = mean_finite(s), t.lpips = mean_finite(l);
           t.holes = st.holes, t.cracks = st.cracks, t.normals = st.normals;
@@ -618,7 +605,9 @@ void Experiment::report() {
       if (!by_seed.str().empty()) {
         md << "Rows over their training seeds: seed k of a row against seed k of `" << config_.reference
            << "`, averaged over the seeds both have; the interval resamples the seeds as well as the pairs, so it "
-              "holds training noise (with two seeds it is crude). Trust these over the per-run rows above:\n\n"
+              "holds training noise, which the per-run rows above leave out. With two seeds it is crude (a bootstrap "
+              "of "
+              "two seeds understates their spread):\n\n"
               "| row | PSNR | ΔPSNR [95% CI] | ΔLPIPS [95% CI] | "
            << bins[static_cast<size_t>(last_bin)] << " Δholes % [CI] | " << bins[static_cast<size_t>(last_bin)]
            << " Δcracks % [CI] |\n|---|---|---|---|---|---|\n"

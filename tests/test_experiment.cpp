@@ -63,7 +63,12 @@ TEST_CASE("stats: seed-aware paired bootstrap resamples seeds as well as pairs",
   const Interval narrow = seed_paired_bootstrap(a, zero, 40000, 0.4, 3);
   CHECK(narrow.lo == Approx(1.0));
   CHECK(narrow.hi == Approx(1.0));
-  // One seed is a plain paired bootstrap: d = {0, 0, 3} gives [0, 3] (see the case above).
+  // Seeds are drawn together, seed k of a against seed k of b: here every matched difference is 1, so the interval
+  // is [1, 1]; drawing the two methods' seeds apart would spread it over [-3, 5].
+  const Interval m = seed_paired_bootstrap({{1, 1, 1}, {5, 5, 5}}, {{0, 0, 0}, {4, 4, 4}}, 2000, 0.95, 9);
+  CHECK(m.lo == Approx(1.0));
+  CHECK(m.hi == Approx(1.0));
+  // One seed is statistically a plain paired bootstrap: d = {0, 0, 3} gives [0, 3] (see the case above).
   const Interval one = seed_paired_bootstrap({{0, 0, 3}}, {{0, 0, 0}}, 20000, 0.95, 7);
   CHECK(one.lo == Approx(0.0));
   CHECK(one.hi == Approx(3.0));
@@ -157,6 +162,10 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   REQUIRE(all_bins.count("base_gaussians@depth seeds 0+1"));
   const auto& over = all_bins["base_gaussians@depth seeds 0+1"];
   CHECK(over["interval"] == "seeds and pairs");
+  const std::string csv = test::read_bytes(c.out + "/report.csv");
+  CHECK_THAT(csv, Catch::Contains(",delta_cracks_hi,interval\n"));
+  CHECK_THAT(csv, Catch::Contains(",base_gaussians@depth seeds 0+1,all,"));
+  CHECK_THAT(csv, Catch::Contains(",seeds and pairs\n") && Catch::Contains(",pairs\n"));
   CHECK(all_bins["base_gaussians-s0@depth"]["interval"] == "pairs");
   const double runs_mean = (all_bins["base_gaussians-s0@depth"]["delta_psnr"].get<double>() +
                             all_bins["base_gaussians-s1@depth"]["delta_psnr"].get<double>()) /
