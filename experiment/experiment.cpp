@@ -605,9 +605,8 @@ void Experiment::report() {
       if (!by_seed.str().empty()) {
         md << "Rows over their training seeds: seed k of a row against seed k of `" << config_.reference
            << "`, averaged over the seeds both have; the interval resamples the seeds as well as the pairs, so it "
-              "holds training noise, which the per-run rows above leave out. With two seeds it is crude (a bootstrap "
-              "of "
-              "two seeds understates their spread):\n\n"
+              "holds training noise, which the per-run rows above leave out. With two seeds it is crude (a "
+              "bootstrap of two seeds understates their spread):\n\n"
               "| row | PSNR | ΔPSNR [95% CI] | ΔLPIPS [95% CI] | "
            << bins[static_cast<size_t>(last_bin)] << " Δholes % [CI] | " << bins[static_cast<size_t>(last_bin)]
            << " Δcracks % [CI] |\n|---|---|---|---|---|---|\n"
