@@ -576,6 +576,12 @@ void Experiment::report() {
       if (any_stability) md << stab.str() << "\n";
       // Rows over their training seeds, seed k against the reference's seed k: the intervals resample seeds as
       // well as pairs, so they hold training noise, which the per-run intervals above leave out.
+      // The runs' scores are those of `entries` (loaded above), not read again.
+      auto scored = [&](const std::string& name) -> const Scores* {
+        for (const Entry& e : entries)
+          if (!e.is_baseline && e.name == name) return &e.s;
+        return nullptr;
+      };
       std::ostringstream by_seed;
       for (const auto& r : config_.rows) {
         if (r.name == config_.reference || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
@@ -583,9 +589,9 @@ void Experiment::report() {
         std::string seeds;
         for (const auto& run : runs(r)) {
           const auto it = ref_by_seed.find(run.seed);
-          Scores s = it == ref_by_seed.end() ? Scores{} : load(method_name(r, run.seed, v));
-          if (!s.any) continue;
-          mine.push_back(s), theirs.push_back(it->second);
+          const Scores* s = it == ref_by_seed.end() ? nullptr : scored(method_name(r, run.seed, v));
+          if (s == nullptr) continue;
+          mine.push_back(*s), theirs.push_back(it->second);
           seeds += cat(seeds.empty() ? "" : "+", run.seed);
         }
         if (mine.size() < 2) continue;
