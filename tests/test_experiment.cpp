@@ -3,7 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <iomanip>
 #include <map>
+#include <sstream>
 
 #include "core/config.h"
 #include "eval/eval_config.h"
@@ -176,6 +178,15 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   CHECK(over["psnr"].get<double>() == Approx((all_bins["base_gaussians-s0@depth"]["psnr"].get<double>() +
                                               all_bins["base_gaussians-s1@depth"]["psnr"].get<double>()) /
                                              2));
+  // Beside it, each seed against its own reference seed: ΔPSNR over all pairs, then holes and cracks at the last bin.
+  CHECK_THAT(md, Catch::Contains("| per seed: ΔPSNR / "));
+  for (int seed : {0, 1}) {
+    const double d = all_bins[cat("base_gaussians-s", seed, "@depth")]["psnr"].get<double>() -
+                     all_bins[cat("full-s", seed, "@depth")]["psnr"].get<double>();
+    std::ostringstream want;
+    want << (seed ? "; s1 " : " | s0 ") << (d >= 0 ? "+" : "") << std::fixed << std::setprecision(2) << d << " / ";
+    CHECK_THAT(md, Catch::Contains(want.str()));
+  }
   // Resume: nothing is retrained (the run's log does not grow).
   const std::string log = test::read_bytes(c.out + "/runs/full_s0/train_log.jsonl");
   Experiment again(c);
