@@ -5,12 +5,13 @@
 # Usage: python3 seeds.py <eval out folder> <a> <b> <seeds, e.g. 2,3,4,5> [bins, e.g. all,3]
 # <a>/<b> name a results file with {s} for the seed's suffix: "full_behind{s}_split" reads results_full_behind_split
 # for seed 0 ("" suffix) and results_full_behind_s2_split for seed 2.
+# {k} is the seed number itself, for names such as "full-s{k}" (results_full-s0 ... results_full-s3).
 import json, os, random, sys
 root, a, b, seeds = sys.argv[1], sys.argv[2], sys.argv[3], [int(x) for x in sys.argv[4].split(',')]
 bins = sys.argv[5].split(',') if len(sys.argv) > 5 else ['all', '3']
 FIELDS = [('psnr', 1, 2), ('hole_rate', 100, 2), ('crack_rate', 100, 2), ('normal_deg', 1, 2), ('lpips_squeeze', 1, 3)]
 def path(s, spec, seed):
-    return f"{root}/{s}/results_{spec.format(s='' if seed == 0 else f'_s{seed}')}.jsonl"
+    return f"{root}/{s}/results_{spec.format(s='' if seed == 0 else f'_s{seed}', k=seed)}.jsonl"
 def load(s, spec, seed):
     return {r['index']: r for r in map(json.loads, open(path(s, spec, seed)))}
 sets = sorted(d for d in os.listdir(root) if all(os.path.exists(path(d, m, k)) for m in (a, b) for k in seeds))
