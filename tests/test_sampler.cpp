@@ -2,6 +2,8 @@
 // fills the holes), the count equals the budget, seeds are reproducible, and adaptive budgets scale with the scene.
 #include <catch2/catch.hpp>
 
+#include <tuple>
+
 #include <torch/torch.h>
 
 #include "core/config.h"
@@ -322,6 +324,64 @@ TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette,
   CHECK_THROWS_WITH(
       config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_shift", 0.6}}, "test"),
       Catch::Contains("edge_shift"));
+}
+
+TEST_CASE("sampler: edge_shift_from = coverage places each silhouette by its pixel's antialiased colour", "[sampler]") {
+  // Columns 0..31 at 2 m (dark red), 32..64 at 6 m (light grey). Column 31 is the near side; in row i its colour is
+  // the linear-light mix of the two with the near surface covering alpha(i) of the pixel, gamma-encoded as the data
+  // is (1/2.2). Rows 0..15 cover 0.75, rows 16..31 a quarter, rows 32..48 the whole pixel.
+  auto depth = torch::full({H, W}, 6.0f);
+  depth.narrow(1, 0, 32).fill_(2.0f);
+  const double near_lin[3] = {0.6, 0.05, 0.02}, far_lin[3] = {0.7, 0.7, 0.7};
+  auto alpha = [](int64_t i) { return i < 16 ? 0.75 : i < 32 ? 0.25 : 1.0; };
+  auto img = torch::empty({3, H, W});
+  auto a = img.accessor<float, 3>();
+  for (int c = 0; c < 3; ++c)
+    for (int64_t i = 0; i < H; ++i)
+      for (int64_t j = 0; j < W; ++j) {
+        const double mix = j < 31 ? 1.0 : j == 31 ? alpha(i) : 0.0;
+        a[c][i][j] = static_cast<float>(std::pow(mix * near_lin[c] + (1 - mix) * far_lin[c], 1 / 2.2));
+      }
+  SamplerOptions o = fixed(4000);
+  o.edge_supports = true;
+  const Supports centred = sample_supports(depth, ones(), K(), img, o, 2);
+  o.edge_shift = 0.5;
+  o.edge_shift_from = "coverage";
+  const Supports placed = sample_supports(depth, ones(), K(), img, o, 2);
+  REQUIRE(placed.count() == centred.count());
+  // Inside the image (rows 1..H-2, where the far side lies straight right), the near side moves left by
+  // edge_shift + 0.5 - alpha: 0.25, 0.75 and 0 pixels; nothing else moves and depth, colour and footprint stay.
+  const auto u = centred.uv.select(1, 0), v = centred.uv.select(1, 1);
+  const auto col31 = (u - 31.5).abs().lt(1e-4) & on_pixel_centre(centred.uv);
+  const auto du = placed.uv - centred.uv;
+  for (auto [first, last, move] :
+       {std::tuple<int64_t, int64_t, double>{1, 15, 0.25}, {16, 31, 0.75}, {32, H - 2, 0.0}}) {
+    const auto rows = col31 & v.gt(first) & v.lt(last + 1);
+    REQUIRE(rows.sum().item<int64_t>() == last - first + 1);
+    CHECK((du.select(1, 0).masked_select(rows) + move).abs().max().item<double>() < 1e-4);
+    CHECK(du.select(1, 1).masked_select(rows).abs().max().item<double>() < 1e-6);
+  }
+  CHECK(du.abs().gt(1e-6).any(1).logical_and(col31.logical_not()).sum().item<int64_t>() == 0);
+  CHECK(torch::equal(placed.depth, centred.depth));
+  CHECK(torch::equal(placed.color, centred.color));
+  CHECK(torch::equal(placed.area, centred.area));
+  // Where the two surfaces share a colour, or the near surface is a line two pixels wide (its inward pixel is on a
+  // silhouette too), the colour does not tell and the move is edge_shift.
+  const Supports plain = sample_supports(depth, ones(), K(), torch::full({3, H, W}, 0.5f), o, 2);
+  const auto plain_rows = col31 & v.gt(1) & v.lt(H - 1);
+  CHECK(((plain.uv - centred.uv).select(1, 0).masked_select(plain_rows) + 0.5).abs().max().item<double>() < 1e-4);
+  auto line = torch::full({H, W}, 6.0f);
+  line.narrow(1, 30, 2).fill_(2.0f);
+  o.edge_shift_from = "fixed";
+  const Supports line_fixed = sample_supports(line, ones(), K(), img, o, 2);
+  o.edge_shift_from = "coverage";
+  const Supports line_placed = sample_supports(line, ones(), K(), img, o, 2);
+  CHECK(torch::equal(line_placed.uv, line_fixed.uv));
+  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_shift_from", "coverage"}}, "test"),
+                    Catch::Contains("edge_supports = true"));
+  CHECK_THROWS_WITH(
+      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_shift_from", "colour"}}, "test"),
+      Catch::Contains("edge_shift_from"));
 }
 
 TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette", "[sampler]") {

@@ -106,6 +106,13 @@ void SamplerOptions::visit(ConfigVisitor& v) {
       "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true (it acts on the supports "
       "at depth edges)";
   v.require("edge_shift", edge_shift == 0.0 || at_edges, at_edges_needs);
+  v.field("edge_shift_from", edge_shift_from,
+          "how far each near-side edge support moves: fixed (edge_shift), or coverage (edge_shift + 0.5 - the share "
+          "of its pixel its surface covers, within [0, 1]: the share is read from the antialiased colour as a mix of "
+          "the pixel one step inwards and the farther neighbours, in linear light; edge_shift where those colours "
+          "differ too little or the pixel lies on a line one or two pixels wide)",
+          {"fixed", "coverage"});
+  v.require("edge_shift_from", edge_shift_from == "fixed" || at_edges, at_edges_needs);
   v.field("edge_behind", edge_behind,
           "area mode with edge_supports, or pixel mode: continue the farther surface under each near-side "
           "silhouette pixel with up to this many supports, one pixel apart inwards while they stay hidden, on the "
@@ -694,16 +701,51 @@ void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64
   }
 }
 
+// The share of near-side edge pixel p that its own surface covers, read from its colour as a mix (in linear light:
+// the images are antialiased and then gamma-encoded with 1/2.2) of the same-surface pixel one step inwards and the
+// farther neighbours `far`: the projection of p's colour onto the line between the two, clamped to [0, 1]. -1 where
+// the colours do not tell: no inward pixel on p's surface, one that is itself on a silhouette (a line one or two
+// pixels wide), or colours that differ by less than kCoverageContrast.
+double near_coverage(const Grid& g, int64_t p, const std::vector<int64_t>& far, const double* away,
+                     std::vector<int64_t>& scratch) {
+  constexpr double kCoverageContrast = 0.05;  // linear RGB distance; JPEG noise at edges stays well below it
+  const int64_t HW = g.H * g.W;
+  const int64_t y = p / g.W - std::lround(away[1]), x = p % g.W - std::lround(away[0]), q = y * g.W + x;
+  if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f || depths_apart(g.depth[p], g.depth[q])) return -1;
+  farther_neighbours(g, q, scratch);
+  if (!scratch.empty()) return -1;
+  auto linear = [&](int64_t pixel, int c) { return std::pow(std::max(0.0f, g.image[c * HW + pixel]), 2.2); };
+  double num = 0, den = 0;
+  for (int c = 0; c < 3; ++c) {
+    double back = 0;
+    for (int64_t f : far) back += linear(f, c);
+    back /= static_cast<double>(far.size());
+    const double d = linear(q, c) - back;
+    num += (linear(p, c) - back) * d;
+    den += d * d;
+  }
+  if (den < kCoverageContrast * kCoverageContrast) return -1;
+  return std::clamp(num / den, 0.0, 1.0);
+}
+
 // Edge supports on the near side of a depth edge move `shift` pixels away from the farther neighbours, into their
 // own surface, keeping their depth and footprint: the silhouette's outermost Gaussians then reach that much less far
-// onto the background. Depth and colour stay the pixel centre's, read before the move.
-void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift) {
-  std::vector<int64_t> far;
+// onto the background. With from_coverage, the move is shift + 0.5 - (the pixel's near_coverage), within [0, 1]: the
+// silhouette sits (coverage - 0.5) pixels beyond the centre, so `shift` is the move at half coverage; pixels whose
+// colours do not tell keep `shift`. Depth and colour stay the pixel centre's, read before the move.
+void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift,
+                         bool from_coverage) {
+  std::vector<int64_t> far, inner_far;
   for (size_t k = 0; k < pixels.size(); ++k) {
     double away[2];
     if (!near_side(g, pixels[k], far, away) || (away[0] == 0.0 && away[1] == 0.0)) continue;
-    o.uv[2 * k] -= static_cast<float>(shift * away[0]);
-    o.uv[2 * k + 1] -= static_cast<float>(shift * away[1]);
+    double s = shift;
+    if (from_coverage) {
+      const double alpha = near_coverage(g, pixels[k], far, away, inner_far);
+      if (alpha >= 0) s = std::clamp(shift + 0.5 - alpha, 0.0, 1.0);
+    }
+    o.uv[2 * k] -= static_cast<float>(s * away[0]);
+    o.uv[2 * k + 1] -= static_cast<float>(s * away[1]);
   }
 }
 
@@ -942,6 +984,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   torch::Tensor dk, vk, ik;
   Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
   g.nearest_color = options.color == "nearest";
+  const bool coverage_shift = options.edge_shift_from == "coverage";
   if (options.mode == "pixel") {
     std::vector<int64_t> idx;
     for (int64_t p = 0; p < g.H * g.W; ++p)
@@ -953,7 +996,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);
     write_pixel_supports(g, o, idx, nv);
-    if (options.edge_shift > 0) shift_edge_supports(g, o, idx, options.edge_shift);
+    if (options.edge_shift > 0 || coverage_shift) shift_edge_supports(g, o, idx, options.edge_shift, coverage_shift);
     write_behind(g, o, behind, nb, nv);
     s.behind = nb;
     if (options.normals) {
@@ -981,7 +1024,8 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       write_pixel_supports(g, o, chosen, ne);
       if (options.edge_scale != 1.0)
         scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
-      if (options.edge_shift > 0) shift_edge_supports(g, o, chosen, options.edge_shift);
+      if (options.edge_shift > 0 || coverage_shift)
+        shift_edge_supports(g, o, chosen, options.edge_shift, coverage_shift);
       if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
         behind = behind_places(g, chosen, options.edge_behind, options.edge_behind_start);
         const int64_t places = static_cast<int64_t>(behind.depth.size());

@@ -51,6 +51,9 @@ struct SamplerOptions {
   // With edge_supports (or in pixel mode): supports on the near side of a depth edge sit this many pixels from their
   // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre.
   double edge_shift = 0.0;
+  // fixed | coverage: every near-side support moves edge_shift, or edge_shift + 0.5 - its pixel's coverage by its
+  // own surface (read from the antialiased colour), so the silhouette lands where the image puts it within the pixel.
+  std::string edge_shift_from = "fixed";
   // With edge_supports (or in pixel mode, on top of one per pixel): supports that continue the farther surface under
   // each near-side silhouette pixel, up to this many pixels deep while they stay hidden in the source view (on the
   // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off.
