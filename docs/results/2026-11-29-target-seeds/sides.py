@@ -3,14 +3,20 @@
 
 The farther part is the default measure minus the nearer one (`scoring.crack_side = nearer`) on the same pairs. The
 interval draws seeds with replacement (seed k of a method against seed k of the reference), then pairs, 2000
-resamples, 95% (as docs/results/2026-11-28-seeds/seeds.py).
+resamples, 95% (seed_interval of docs/results/2026-11-28-seeds/seeds.py).
 
 usage: sides.py <any dir> <nearer dir> <bin> <seeds, e.g. 0,1,2,3> <label=any_name,nearer_name> ...
   names are results files without "results_" and ".jsonl", with {s} for the seed; the first method is the reference.
 """
+import importlib.util
 import json
-import random
+import os
 import sys
+
+_spec = importlib.util.spec_from_file_location(
+    "seeds", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "2026-11-28-seeds", "seeds.py"))
+seeds_py = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(seeds_py)
 
 any_dir, nearer_dir, bin_index = sys.argv[1], sys.argv[2], int(sys.argv[3])
 seeds = [int(x) for x in sys.argv[4].split(",")]
@@ -39,12 +45,7 @@ for label, _ in methods[1:]:
     for k, name in enumerate(("cracks", "nearer", "farther")):
         d = {s: [P[(label, s)][i][k] - P[(ref, s)][i][k] for i in keys] for s in seeds}
         per = [sum(d[s]) / len(keys) for s in seeds]
-        rng, bs = random.Random(0), []
-        for _ in range(2000):
-            ss = [seeds[rng.randrange(len(seeds))] for _ in seeds]
-            ps = [rng.randrange(len(keys)) for _ in keys]
-            bs.append(sum(d[s][p] for s in ss for p in ps) / (len(ss) * len(ps)))
-        bs.sort()
-        txt.append(f"{name} {sum(per) / len(seeds):+.3f} [{bs[50]:+.3f}, {bs[1949]:+.3f}] "
+        lo, hi = seeds_py.seed_interval(d, seeds, len(keys))
+        txt.append(f"{name} {sum(per) / len(seeds):+.3f} [{lo:+.3f}, {hi:+.3f}] "
                    f"(seeds {' '.join(f'{x:+.3f}' for x in per)})")
     print(f"{label} - {ref}:", " | ".join(txt))
