@@ -6,6 +6,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/paths.h"
 
 namespace isplat {
 
@@ -116,8 +117,13 @@ std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input
     }
   }
   for (size_t i = 0; i < out.size(); ++i)
-    for (size_t j = 0; j < i; ++j)
+    for (size_t j = 0; j < i; ++j) {
       ISPLAT_CHECK(out[i].name != out[j].name, "eval: two methods are named '", out[i].name, "'");
+      // Results files are named by safe_name, so such a pair would share (and mix) one file.
+      ISPLAT_CHECK(safe_name(out[i].name) != safe_name(out[j].name), "eval: methods '", out[j].name, "' and '",
+                   out[i].name, "' would share the results file results_", safe_name(out[i].name),
+                   ".jsonl; rename one (letters, digits, - and _ are kept, anything else becomes _)");
+    }
   return out;
 }
 

@@ -27,7 +27,8 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     } else if (name.rfind("eval", 0) == 0) {
       const auto c = load_config<EvalConfig>(path);
       CHECK_FALSE(c.datasets.empty());
-    } else if (name.rfind("data", 0) == 0) {  // data.json, data_hall.json: generator configs
+      CHECK_NOTHROW(expand_sweeps(c.methods));  // budgets and sweeps expand, and no two methods share a results file
+    } else if (name.rfind("data", 0) == 0) {    // data.json, data_hall.json: generator configs
       const auto c = load_config<GenerateConfig>(path);
       CHECK(c.generate.train_scenes + static_cast<int64_t>(c.generate.eval_datasets.size()) > 0);  // writes something
     } else if (experiments && name.rfind("ablation", 0) == 0) {

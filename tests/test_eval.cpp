@@ -214,6 +214,10 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   }
   m.budgets = {"px:1", "px:1"};
   CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("two methods are named 'full@px1'"));
+  // Different names that map to one results file (@ becomes _) are refused too, naming both.
+  m.budgets = {"px:1"};
+  CHECK_THROWS_WITH(expand_sweeps({m, named_method("full_px1", "lift")}),
+                    Catch::Contains("methods 'full@px1' and 'full_px1' would share the results file results_full_px1"));
   CHECK(method_family("full@px0.25") == "full px");
   CHECK(method_family("full+prune@detail2") == "full+prune detail");
   CHECK(method_family("lift") == "lift");
