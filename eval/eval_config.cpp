@@ -127,6 +127,15 @@ std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input
   return out;
 }
 
+void check_dataset_names(const std::vector<EvalDatasetOptions>& datasets) {
+  ISPLAT_CHECK(!datasets.empty(), "eval: no datasets (config key datasets)");
+  for (size_t i = 0; i < datasets.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      ISPLAT_CHECK(safe_name(datasets[i].name) != safe_name(datasets[j].name), "eval: datasets '", datasets[j].name,
+                   "' and '", datasets[i].name, "' would share the output folder ", safe_name(datasets[i].name),
+                   " (manifest and results); rename one");
+}
+
 void ScoringOptions::visit(ConfigVisitor& v) {
   v.field("out", out, "output folder: manifests, per-pair results, reports, examples");
   v.field("lpips", lpips, "LPIPS variants to report (squeeze | alex | vgg); unavailable ones are reported as n/a");

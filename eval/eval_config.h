@@ -38,8 +38,12 @@ inline MethodOptions named_method(const std::string& name, const std::string& ty
 // A model method with budgets becomes one method per budget, named <name>@<budget> (e.g. full@px0.5), with
 // the sampler overrides appended. A method with a sweep becomes one method per value, named
 // <name>~<last key part><value> (e.g. full~depth_noise0.02). Other methods pass through. Throws Error
-// naming a malformed budget, an unknown sweep key or a value out of range.
+// naming a malformed budget, an unknown sweep key, a value out of range, or two methods whose names would share
+// one results file.
 std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& methods);
+
+// Throws Error naming two datasets whose names would share one output folder (safe_name), or none at all.
+void check_dataset_names(const std::vector<EvalDatasetOptions>& datasets);
 
 struct ScoringOptions {
   std::string out = "out/eval";

@@ -22,7 +22,7 @@ namespace isplat {
 namespace fs = std::filesystem;
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
-  ISPLAT_CHECK(!config_.datasets.empty(), "eval: no datasets (config key datasets)");
+  check_dataset_names(config_.datasets);
   config_.methods = expand_sweeps(config_.methods);
   for (const auto& net : config_.scoring.lpips) {
     std::string why;

@@ -27,6 +27,7 @@ TEST_CASE("configs: every file in configs/ is valid for its executable", "[confi
     } else if (name.rfind("eval", 0) == 0) {
       const auto c = load_config<EvalConfig>(path);
       CHECK_FALSE(c.datasets.empty());
+      CHECK_NOTHROW(check_dataset_names(c.datasets));
       CHECK_NOTHROW(expand_sweeps(c.methods));  // budgets and sweeps expand, and no two methods share a results file
     } else if (name.rfind("data", 0) == 0) {    // data.json, data_hall.json: generator configs
       const auto c = load_config<GenerateConfig>(path);

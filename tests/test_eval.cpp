@@ -215,6 +215,12 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   m.budgets = {"px:1", "px:1"};
   CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("two methods are named 'full@px1'"));
   // Different names that map to one results file (@ becomes _) are refused too, naming both.
+  EvalDatasetOptions rooms, rooms_again;
+  rooms.name = "rooms held-out", rooms_again.name = "rooms_held-out";
+  CHECK_NOTHROW(check_dataset_names({rooms}));
+  CHECK_THROWS_WITH(check_dataset_names({rooms, rooms_again}),
+                    Catch::Contains("datasets 'rooms held-out' and 'rooms_held-out' would share the output folder"));
+  CHECK_THROWS_WITH(check_dataset_names({}), Catch::Contains("no datasets"));
   m.budgets = {"px:1"};
   CHECK_THROWS_WITH(expand_sweeps({m, named_method("full_px1", "lift")}),
                     Catch::Contains("methods 'full@px1' and 'full_px1' would share the results file results_full_px1"));
