@@ -708,7 +708,7 @@ void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64
 // pixels wide), or colours that differ by less than kCoverageContrast.
 double near_coverage(const Grid& g, int64_t p, const std::vector<int64_t>& far, const double* away,
                      std::vector<int64_t>& scratch) {
-  constexpr double kCoverageContrast = 0.05;  // linear RGB distance; JPEG noise at edges stays well below it
+  constexpr double kCoverageContrast = 0.05;  // linear RGB distance; below it the colours barely differ
   const int64_t HW = g.H * g.W;
   const int64_t y = p / g.W - std::lround(away[1]), x = p % g.W - std::lround(away[0]), q = y * g.W + x;
   if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f || depths_apart(g.depth[p], g.depth[q])) return -1;
