@@ -735,6 +735,7 @@ double near_coverage(const Grid& g, int64_t p, const std::vector<int64_t>& far, 
 // colours do not tell keep `shift`. Depth and colour stay the pixel centre's, read before the move.
 void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift,
                          bool from_coverage) {
+  if (shift == 0.0 && !from_coverage) return;  // nothing moves
   std::vector<int64_t> far, inner_far;
   for (size_t k = 0; k < pixels.size(); ++k) {
     double away[2];
@@ -996,7 +997,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);
     write_pixel_supports(g, o, idx, nv);
-    if (options.edge_shift > 0 || coverage_shift) shift_edge_supports(g, o, idx, options.edge_shift, coverage_shift);
+    shift_edge_supports(g, o, idx, options.edge_shift, coverage_shift);
     write_behind(g, o, behind, nb, nv);
     s.behind = nb;
     if (options.normals) {
@@ -1024,8 +1025,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       write_pixel_supports(g, o, chosen, ne);
       if (options.edge_scale != 1.0)
         scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
-      if (options.edge_shift > 0 || coverage_shift)
-        shift_edge_supports(g, o, chosen, options.edge_shift, coverage_shift);
+      shift_edge_supports(g, o, chosen, options.edge_shift, coverage_shift);
       if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
         behind = behind_places(g, chosen, options.edge_behind, options.edge_behind_start);
         const int64_t places = static_cast<int64_t>(behind.depth.size());
