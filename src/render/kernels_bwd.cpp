@@ -31,12 +31,13 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     const T* rec = local + i * kRec;
     LaneSums<T> sums{};
     int64_t ys, ye, g0, g1;
+    Splat<T> s = bwd_splat(rec);
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
-      Splat<T> s = bwd_splat(rec);
       const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups);
       for (int k = 0; k < n; ++k) bwd_group(s, groups[k], st, last, int32_t(i), sums);
     }
     sums.reduce(out + i * kGrad2d);
+    moments_to_grads(s, out + i * kGrad2d);
   }
 }
 
@@ -66,6 +67,7 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     for (; k + 2 <= n; k += 2) bwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i), g);
     if (k < n) bwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i), g);
     reduce_sets(g, slot);
+    moments_to_grads(s, slot);
   }
 }
 
@@ -96,6 +98,7 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
       g.zero();
       bwd_all_jobs_avx512<true>(a, jobs, row_jobs(rows, x0, jobs), st, last, int32_t(i), {g});
       g.reduce(slot);
+      moments_to_grads(s, slot);
       continue;
     }
     Group<float> odd;
@@ -106,6 +109,7 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
     bwd_all_jobs_avx512<false>(a, jobs, n, st, last, int32_t(i), {g[g0]});
     if (has_odd) bwd_groups_avx2<1>(a.low(kBwdCh), &odd, st, last, int32_t(i), g);
     reduce_sets(g, slot);
+    moments_to_grads(s, slot);
   }
 }
 #endif

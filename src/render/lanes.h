@@ -31,31 +31,39 @@ ISPLAT_INLINE double madd(double a, double b, double c) {
   return std::fma(a, b, c);
 }
 
-// exp(x) for the splat weights, x ≤ 0. float: e^x = p(x/16)^16 with p the degree-6 Taylor polynomial
-// (relative error about 1e-6 on the [−4.5, 0] that is ever used); arithmetic only, so it vectorizes.
-// double (the tests' precision): std::exp. Forward and backward call the same one, so they agree.
-// The polynomial's coefficients, highest degree first, for every lane width.
-constexpr float kExpPoly[7] = {1.0f / 720, 1.0f / 120, 1.0f / 24, 1.0f / 6, 0.5f, 1.0f, 1.0f};
-ISPLAT_INLINE float splat_exp(float x) {
-  const float y = std::max(x, -16.0f) * 0.0625f;
-  float p = kExpPoly[0];
-  for (int k = 1; k < 7; ++k) p = madd(p, y, kExpPoly[k]);
-  p = p * p, p = p * p, p = p * p;
-  return p * p;
+// 2^y for the splat weights, y ≤ 0. float: 2^y = 2^n · p(y − n) with n = y rounded to the nearest integer and p
+// a degree-5 fit of 2^r on [−0.5, 0.5] (relative error below 2e-7); the scaling by 2^n is exact, so every lane
+// width gives the same bits. double (the tests' precision): std::exp2. Forward and backward call the same one.
+// The polynomial's coefficients, highest degree first, for every lane width (p(0) = 1 exactly).
+constexpr float kExp2Poly[6] = {1.326474594e-03f, 9.671520442e-03f, 5.550733954e-02f,
+                                2.402224243e-01f, 6.931470037e-01f, 1.0f};
+constexpr float kExp2Floor = -16.0f;  // far below any cut (at most 4.5·log2 e): keeps 2^n normal
+ISPLAT_INLINE float splat_exp2(float y) {
+  y = std::max(y, kExp2Floor);
+  const float n = std::nearbyint(y), r = y - n;  // r is exact
+  float p = kExp2Poly[0];
+  for (int k = 1; k < 6; ++k) p = madd(p, r, kExp2Poly[k]);
+  return std::ldexp(p, int(n));
 }
-ISPLAT_INLINE double splat_exp(double x) {
-  return std::exp(x);
+ISPLAT_INLINE double splat_exp2(double y) {
+  return std::exp2(y);
 }
 
 // One Gaussian's constants for the pixel loops. f: the composited channels (forward: r, g, b, z, nx, ny, nz;
-// backward: r, g, b, z, 1).
+// backward: r, g, b, z, 1). The pixel loops work with the weight's exponent in base 2 and negated,
+// −log2(e)·power, a quadratic in dx taken in Horner form: two fused multiply-adds (neg_power).
+constexpr double kLog2e = 1.4426950408889634;
 template <class T>
 struct Splat {
   T u, v, A, B, C, opac, cut;
   T f[7];
-  T beta = 0, cut_wide = 0;  // −B/A (where a row's power is smallest), cut with the kSpanMargin slack
+  T beta = 0, cut_wide = 0;    // −B/A (where a row's power is smallest), cut with the kSpanMargin slack
+  T a2 = 0, nbk = 0, nck = 0;  // −½·log2 e·A, −log2 e·B, −½·log2 e·C
+  T ncut = 0, ncut_wide = 0;   // −log2 e·cut and −log2 e·cut_wide: a pixel is in when neg_power ≥ ncut
   Splat& prepare() {
     beta = -B / A, cut_wide = cut * T(1 + kSpanMargin) + T(kSpanMargin);
+    a2 = T(-0.5 * kLog2e) * A, nbk = T(-kLog2e) * B, nck = T(-0.5 * kLog2e) * C;
+    ncut = T(-kLog2e) * cut, ncut_wide = T(-kLog2e) * cut_wide;
     return *this;
   }
 };
@@ -86,21 +94,21 @@ ISPLAT_INLINE T plane_z(const DepthPlane<T>& p, T dx, T dy) {
   return std::max(p.zlo, T(1) / std::max(madd(p.gx, dx, madd(p.gy, dy, p.iz0)), p.izmin));
 }
 
-// Per row: dy-dependent terms, computed once. power = ½((A·dx)·dx + (C·dy)·dy) + dx·(B·dy), see splat_power.
+// Per row: dy-dependent terms, computed once (after Splat::prepare). −log2 e·power = (a2·dx + nb)·dx + nc.
 template <class T>
 struct Row {
-  T dy, cdy, bdy, cdy2;
+  T dy, nb, nc;
 };
 template <class T>
 ISPLAT_INLINE Row<T> make_row(const Splat<T>& s, int64_t py) {
-  const T dy = T(py) + T(0.5) - s.v, cdy = s.C * dy;
-  return {dy, cdy, s.B * dy, cdy * dy};
+  const T dy = T(py) + T(0.5) - s.v;
+  return {dy, s.nbk * dy, (s.nck * dy) * dy};
 }
 
-// The exponent of the splat weight at offset dx on row r: both fused multiply-adds as in avx2_power.
+// −log2(e) times the exponent of the splat weight at offset dx on row r, as in avx2_neg_power.
 template <class T>
-ISPLAT_INLINE T splat_power(const Splat<T>& s, const Row<T>& r, T dx) {
-  return madd(T(0.5), madd(s.A * dx, dx, r.cdy2), dx * r.bdy);
+ISPLAT_INLINE T neg_power(const Splat<T>& s, const Row<T>& r, T dx) {
+  return madd(madd(s.a2, dx, r.nb), dx, r.nc);
 }
 
 // Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
@@ -110,7 +118,7 @@ template <class T>
 ISPLAT_INLINE bool group_may_hit(const Splat<T>& s, const Row<T>& r, int64_t xb) {
   const T lo = (T(xb) + T(0.5)) - s.u, hi = lo + T(kLanes - 1);
   const T dx = std::min(std::max(s.beta * r.dy, lo), hi);
-  return T(0.5) * (s.A * dx * dx + r.cdy2) + dx * r.bdy <= s.cut_wide;
+  return neg_power(s, r, dx) >= s.ncut_wide;
 }
 
 // One 8-pixel group of a tile row: its row terms, the image column of lane 0 and the tile pixel index of lane 0.
@@ -233,6 +241,18 @@ struct LaneSums {
 };
 enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
 
+// The pixel loops sum moments of g = dL/dpower in the geometry slots: Σg·dx at kGu, Σg·dy at kGv, Σg·dx² at
+// kGA, Σg·dx·dy at kGB and Σg·dy² at kGC. Since power = ½(A·dx² + 2B·dx·dy + C·dy²), with dx = x − u and
+// dy = y − v, the gradients follow once per Gaussian and tile (7 lane operations instead of 12):
+// dL/du = −(A·Σg·dx + B·Σg·dy), dL/dv = −(B·Σg·dx + C·Σg·dy), dL/dA = ½Σg·dx², dL/dB = Σg·dx·dy, dL/dC = ½Σg·dy².
+template <class T>
+ISPLAT_INLINE void moments_to_grads(const Splat<T>& s, T* out) {
+  const T gx = out[kGu], gy = out[kGv], gxx = out[kGA], gxy = out[kGB], gyy = out[kGC];
+  out[kGu] = T(0) - madd(s.A, gx, s.B * gy);  // 0 − x, not −x: zero sums give +0 at every level
+  out[kGv] = T(0) - madd(s.B, gx, s.C * gy);
+  out[kGA] = T(0.5) * gxx, out[kGB] = gxy, out[kGC] = T(0.5) * gyy;
+}
+
 // ---- Portable scalar lanes ----
 
 // Ignores the weights (the renderer's case).
@@ -251,9 +271,9 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
-    const T power = splat_power(s, q.r, dx);
-    if (!(power <= s.cut)) continue;  // outside 3σ, or α < 1/255 for sure: no exp
-    const T raw = s.opac * splat_exp(-power);
+    const T npow = neg_power(s, q.r, dx);
+    if (!(npow >= s.ncut)) continue;  // outside 3σ, or α < 1/255 for sure: no exp
+    const T raw = s.opac * splat_exp2(npow);
     const T alpha = std::min(T(kAlphaMax), raw);
     const T t = st[fwd_at(p, kPlT)], next = t * (T(1) - alpha);
     if (!(raw >= T(kAlphaMin) && t > T(0))) continue;  // skipped, or the pixel has stopped
@@ -282,9 +302,9 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
   for (int l = 0; l < kLanes; ++l) {
     const int p = q.p0 + l;
     const T dx = (T(q.xb + l) + T(0.5)) - s.u;
-    const T power = splat_power(s, r, dx);
-    if (!(power <= s.cut) || i >= last[p]) continue;  // not a contributor in forward
-    const T G = splat_exp(-power);
+    const T npow = neg_power(s, r, dx);
+    if (!(npow >= s.ncut) || i >= last[p]) continue;  // not a contributor in forward
+    const T G = splat_exp2(npow);
     const T raw = s.opac * G;
     const T alpha = std::min(T(kAlphaMax), raw);
     if (!(raw >= T(kAlphaMin))) continue;
@@ -299,12 +319,13 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     for (int c = 0; c < 4; ++c) g[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g[kGr + c][l]);
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
     g[kGo][l] = madd(G, d_alpha, g[kGo][l]);
-    const T dp = -(alpha * d_alpha);  // dL/dpower
-    g[kGu][l] = madd(-dp, madd(s.A, dx, r.bdy), g[kGu][l]);
-    g[kGv][l] = madd(-dp, madd(s.B, dx, r.cdy), g[kGv][l]);
-    g[kGA][l] = madd(dp * T(0.5) * dx, dx, g[kGA][l]);
-    g[kGB][l] = madd(dp * dx, r.dy, g[kGB][l]);
-    g[kGC][l] = madd(dp * T(0.5) * r.dy, r.dy, g[kGC][l]);
+    const T dp = -(alpha * d_alpha);  // dL/dpower; its moments, see moments_to_grads
+    const T dpx = dp * dx, dpy = dp * r.dy;
+    g[kGu][l] = madd(dp, dx, g[kGu][l]);
+    g[kGv][l] = madd(dp, r.dy, g[kGv][l]);
+    g[kGA][l] = madd(dpx, dx, g[kGA][l]);
+    g[kGB][l] = madd(dpx, r.dy, g[kGB][l]);
+    g[kGC][l] = madd(dpy, r.dy, g[kGC][l]);
   }
 }
 
@@ -314,7 +335,7 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
 // already dropped the groups that lie wholly beyond the cut ----
 
 struct Avx2Splat {
-  __m256 u, A, B, opac, cut, f[7];
+  __m256 u, a2, opac, ncut, f[7];
 };
 struct Avx2Plane {
   __m256 iz0, gx, gy, zlo, izmin;
@@ -325,8 +346,8 @@ ISPLAT_AVX2 Avx2Plane avx2_plane(const DepthPlane<float>& p) {
 }
 ISPLAT_AVX2 Avx2Splat avx2_splat(const Splat<float>& s, int channels) {
   Avx2Splat a;
-  a.u = _mm256_set1_ps(s.u), a.A = _mm256_set1_ps(s.A), a.B = _mm256_set1_ps(s.B);
-  a.opac = _mm256_set1_ps(s.opac), a.cut = _mm256_set1_ps(s.cut);
+  a.u = _mm256_set1_ps(s.u), a.a2 = _mm256_set1_ps(s.a2);
+  a.opac = _mm256_set1_ps(s.opac), a.ncut = _mm256_set1_ps(s.ncut);
   for (int c = 0; c < channels; ++c) a.f[c] = _mm256_set1_ps(s.f[c]);
   return a;
 }
@@ -335,31 +356,31 @@ ISPLAT_AVX2 __m256 avx2_neg(__m256 x) {
   return _mm256_xor_ps(x, _mm256_set1_ps(-0.0f));
 }
 
-ISPLAT_AVX2 __m256 avx2_exp(__m256 x) {
-  const __m256 y = _mm256_mul_ps(_mm256_max_ps(x, _mm256_set1_ps(-16.0f)), _mm256_set1_ps(0.0625f));
-  __m256 p = _mm256_set1_ps(kExpPoly[0]);
-  for (int k = 1; k < 7; ++k) p = _mm256_fmadd_ps(p, y, _mm256_set1_ps(kExpPoly[k]));
-  p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p), p = _mm256_mul_ps(p, p);
-  return _mm256_mul_ps(p, p);
+// splat_exp2, 8 lanes: the integer n goes straight into the exponent bits (exact, as ldexp).
+ISPLAT_AVX2 __m256 avx2_exp2(__m256 y) {
+  y = _mm256_max_ps(y, _mm256_set1_ps(kExp2Floor));
+  const __m256 n = _mm256_round_ps(y, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC), r = _mm256_sub_ps(y, n);
+  __m256 p = _mm256_set1_ps(kExp2Poly[0]);
+  for (int k = 1; k < 6; ++k) p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(kExp2Poly[k]));
+  const __m256i e = _mm256_slli_epi32(_mm256_cvtps_epi32(n), 23);
+  return _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(p), e));
 }
 
-// dx and power for the 8 lanes of group q.
-ISPLAT_AVX2 void avx2_power(const Avx2Splat& a, const Group<float>& q, __m256& dx, __m256& power) {
+// dx and neg_power for the 8 lanes of group q (pixel centres xb + lane + 0.5: exact sums).
+ISPLAT_AVX2 void avx2_neg_power(const Avx2Splat& a, const Group<float>& q, __m256& dx, __m256& npow) {
   const __m256 x =
-      _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(q.xb), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
-  const __m256 half = _mm256_set1_ps(0.5f);
-  dx = _mm256_sub_ps(_mm256_add_ps(x, half), a.u);
-  const __m256 quad = _mm256_fmadd_ps(_mm256_mul_ps(a.A, dx), dx, _mm256_set1_ps(q.r.cdy2));
-  power = _mm256_fmadd_ps(half, quad, _mm256_mul_ps(dx, _mm256_set1_ps(q.r.bdy)));
+      _mm256_add_ps(_mm256_set1_ps(float(q.xb)), _mm256_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f));
+  dx = _mm256_sub_ps(x, a.u);
+  npow = _mm256_fmadd_ps(_mm256_fmadd_ps(a.a2, dx, _mm256_set1_ps(q.r.nb)), dx, _mm256_set1_ps(q.r.nc));
 }
 
 template <int N, int kChannels, bool kPlane>
 ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, const Group<float>* q, float* st,
                                 int32_t* last, int32_t id) {
-  __m256 raw[N], power[N], dxs[N];
+  __m256 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
-    avx2_power(a, q[k], dxs[k], power[k]);
-    raw[k] = _mm256_mul_ps(a.opac, avx2_exp(avx2_neg(power[k])));
+    avx2_neg_power(a, q[k], dxs[k], npow[k]);
+    raw[k] = _mm256_mul_ps(a.opac, avx2_exp2(npow[k]));
   }
   int stops = 0;
   for (int k = 0; k < N; ++k) {
@@ -368,7 +389,7 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
     float* Tp = st + fwd_at(p0, kPlT);
     const __m256 t = _mm256_loadu_ps(Tp);
     const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
-    const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power[k], a.cut, _CMP_LE_OQ),
+    const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(npow[k], a.ncut, _CMP_GE_OQ),
                                                    _mm256_cmp_ps(raw[k], _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
                                      _mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ));
     const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
@@ -423,10 +444,10 @@ ISPLAT_AVX2 void reduce_sets(const Avx2Sums* sets, float* out) {
 template <int N>
 ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, const int32_t* last, int32_t i,
                                  Avx2Sums* sums) {
-  __m256 dxs[N], power[N], G[N];
+  __m256 dxs[N], npow[N], G[N];
   for (int k = 0; k < N; ++k) {
-    avx2_power(a, q[k], dxs[k], power[k]);
-    G[k] = avx2_exp(avx2_neg(power[k]));
+    avx2_neg_power(a, q[k], dxs[k], npow[k]);
+    G[k] = avx2_exp2(npow[k]);
   }
   for (int k = 0; k < N; ++k) {
     Avx2Sums& g = sums[lane_set(q[k])];
@@ -436,7 +457,7 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     const __m256 alpha = _mm256_min_ps(raw, _mm256_set1_ps(float(kAlphaMax)));
     const __m256i lst = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + p0));
     const __m256 hit =
-        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(power[k], a.cut, _CMP_LE_OQ),
+        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(npow[k], a.ncut, _CMP_GE_OQ),
                                     _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
                       _mm256_castsi256_ps(_mm256_cmpgt_epi32(lst, _mm256_set1_epi32(i))));  // i < last[p]
     const __m256 one_minus = _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha);
@@ -460,12 +481,12 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
     g.s[kGo] = _mm256_blendv_ps(g.s[kGo], _mm256_fmadd_ps(G[k], d_alpha, g.s[kGo]), free);
     const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
-    const __m256 half = _mm256_set1_ps(0.5f), dy = _mm256_set1_ps(q[k].r.dy);
-    g.s[kGu] = _mm256_fnmadd_ps(dp, _mm256_fmadd_ps(a.A, dx, _mm256_set1_ps(q[k].r.bdy)), g.s[kGu]);
-    g.s[kGv] = _mm256_fnmadd_ps(dp, _mm256_fmadd_ps(a.B, dx, _mm256_set1_ps(q[k].r.cdy)), g.s[kGv]);
-    g.s[kGA] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dx), dx, g.s[kGA]);
-    g.s[kGB] = _mm256_fmadd_ps(_mm256_mul_ps(dp, dx), dy, g.s[kGB]);
-    g.s[kGC] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_mul_ps(dp, half), dy), dy, g.s[kGC]);
+    const __m256 dy = _mm256_set1_ps(q[k].r.dy), dpx = _mm256_mul_ps(dp, dx), dpy = _mm256_mul_ps(dp, dy);
+    g.s[kGu] = _mm256_fmadd_ps(dp, dx, g.s[kGu]);  // moments, see moments_to_grads
+    g.s[kGv] = _mm256_fmadd_ps(dp, dy, g.s[kGv]);
+    g.s[kGA] = _mm256_fmadd_ps(dpx, dx, g.s[kGA]);
+    g.s[kGB] = _mm256_fmadd_ps(dpx, dy, g.s[kGB]);
+    g.s[kGC] = _mm256_fmadd_ps(dpy, dy, g.s[kGC]);
   }
 }
 

@@ -14,12 +14,12 @@ namespace isplat::splat {
 static_assert(kTile == 2 * kLanes, "the AVX-512 loops take a tile row as two 8-pixel groups");
 
 struct Avx512Splat {
-  __m512 u, A, B, opac, cut, f[7];
+  __m512 u, a2, opac, ncut, f[7];
   // The same constants in 8 lanes (the low halves: no instruction), for a last unpaired group.
   ISPLAT_AVX512 Avx2Splat low(int channels) const {
     Avx2Splat a;
-    a.u = _mm512_castps512_ps256(u), a.A = _mm512_castps512_ps256(A), a.B = _mm512_castps512_ps256(B);
-    a.opac = _mm512_castps512_ps256(opac), a.cut = _mm512_castps512_ps256(cut);
+    a.u = _mm512_castps512_ps256(u), a.a2 = _mm512_castps512_ps256(a2);
+    a.opac = _mm512_castps512_ps256(opac), a.ncut = _mm512_castps512_ps256(ncut);
     for (int c = 0; c < channels; ++c) a.f[c] = _mm512_castps512_ps256(f[c]);
     return a;
   }
@@ -37,8 +37,8 @@ ISPLAT_AVX512 Avx512Plane avx512_plane(const DepthPlane<float>& p) {
 }
 ISPLAT_AVX512 Avx512Splat avx512_splat(const Splat<float>& s, int channels) {
   Avx512Splat a;
-  a.u = _mm512_set1_ps(s.u), a.A = _mm512_set1_ps(s.A), a.B = _mm512_set1_ps(s.B);
-  a.opac = _mm512_set1_ps(s.opac), a.cut = _mm512_set1_ps(s.cut);
+  a.u = _mm512_set1_ps(s.u), a.a2 = _mm512_set1_ps(s.a2);
+  a.opac = _mm512_set1_ps(s.opac), a.ncut = _mm512_set1_ps(s.ncut);
   for (int c = 0; c < channels; ++c) a.f[c] = _mm512_set1_ps(s.f[c]);
   return a;
 }
@@ -47,13 +47,13 @@ ISPLAT_AVX512 __m512 avx512_neg(__m512 x) {
   return _mm512_xor_ps(x, _mm512_set1_ps(-0.0f));
 }
 
-// avx2_exp, 16 lanes.
-ISPLAT_AVX512 __m512 avx512_exp(__m512 x) {
-  const __m512 y = _mm512_mul_ps(_mm512_max_ps(x, _mm512_set1_ps(-16.0f)), _mm512_set1_ps(0.0625f));
-  __m512 p = _mm512_set1_ps(kExpPoly[0]);
-  for (int k = 1; k < 7; ++k) p = _mm512_fmadd_ps(p, y, _mm512_set1_ps(kExpPoly[k]));
-  p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p), p = _mm512_mul_ps(p, p);
-  return _mm512_mul_ps(p, p);
+// avx2_exp2, 16 lanes; scalef multiplies by 2^n exactly.
+ISPLAT_AVX512 __m512 avx512_exp2(__m512 y) {
+  y = _mm512_max_ps(y, _mm512_set1_ps(kExp2Floor));
+  const __m512 n = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC), r = _mm512_sub_ps(y, n);
+  __m512 p = _mm512_set1_ps(kExp2Poly[0]);
+  for (int k = 1; k < 6; ++k) p = _mm512_fmadd_ps(p, r, _mm512_set1_ps(kExp2Poly[k]));
+  return _mm512_scalef_ps(p, n);
 }
 
 // 16 lanes of one Gaussian: two 8-pixel groups, the low half at tile pixel p[0], the high half at p[1].
@@ -71,9 +71,9 @@ struct Job {
 // (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
 // or not never changes a result; nor does dropping a group that is not live (LiveGroups).
 struct TileRows {
-  alignas(64) float dy[kTile], cdy[kTile], bdy[kTile], cdy2[kTile];
+  alignas(64) float dy[kTile], nb[kTile], nc[kTile];
   unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
-  Row<float> row(int r) const { return {dy[r], cdy[r], bdy[r], cdy2[r]}; }
+  Row<float> row(int r) const { return {dy[r], nb[r], nc[r]}; }
 };
 ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
                              int64_t g1, const LiveGroups& live, TileRows& t) {
@@ -81,20 +81,18 @@ ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int6
   const __m512 dy =  // T(py) + T(0.5) − v, with py = y0 + lane exactly
       _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(y0)), lane), _mm512_set1_ps(0.5f)),
                     _mm512_set1_ps(s.v));
-  const __m512 cdy = _mm512_mul_ps(_mm512_set1_ps(s.C), dy), bdy = _mm512_mul_ps(_mm512_set1_ps(s.B), dy);
-  const __m512 cdy2 = _mm512_mul_ps(cdy, dy);
-  _mm512_store_ps(t.dy, dy), _mm512_store_ps(t.cdy, cdy), _mm512_store_ps(t.bdy, bdy), _mm512_store_ps(t.cdy2, cdy2);
+  const __m512 nb = _mm512_mul_ps(_mm512_set1_ps(s.nbk), dy);
+  const __m512 nc = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(s.nck), dy), dy);
+  _mm512_store_ps(t.dy, dy), _mm512_store_ps(t.nb, nb), _mm512_store_ps(t.nc, nc);
   const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
-  const __m512 at_min = _mm512_mul_ps(_mm512_set1_ps(s.beta), dy), A = _mm512_set1_ps(s.A);
+  const __m512 at_min = _mm512_mul_ps(_mm512_set1_ps(s.beta), dy), a2 = _mm512_set1_ps(s.a2);
   for (int g = 0; g < 2; ++g) {
     t.groups[g] = 0;
     if (g < g0 || g >= g1) continue;
     const float lo = (float(int32_t(x0) + g * kLanes) + 0.5f) - s.u, hi = lo + float(kLanes - 1);
     const __m512 dx = _mm512_min_ps(_mm512_max_ps(at_min, _mm512_set1_ps(lo)), _mm512_set1_ps(hi));
-    const __m512 q =
-        _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(A, dx), dx), cdy2)),
-                      _mm512_mul_ps(dx, bdy));
-    t.groups[g] = rows & live.half[g] & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.cut_wide), _CMP_LE_OQ));
+    const __m512 q = _mm512_fmadd_ps(_mm512_fmadd_ps(a2, dx, nb), dx, nc);
+    t.groups[g] = rows & live.half[g] & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.ncut_wide), _CMP_GE_OQ));
   }
 }
 
@@ -177,26 +175,27 @@ ISPLAT_AVX512 __m512 job_term(const Job& j, float Row<float>::*term) {
   return _mm512_insertf32x8(_mm512_set1_ps(j.r[0].*term), _mm256_set1_ps(j.r[1].*term), 1);
 }
 
-// avx2_power for the 16 lanes of job j: pixel centres at image columns xb + lane + 0.5 (rows) or
+// avx2_neg_power for the 16 lanes of job j: pixel centres at image columns xb + lane + 0.5 (rows) or
 // xb + lane mod 8 + 0.5 (pairs); every term is an integer or half-integer far below 2^23, so each sum is exact.
 template <bool kRow>
-ISPLAT_AVX512 void avx512_power(const Avx512Splat& a, const Job& j, __m512& dx, __m512& power) {
-  const __m512 lane = kRow ? _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
-                           : _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
-  const __m512 x = _mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(j.xb)), lane), _mm512_set1_ps(0.5f));
-  dx = _mm512_sub_ps(x, a.u);
-  const __m512 quad = _mm512_fmadd_ps(_mm512_mul_ps(a.A, dx), dx, job_term<kRow>(j, &Row<float>::cdy2));
-  power = _mm512_fmadd_ps(_mm512_set1_ps(0.5f), quad, _mm512_mul_ps(dx, job_term<kRow>(j, &Row<float>::bdy)));
+ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const Job& j, __m512& dx, __m512& npow) {
+  const __m512 lane = kRow ? _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 8.5f, 9.5f, 10.5f, 11.5f,
+                                            12.5f, 13.5f, 14.5f, 15.5f)
+                           : _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 0.5f, 1.5f, 2.5f, 3.5f,
+                                            4.5f, 5.5f, 6.5f, 7.5f);
+  dx = _mm512_sub_ps(_mm512_add_ps(_mm512_set1_ps(float(j.xb)), lane), a.u);
+  npow = _mm512_fmadd_ps(_mm512_fmadd_ps(a.a2, dx, job_term<kRow>(j, &Row<float>::nb)), dx,
+                         job_term<kRow>(j, &Row<float>::nc));
 }
 
 // fwd_groups_avx2 on the N jobs q[0..N).
 template <int N, int kChannels, bool kPlane, bool kRow>
 ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, float* st,
                                   int32_t* last, int32_t id) {
-  __m512 raw[N], power[N], dxs[N];
+  __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
-    avx512_power<kRow>(a, q[k], dxs[k], power[k]);
-    raw[k] = _mm512_mul_ps(a.opac, avx512_exp(avx512_neg(power[k])));
+    avx512_neg_power<kRow>(a, q[k], dxs[k], npow[k]);
+    raw[k] = _mm512_mul_ps(a.opac, avx512_exp2(npow[k]));
   }
   int stops = 0;
   for (int k = 0; k < N; ++k) {
@@ -204,7 +203,7 @@ ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane
     const __m512 alpha = _mm512_min_ps(raw[k], _mm512_set1_ps(float(kAlphaMax)));
     const __m512 t = job_load<kRow>(st, j, fwd_at, kPlT);
     const __m512 next = _mm512_mul_ps(t, _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha));
-    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(power[k], a.cut, _CMP_LE_OQ) &
+    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(npow[k], a.ncut, _CMP_GE_OQ) &
                           _mm512_cmp_ps_mask(raw[k], _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
                           _mm512_cmp_ps_mask(t, _mm512_setzero_ps(), _CMP_GT_OQ);
     const __mmask16 stop = hit & _mm512_cmp_ps_mask(next, _mm512_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ);
@@ -280,7 +279,6 @@ struct JobSums<true> {
   Avx512Sums& g;
   // g += x·y, or where `keep` is clear g stays.
   ISPLAT_AVX512 void fma(int k, __m512 x, __m512 y) { g.s[k] = _mm512_fmadd_ps(x, y, g.s[k]); }
-  ISPLAT_AVX512 void fnma(int k, __m512 x, __m512 y) { g.s[k] = _mm512_fnmadd_ps(x, y, g.s[k]); }
   ISPLAT_AVX512 void fma_where(int k, __mmask16 keep, __m512 x, __m512 y) {
     g.s[k] = _mm512_mask_mov_ps(g.s[k], keep, _mm512_fmadd_ps(x, y, g.s[k]));
   }
@@ -293,9 +291,6 @@ struct JobSums<false> {
   ISPLAT_AVX512 void fma(int k, __m512 x, __m512 y) {
     g.s[k] = _mm256_fmadd_ps(hi(x), hi(y), _mm256_fmadd_ps(lo(x), lo(y), g.s[k]));
   }
-  ISPLAT_AVX512 void fnma(int k, __m512 x, __m512 y) {
-    g.s[k] = _mm256_fnmadd_ps(hi(x), hi(y), _mm256_fnmadd_ps(lo(x), lo(y), g.s[k]));
-  }
   ISPLAT_AVX512 void fma_where(int k, __mmask16 keep, __m512 x, __m512 y) {
     const __m256 first = _mm256_mask3_fmadd_ps(lo(x), lo(y), g.s[k], __mmask8(keep));
     g.s[k] = _mm256_mask3_fmadd_ps(hi(x), hi(y), first, __mmask8(keep >> 8));
@@ -306,17 +301,17 @@ struct JobSums<false> {
 template <int N, bool kRow>
 ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st, const int32_t* last, int32_t i,
                                    JobSums<kRow> g) {
-  __m512 dxs[N], power[N], G[N];
+  __m512 dxs[N], npow[N], G[N];
   for (int k = 0; k < N; ++k) {
-    avx512_power<kRow>(a, q[k], dxs[k], power[k]);
-    G[k] = avx512_exp(avx512_neg(power[k]));
+    avx512_neg_power<kRow>(a, q[k], dxs[k], npow[k]);
+    G[k] = avx512_exp2(npow[k]);
   }
   for (int k = 0; k < N; ++k) {
     const Job& j = q[k];
     const __m512 dx = dxs[k];
     const __m512 raw = _mm512_mul_ps(a.opac, G[k]);
     const __m512 alpha = _mm512_min_ps(raw, _mm512_set1_ps(float(kAlphaMax)));
-    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(power[k], a.cut, _CMP_LE_OQ) &
+    const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(npow[k], a.ncut, _CMP_GE_OQ) &
                           _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
                           _mm512_cmpgt_epi32_mask(job_load_last<kRow>(last, j), _mm512_set1_epi32(i));
     const __m512 one_minus = _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha);
@@ -338,12 +333,12 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st
     const __mmask16 free = hit & _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMax)), _CMP_LE_OQ);
     g.fma_where(kGo, free, G[k], d_alpha);
     const __m512 dp = _mm512_maskz_mov_ps(free, avx512_neg(_mm512_mul_ps(alpha, d_alpha)));
-    const __m512 half = _mm512_set1_ps(0.5f), dy = job_term<kRow>(j, &Row<float>::dy);
-    g.fnma(kGu, dp, _mm512_fmadd_ps(a.A, dx, job_term<kRow>(j, &Row<float>::bdy)));
-    g.fnma(kGv, dp, _mm512_fmadd_ps(a.B, dx, job_term<kRow>(j, &Row<float>::cdy)));
-    g.fma(kGA, _mm512_mul_ps(_mm512_mul_ps(dp, half), dx), dx);
-    g.fma(kGB, _mm512_mul_ps(dp, dx), dy);
-    g.fma(kGC, _mm512_mul_ps(_mm512_mul_ps(dp, half), dy), dy);
+    const __m512 dy = job_term<kRow>(j, &Row<float>::dy), dpx = _mm512_mul_ps(dp, dx), dpy = _mm512_mul_ps(dp, dy);
+    g.fma(kGu, dp, dx);  // moments, see moments_to_grads
+    g.fma(kGv, dp, dy);
+    g.fma(kGA, dpx, dx);
+    g.fma(kGB, dpx, dy);
+    g.fma(kGC, dpy, dy);
   }
 }
 
