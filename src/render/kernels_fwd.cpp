@@ -215,8 +215,8 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
   Job jobs[kTile];
   TileRows rows;
   LiveGroups live = unstopped_groups_avx512(st);
-  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
-  for (int64_t i = 0; i < count && active > 0; ++i) {
+  int64_t ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && (live.half[0] | live.half[1]) != 0; ++i) {  // until every pixel has stopped
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
@@ -226,7 +226,7 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
     const int32_t id = int32_t(i + 1);
     const Avx512Splat a = avx512_splat(s, kChannels);
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
-    int stops;
+    unsigned stops;  // nonzero if a pixel stopped
     if (g1 - g0 == 2) {
       const int n = row_jobs(rows, x0, jobs);
       stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, jobs, n, st, last, id);
@@ -235,9 +235,10 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
       bool has_odd;
       const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
       stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, jobs, n, st, last, id);
-      if (has_odd) stops += fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id);
+      if (has_odd)
+        stops |= unsigned(fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id));
     }
-    if (stops > 0) active -= stops, live = unstopped_groups_avx512(st);
+    if (stops != 0) live = unstopped_groups_avx512(st);
   }
 }
 

@@ -241,16 +241,16 @@ struct LaneSums {
 };
 enum GradSlot { kGu = 0, kGv, kGA, kGB, kGC, kGo, kGr, kGg, kGb, kGz };
 
-// The pixel loops sum moments of g = dL/dpower in the geometry slots: Σg·dx at kGu, Σg·dy at kGv, Σg·dx² at
-// kGA, Σg·dx·dy at kGB and Σg·dy² at kGC. Since power = ½(A·dx² + 2B·dx·dy + C·dy²), with dx = x − u and
-// dy = y − v, the gradients follow once per Gaussian and tile (7 lane operations instead of 12):
-// dL/du = −(A·Σg·dx + B·Σg·dy), dL/dv = −(B·Σg·dx + C·Σg·dy), dL/dA = ½Σg·dx², dL/dB = Σg·dx·dy, dL/dC = ½Σg·dy².
+// The pixel loops sum moments of q = −dL/dpower = α·dL/dα in the geometry slots: Σq·dx at kGu, Σq·dy at kGv,
+// Σq·dx² at kGA, Σq·dx·dy at kGB and Σq·dy² at kGC. Since power = ½(A·dx² + 2B·dx·dy + C·dy²), with dx = x − u
+// and dy = y − v, the gradients follow once per Gaussian and tile (6 lane operations instead of 12):
+// dL/du = A·Σq·dx + B·Σq·dy, dL/dv = B·Σq·dx + C·Σq·dy, dL/dA = −½Σq·dx², dL/dB = −Σq·dx·dy, dL/dC = −½Σq·dy².
 template <class T>
 ISPLAT_INLINE void moments_to_grads(const Splat<T>& s, T* out) {
-  const T gx = out[kGu], gy = out[kGv], gxx = out[kGA], gxy = out[kGB], gyy = out[kGC];
-  out[kGu] = T(0) - madd(s.A, gx, s.B * gy);  // 0 − x, not −x: zero sums give +0 at every level
-  out[kGv] = T(0) - madd(s.B, gx, s.C * gy);
-  out[kGA] = T(0.5) * gxx, out[kGB] = gxy, out[kGC] = T(0.5) * gyy;
+  const T qx = out[kGu], qy = out[kGv], qxx = out[kGA], qxy = out[kGB], qyy = out[kGC];
+  out[kGu] = madd(s.A, qx, s.B * qy), out[kGv] = madd(s.B, qx, s.C * qy);
+  // 0 − x, not −x: zero sums give +0, as a slot the AVX loops fill with zeros
+  out[kGA] = T(0) - T(0.5) * qxx, out[kGB] = T(0) - qxy, out[kGC] = T(0) - T(0.5) * qyy;
 }
 
 // ---- Portable scalar lanes ----
@@ -313,19 +313,19 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     T dq = st[bwd_at(p, kPbDC)] * s.f[0];  // Σ_c dL/dC_c·f_c
     for (int c = 1; c < kBwdCh; ++c) dq = madd(st[bwd_at(p, kPbDC + c)], s.f[c], dq);
     T& S = st[bwd_at(p, kPbS)];
-    const T d_alpha = (dq - S) * t_in;
-    S = madd(alpha, dq, (T(1) - alpha) * S);
+    const T diff = dq - S, d_alpha = diff * t_in;
+    S = madd(alpha, diff, S);  // α·dq + (1 − α)·S
     st[bwd_at(p, kPbT)] = t_in;
     for (int c = 0; c < 4; ++c) g[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g[kGr + c][l]);
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
     g[kGo][l] = madd(G, d_alpha, g[kGo][l]);
-    const T dp = -(alpha * d_alpha);  // dL/dpower; its moments, see moments_to_grads
-    const T dpx = dp * dx, dpy = dp * r.dy;
-    g[kGu][l] = madd(dp, dx, g[kGu][l]);
-    g[kGv][l] = madd(dp, r.dy, g[kGv][l]);
-    g[kGA][l] = madd(dpx, dx, g[kGA][l]);
-    g[kGB][l] = madd(dpx, r.dy, g[kGB][l]);
-    g[kGC][l] = madd(dpy, r.dy, g[kGC][l]);
+    const T q = alpha * d_alpha;  // −dL/dpower; its moments, see moments_to_grads
+    const T qx = q * dx, qy = q * r.dy;
+    g[kGu][l] = madd(q, dx, g[kGu][l]);
+    g[kGv][l] = madd(q, r.dy, g[kGv][l]);
+    g[kGA][l] = madd(qx, dx, g[kGA][l]);
+    g[kGB][l] = madd(qx, r.dy, g[kGB][l]);
+    g[kGC][l] = madd(qy, r.dy, g[kGC][l]);
   }
 }
 
@@ -471,8 +471,8 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     for (int c = 1; c < kBwdCh; ++c) dq = _mm256_fmadd_ps(dc[c], a.f[c], dq);
     float* Sp = st + bwd_at(p0, kPbS);
     const __m256 S = _mm256_loadu_ps(Sp);
-    const __m256 d_alpha = _mm256_mul_ps(_mm256_sub_ps(dq, S), t_in);
-    const __m256 S_new = _mm256_fmadd_ps(alpha, dq, _mm256_mul_ps(one_minus, S));
+    const __m256 diff = _mm256_sub_ps(dq, S), d_alpha = _mm256_mul_ps(diff, t_in);
+    const __m256 S_new = _mm256_fmadd_ps(alpha, diff, S);
     _mm256_storeu_ps(Sp, _mm256_blendv_ps(S, S_new, hit));
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
     // Masked lanes add exactly zero: wh and dp are 0 there, and every factor they meet is finite.
@@ -480,13 +480,13 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_fmadd_ps(wh, dc[c], g.s[kGr + c]);
     const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
     g.s[kGo] = _mm256_blendv_ps(g.s[kGo], _mm256_fmadd_ps(G[k], d_alpha, g.s[kGo]), free);
-    const __m256 dp = _mm256_and_ps(free, avx2_neg(_mm256_mul_ps(alpha, d_alpha)));
-    const __m256 dy = _mm256_set1_ps(q[k].r.dy), dpx = _mm256_mul_ps(dp, dx), dpy = _mm256_mul_ps(dp, dy);
-    g.s[kGu] = _mm256_fmadd_ps(dp, dx, g.s[kGu]);  // moments, see moments_to_grads
-    g.s[kGv] = _mm256_fmadd_ps(dp, dy, g.s[kGv]);
-    g.s[kGA] = _mm256_fmadd_ps(dpx, dx, g.s[kGA]);
-    g.s[kGB] = _mm256_fmadd_ps(dpx, dy, g.s[kGB]);
-    g.s[kGC] = _mm256_fmadd_ps(dpy, dy, g.s[kGC]);
+    const __m256 qp = _mm256_and_ps(free, _mm256_mul_ps(alpha, d_alpha));  // −dL/dpower
+    const __m256 dy = _mm256_set1_ps(q[k].r.dy), qx = _mm256_mul_ps(qp, dx), qy = _mm256_mul_ps(qp, dy);
+    g.s[kGu] = _mm256_fmadd_ps(qp, dx, g.s[kGu]);  // moments, see moments_to_grads
+    g.s[kGv] = _mm256_fmadd_ps(qp, dy, g.s[kGv]);
+    g.s[kGA] = _mm256_fmadd_ps(qx, dx, g.s[kGA]);
+    g.s[kGB] = _mm256_fmadd_ps(qx, dy, g.s[kGB]);
+    g.s[kGC] = _mm256_fmadd_ps(qy, dy, g.s[kGC]);
   }
 }
 

@@ -188,16 +188,16 @@ ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const Job& j, __m512& 
                          job_term<kRow>(j, &Row<float>::nc));
 }
 
-// fwd_groups_avx2 on the N jobs q[0..N).
+// fwd_groups_avx2 on the N jobs q[0..N); returns the lanes that stopped, OR-ed over the jobs (nonzero if any).
 template <int N, int kChannels, bool kPlane, bool kRow>
-ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, float* st,
-                                  int32_t* last, int32_t id) {
+ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, float* st,
+                                       int32_t* last, int32_t id) {
   __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
     avx512_neg_power<kRow>(a, q[k], dxs[k], npow[k]);
     raw[k] = _mm512_mul_ps(a.opac, avx512_exp2(npow[k]));
   }
-  int stops = 0;
+  unsigned stops = 0;
   for (int k = 0; k < N; ++k) {
     const Job& j = q[k];
     const __m512 alpha = _mm512_min_ps(raw[k], _mm512_set1_ps(float(kAlphaMax)));
@@ -208,16 +208,16 @@ ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane
                           _mm512_cmp_ps_mask(t, _mm512_setzero_ps(), _CMP_GT_OQ);
     const __mmask16 stop = hit & _mm512_cmp_ps_mask(next, _mm512_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ);
     const __mmask16 add = hit & ~stop;
-    const __m512 w = _mm512_maskz_mov_ps(add, _mm512_mul_ps(alpha, t));
+    const __m512 w = _mm512_mul_ps(alpha, t);
     __m512 z = a.f[3];
     if constexpr (kPlane) {  // plane_z
       const __m512 dy = job_term<kRow>(j, &Row<float>::dy);
       const __m512 iz = _mm512_fmadd_ps(plane.gx, dxs[k], _mm512_fmadd_ps(plane.gy, dy, plane.iz0));
       z = _mm512_max_ps(plane.zlo, _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_max_ps(iz, plane.izmin)));
     }
-    for (int c = 0; c < kChannels; ++c)  // w = 0 where nothing is added: 0·f + acc = acc
+    for (int c = 0; c < kChannels; ++c)  // acc stays where nothing is added (AVX2: 0·f + acc, the same value)
       job_store<kRow>(st, j, fwd_at, kPlAcc + c,
-                      _mm512_fmadd_ps(w, c == 3 ? z : a.f[c], job_load<kRow>(st, j, fwd_at, kPlAcc + c)));
+                      _mm512_mask3_fmadd_ps(w, c == 3 ? z : a.f[c], job_load<kRow>(st, j, fwd_at, kPlAcc + c), add));
     job_store<kRow>(st, j, fwd_at, kPlT, _mm512_mask_mov_ps(_mm512_mask_mov_ps(t, add, next), stop, avx512_neg(t)));
     if constexpr (kRow) {
       _mm512_mask_storeu_epi32(last + j.p[0], add, _mm512_set1_epi32(id));
@@ -226,19 +226,20 @@ ISPLAT_AVX512 int fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane
       _mm256_mask_storeu_epi32(last + j.p[0], __mmask8(add), ids);
       _mm256_mask_storeu_epi32(last + j.p[1], __mmask8(add >> 8), ids);
     }
-    stops += __builtin_popcount(unsigned(stop));
+    stops |= stop;
   }
   return stops;
 }
 
-// fwd_jobs_avx512 on jobs q[0..n), four at a time where it can. Returns how many pixels stopped.
+// fwd_jobs_avx512 on jobs q[0..n), four at a time where it can. Nonzero if a pixel stopped.
 template <int kChannels, bool kPlane, bool kRow>
-ISPLAT_AVX512 int fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, int n, float* st,
-                                      int32_t* last, int32_t id) {
-  int stops = 0, k = 0;
-  for (; k + 4 <= n; k += 4) stops += fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
-  for (; k + 2 <= n; k += 2) stops += fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
-  if (k < n) stops += fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, int n,
+                                           float* st, int32_t* last, int32_t id) {
+  unsigned stops = 0;
+  int k = 0;
+  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
   return stops;
 }
 
@@ -280,7 +281,7 @@ struct JobSums<true> {
   // g += x·y, or where `keep` is clear g stays.
   ISPLAT_AVX512 void fma(int k, __m512 x, __m512 y) { g.s[k] = _mm512_fmadd_ps(x, y, g.s[k]); }
   ISPLAT_AVX512 void fma_where(int k, __mmask16 keep, __m512 x, __m512 y) {
-    g.s[k] = _mm512_mask_mov_ps(g.s[k], keep, _mm512_fmadd_ps(x, y, g.s[k]));
+    g.s[k] = _mm512_mask3_fmadd_ps(x, y, g.s[k], keep);
   }
 };
 template <>
@@ -317,28 +318,26 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st
     const __m512 one_minus = _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha);
     const __m512 t = job_load<kRow>(st, j, bwd_at, kPbT);
     const __m512 t_in = _mm512_div_ps(t, one_minus);
-    const __m512 w = _mm512_mul_ps(alpha, t_in);
     __m512 dc[kBwdCh];
     for (int c = 0; c < kBwdCh; ++c) dc[c] = job_load<kRow>(st, j, bwd_at, kPbDC + c);
     __m512 dq = _mm512_mul_ps(dc[0], a.f[0]);
     for (int c = 1; c < kBwdCh; ++c) dq = _mm512_fmadd_ps(dc[c], a.f[c], dq);
     const __m512 S = job_load<kRow>(st, j, bwd_at, kPbS);
-    const __m512 d_alpha = _mm512_mul_ps(_mm512_sub_ps(dq, S), t_in);
-    const __m512 S_new = _mm512_fmadd_ps(alpha, dq, _mm512_mul_ps(one_minus, S));
-    job_store<kRow>(st, j, bwd_at, kPbS, _mm512_mask_mov_ps(S, hit, S_new));
+    const __m512 diff = _mm512_sub_ps(dq, S), d_alpha = _mm512_mul_ps(diff, t_in);
+    job_store<kRow>(st, j, bwd_at, kPbS, _mm512_mask3_fmadd_ps(alpha, diff, S, hit));  // α·diff + S where hit
     job_store<kRow>(st, j, bwd_at, kPbT, _mm512_mask_mov_ps(t, hit, t_in));
     // Masked lanes add exactly zero, as in bwd_groups_avx2.
-    const __m512 wh = _mm512_maskz_mov_ps(hit, w);
+    const __m512 wh = _mm512_maskz_mul_ps(hit, alpha, t_in);
     for (int c = 0; c < 4; ++c) g.fma(kGr + c, wh, dc[c]);
     const __mmask16 free = hit & _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMax)), _CMP_LE_OQ);
     g.fma_where(kGo, free, G[k], d_alpha);
-    const __m512 dp = _mm512_maskz_mov_ps(free, avx512_neg(_mm512_mul_ps(alpha, d_alpha)));
-    const __m512 dy = job_term<kRow>(j, &Row<float>::dy), dpx = _mm512_mul_ps(dp, dx), dpy = _mm512_mul_ps(dp, dy);
-    g.fma(kGu, dp, dx);  // moments, see moments_to_grads
-    g.fma(kGv, dp, dy);
-    g.fma(kGA, dpx, dx);
-    g.fma(kGB, dpx, dy);
-    g.fma(kGC, dpy, dy);
+    const __m512 qp = _mm512_maskz_mul_ps(free, alpha, d_alpha);  // −dL/dpower
+    const __m512 dy = job_term<kRow>(j, &Row<float>::dy), qx = _mm512_mul_ps(qp, dx), qy = _mm512_mul_ps(qp, dy);
+    g.fma(kGu, qp, dx);  // moments, see moments_to_grads
+    g.fma(kGv, qp, dy);
+    g.fma(kGA, qx, dx);
+    g.fma(kGB, qx, dy);
+    g.fma(kGC, qy, dy);
   }
 }
 
