@@ -96,7 +96,7 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
     if (g1 - g0 == 2) {
       Avx512Sums g;
       g.zero();
-      bwd_all_jobs_avx512<true>(a, jobs, row_jobs(rows, x0, jobs), st, last, int32_t(i), {g});
+      bwd_all_jobs_avx512<true>(a, {rows, 0, int32_t(x0)}, jobs, row_jobs(rows, jobs), st, last, int32_t(i), {g});
       g.reduce(slot);
       moments_to_grads(s, slot);
       continue;
@@ -106,7 +106,8 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
     const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
     Avx2Sums g[2];  // all in the set of column g0
     g[0].zero(), g[1].zero();
-    bwd_all_jobs_avx512<false>(a, jobs, n, st, last, int32_t(i), {g[g0]});
+    const int32_t col = int32_t(g0) * kLanes;
+    bwd_all_jobs_avx512<false>(a, {rows, col, int32_t(x0) + col}, jobs, n, st, last, int32_t(i), {g[g0]});
     if (has_odd) bwd_groups_avx2<1>(a.low(kBwdCh), &odd, st, last, int32_t(i), g);
     reduce_sets(g, slot);
     moments_to_grads(s, slot);

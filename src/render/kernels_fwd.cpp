@@ -228,13 +228,15 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
     unsigned stops;  // nonzero if a pixel stopped
     if (g1 - g0 == 2) {
-      const int n = row_jobs(rows, x0, jobs);
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, jobs, n, st, last, id);
+      const int n = row_jobs(rows, jobs);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last, id);
     } else {
       Group<float> odd;
       bool has_odd;
       const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, jobs, n, st, last, id);
+      const int32_t col = int32_t(g0) * kLanes;
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n, st, last,
+                                                            id);
       if (has_odd)
         stops |= unsigned(fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id));
     }

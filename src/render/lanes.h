@@ -146,8 +146,8 @@ enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
 // contiguous block (a plane of it is 16 floats, one AVX-512 register), and no two planes lie a multiple of
 // 4 KiB apart (which makes loads wait on unrelated stores).
 template <int kPlanes>
-ISPLAT_INLINE int plane_at(int p, int plane) {
-  return ((p / kTile) * kPlanes + plane) * kTile + p % kTile;
+ISPLAT_INLINE int plane_at(int p, int plane) {  // p ≥ 0: unsigned, so / and % are a shift and a mask
+  return int((unsigned(p) / kTile * kPlanes + unsigned(plane)) * kTile + unsigned(p) % kTile);
 }
 ISPLAT_INLINE int fwd_at(int p, int plane) {
   return plane_at<kFwdPlanes>(p, plane);
@@ -386,7 +386,8 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
   for (int k = 0; k < N; ++k) {
     const int p0 = q[k].p0;
     const __m256 alpha = _mm256_min_ps(raw[k], _mm256_set1_ps(float(kAlphaMax)));
-    float* Tp = st + fwd_at(p0, kPlT);
+    float* const base = st + fwd_at(p0, 0);  // plane k at base + k·kTile
+    float* Tp = base + kPlT * kTile;
     const __m256 t = _mm256_loadu_ps(Tp);
     const __m256 next = _mm256_mul_ps(t, _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha));
     const __m256 hit = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(npow[k], a.ncut, _CMP_GE_OQ),
@@ -402,7 +403,7 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
       z = _mm256_max_ps(plane.zlo, _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_max_ps(iz, plane.izmin)));
     }
     for (int c = 0; c < kChannels; ++c) {  // w = 0 where nothing is added: 0·f + acc = acc
-      float* acc = st + fwd_at(p0, kPlAcc + c);
+      float* acc = base + (kPlAcc + c) * kTile;
       _mm256_storeu_ps(acc, _mm256_fmadd_ps(w, c == 3 ? z : a.f[c], _mm256_loadu_ps(acc)));
     }
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(_mm256_blendv_ps(t, next, add), avx2_neg(t), stop));
@@ -461,15 +462,16 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
                                     _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMin)), _CMP_GE_OQ)),
                       _mm256_castsi256_ps(_mm256_cmpgt_epi32(lst, _mm256_set1_epi32(i))));  // i < last[p]
     const __m256 one_minus = _mm256_sub_ps(_mm256_set1_ps(1.0f), alpha);
-    float* Tp = st + bwd_at(p0, kPbT);
+    float* const base = st + bwd_at(p0, 0);  // plane k at base + k·kTile
+    float* Tp = base + kPbT * kTile;
     const __m256 t = _mm256_loadu_ps(Tp);
     const __m256 t_in = _mm256_div_ps(t, one_minus);
     const __m256 w = _mm256_mul_ps(alpha, t_in);
     __m256 dc[kBwdCh];
-    for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(st + bwd_at(p0, kPbDC + c));
+    for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(base + (kPbDC + c) * kTile);
     __m256 dq = _mm256_mul_ps(dc[0], a.f[0]);
     for (int c = 1; c < kBwdCh; ++c) dq = _mm256_fmadd_ps(dc[c], a.f[c], dq);
-    float* Sp = st + bwd_at(p0, kPbS);
+    float* Sp = base + kPbS * kTile;
     const __m256 S = _mm256_loadu_ps(Sp);
     const __m256 diff = _mm256_sub_ps(dq, S), d_alpha = _mm256_mul_ps(diff, t_in);
     const __m256 S_new = _mm256_fmadd_ps(alpha, diff, S);

@@ -56,17 +56,6 @@ ISPLAT_AVX512 __m512 avx512_exp2(__m512 y) {
   return _mm512_scalef_ps(p, n);
 }
 
-// 16 lanes of one Gaussian: two 8-pixel groups, the low half at tile pixel p[0], the high half at p[1].
-// Row jobs (kRow) are a whole tile row, p[1] = p[0] + 8, one contiguous block per plane; a group the culling
-// dropped is masked off in `lanes`. Pair jobs are two consecutive groups of a narrow Gaussian's list (one
-// group per row, all in the same column): their state is loaded and stored in halves.
-struct Job {
-  Row<float> r[2];
-  int32_t p[2];
-  int32_t xb;  // image column of lane 0 (and, for pairs, of lane 8)
-  __mmask16 lanes;
-};
-
 // A Gaussian's terms of the tile's 16 rows (make_row's, computed as one vector) and which live groups it may hit
 // (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
 // or not never changes a result; nor does dropping a group that is not live (LiveGroups).
@@ -74,6 +63,22 @@ struct TileRows {
   alignas(64) float dy[kTile], nb[kTile], nc[kTile];
   unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
   Row<float> row(int r) const { return {dy[r], nb[r], nc[r]}; }
+};
+
+// 16 lanes of one Gaussian: two 8-pixel groups, the low half on tile row r[0], the high half on r[1]. Row jobs
+// (kRow) are a whole tile row, r[1] = r[0], one contiguous block per plane; a group the culling dropped is
+// masked off in `lanes`. Pair jobs are two consecutive groups of a narrow Gaussian's list (one group per row, all
+// in the same column): their state is loaded and stored in halves.
+struct Job {
+  int32_t r[2];
+  __mmask16 lanes;
+};
+// What the jobs of one Gaussian in a tile share: its rows' terms, and the tile column and image column of lane 0
+// (of both halves, for pair jobs).
+struct JobSet {
+  const TileRows& rows;
+  int32_t col, xb;
+  int32_t pixel(const Job& j, int half) const { return j.r[half] * kTile + col; }  // tile pixel of the half's lane 0
 };
 ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
                              int64_t g1, const LiveGroups& live, TileRows& t) {
@@ -118,13 +123,12 @@ ISPLAT_AVX512 LiveGroups live_for_avx512(const GroupLast& gl, int32_t i) {
 }
 
 // Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
-ISPLAT_AVX512 int row_jobs(const TileRows& t, int64_t x0, Job* out) {
+ISPLAT_AVX512 int row_jobs(const TileRows& t, Job* out) {
   int n = 0;
   for (unsigned m = t.groups[0] | t.groups[1]; m != 0; m &= m - 1) {
     const int r = __builtin_ctz(m);
-    const Row<float> row = t.row(r);
     const unsigned lanes = ((t.groups[0] >> r) & 1 ? 0x00ffu : 0u) | ((t.groups[1] >> r) & 1 ? 0xff00u : 0u);
-    out[n++] = {{row, row}, {r * kTile, r * kTile + kLanes}, int32_t(x0), __mmask16(lanes)};
+    out[n++] = {{r, r}, __mmask16(lanes)};
   }
   return n;
 }
@@ -139,7 +143,7 @@ ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, Job* out, Grou
       first = r;
       continue;
     }
-    out[n++] = {{t.row(first), t.row(r)}, {first * kTile + g * kLanes, r * kTile + g * kLanes}, xb, __mmask16(0xffff)};
+    out[n++] = {{first, r}, __mmask16(0xffff)};
     first = -1;
   }
   has_odd = first >= 0;
@@ -147,61 +151,73 @@ ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, Job* out, Grou
   return n;
 }
 
-template <bool kRow>
-ISPLAT_AVX512 __m512 job_load(const float* st, const Job& j, int (*at)(int, int), int plane) {
-  if constexpr (kRow) return _mm512_loadu_ps(st + at(j.p[0], plane));
-  return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(st + at(j.p[0], plane))),
-                            _mm256_loadu_ps(st + at(j.p[1], plane)), 1);
-}
-template <bool kRow>
-ISPLAT_AVX512 void job_store(float* st, const Job& j, int (*at)(int, int), int plane, __m512 v) {
-  if constexpr (kRow) {
-    _mm512_storeu_ps(st + at(j.p[0], plane), v);
-  } else {
-    _mm256_storeu_ps(st + at(j.p[0], plane), _mm512_castps512_ps256(v));
-    _mm256_storeu_ps(st + at(j.p[1], plane), _mm512_extractf32x8_ps(v, 1));
+// A job's pixel state: plane k of its low (high) half starts at b[0] (b[1]) + k·kTile (plane_at's layout), so each
+// load or store is one add away from these.
+template <int kPlanes>
+struct JobPlanes {
+  float* b[2];
+  ISPLAT_AVX512 JobPlanes(float* st, const JobSet& s, const Job& j)
+      : b{st + plane_at<kPlanes>(s.pixel(j, 0), 0), st + plane_at<kPlanes>(s.pixel(j, 1), 0)} {}
+  template <bool kRow>
+  ISPLAT_AVX512 __m512 load(int plane) const {
+    if constexpr (kRow) return _mm512_loadu_ps(b[0] + plane * kTile);
+    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(b[0] + plane * kTile)),
+                              _mm256_loadu_ps(b[1] + plane * kTile), 1);
   }
-}
+  template <bool kRow>
+  ISPLAT_AVX512 void store(int plane, __m512 v) const {
+    if constexpr (kRow) {
+      _mm512_storeu_ps(b[0] + plane * kTile, v);
+    } else {
+      _mm256_storeu_ps(b[0] + plane * kTile, _mm512_castps512_ps256(v));
+      _mm256_storeu_ps(b[1] + plane * kTile, _mm512_extractf32x8_ps(v, 1));
+    }
+  }
+};
 template <bool kRow>
-ISPLAT_AVX512 __m512i job_load_last(const int32_t* last, const Job& j) {
-  if constexpr (kRow) return _mm512_loadu_si512(last + j.p[0]);
-  return _mm512_inserti32x8(_mm512_castsi256_si512(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + j.p[0]))),
-                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + j.p[1])), 1);
+ISPLAT_AVX512 __m512i job_load_last(const int32_t* last, const JobSet& s, const Job& j) {
+  const int32_t* l0 = last + s.pixel(j, 0);
+  if constexpr (kRow) return _mm512_loadu_si512(l0);
+  return _mm512_inserti32x8(_mm512_castsi256_si512(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(l0))),
+                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(last + s.pixel(j, 1))), 1);
 }
 // A row term per lane: one value for a row job, the two rows' for a pair job.
+using RowTerm = float (TileRows::*)[kTile];
 template <bool kRow>
-ISPLAT_AVX512 __m512 job_term(const Job& j, float Row<float>::*term) {
-  if constexpr (kRow) return _mm512_set1_ps(j.r[0].*term);
-  return _mm512_insertf32x8(_mm512_set1_ps(j.r[0].*term), _mm256_set1_ps(j.r[1].*term), 1);
+ISPLAT_AVX512 __m512 job_term(const JobSet& s, const Job& j, RowTerm term) {
+  const float* v = s.rows.*term;
+  if constexpr (kRow) return _mm512_set1_ps(v[j.r[0]]);
+  return _mm512_insertf32x8(_mm512_set1_ps(v[j.r[0]]), _mm256_set1_ps(v[j.r[1]]), 1);
 }
 
 // avx2_neg_power for the 16 lanes of job j: pixel centres at image columns xb + lane + 0.5 (rows) or
 // xb + lane mod 8 + 0.5 (pairs); every term is an integer or half-integer far below 2^23, so each sum is exact.
 template <bool kRow>
-ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const Job& j, __m512& dx, __m512& npow) {
+ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const JobSet& s, const Job& j, __m512& dx, __m512& npow) {
   const __m512 lane = kRow ? _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 8.5f, 9.5f, 10.5f, 11.5f,
                                             12.5f, 13.5f, 14.5f, 15.5f)
                            : _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 0.5f, 1.5f, 2.5f, 3.5f,
                                             4.5f, 5.5f, 6.5f, 7.5f);
-  dx = _mm512_sub_ps(_mm512_add_ps(_mm512_set1_ps(float(j.xb)), lane), a.u);
-  npow = _mm512_fmadd_ps(_mm512_fmadd_ps(a.a2, dx, job_term<kRow>(j, &Row<float>::nb)), dx,
-                         job_term<kRow>(j, &Row<float>::nc));
+  dx = _mm512_sub_ps(_mm512_add_ps(_mm512_set1_ps(float(s.xb)), lane), a.u);
+  npow = _mm512_fmadd_ps(_mm512_fmadd_ps(a.a2, dx, job_term<kRow>(s, j, &TileRows::nb)), dx,
+                         job_term<kRow>(s, j, &TileRows::nc));
 }
 
 // fwd_groups_avx2 on the N jobs q[0..N); returns the lanes that stopped, OR-ed over the jobs (nonzero if any).
 template <int N, int kChannels, bool kPlane, bool kRow>
-ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, float* st,
-                                       int32_t* last, int32_t id) {
+ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s, const Job* q,
+                                       float* st, int32_t* last, int32_t id) {
   __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
-    avx512_neg_power<kRow>(a, q[k], dxs[k], npow[k]);
+    avx512_neg_power<kRow>(a, s, q[k], dxs[k], npow[k]);
     raw[k] = _mm512_mul_ps(a.opac, avx512_exp2(npow[k]));
   }
   unsigned stops = 0;
   for (int k = 0; k < N; ++k) {
     const Job& j = q[k];
     const __m512 alpha = _mm512_min_ps(raw[k], _mm512_set1_ps(float(kAlphaMax)));
-    const __m512 t = job_load<kRow>(st, j, fwd_at, kPlT);
+    const JobPlanes<kFwdPlanes> pl(st, s, j);
+    const __m512 t = pl.load<kRow>(kPlT);
     const __m512 next = _mm512_mul_ps(t, _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha));
     const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(npow[k], a.ncut, _CMP_GE_OQ) &
                           _mm512_cmp_ps_mask(raw[k], _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
@@ -211,20 +227,19 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
     const __m512 w = _mm512_mul_ps(alpha, t);
     __m512 z = a.f[3];
     if constexpr (kPlane) {  // plane_z
-      const __m512 dy = job_term<kRow>(j, &Row<float>::dy);
+      const __m512 dy = job_term<kRow>(s, j, &TileRows::dy);
       const __m512 iz = _mm512_fmadd_ps(plane.gx, dxs[k], _mm512_fmadd_ps(plane.gy, dy, plane.iz0));
       z = _mm512_max_ps(plane.zlo, _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_max_ps(iz, plane.izmin)));
     }
     for (int c = 0; c < kChannels; ++c)  // acc stays where nothing is added (AVX2: 0·f + acc, the same value)
-      job_store<kRow>(st, j, fwd_at, kPlAcc + c,
-                      _mm512_mask3_fmadd_ps(w, c == 3 ? z : a.f[c], job_load<kRow>(st, j, fwd_at, kPlAcc + c), add));
-    job_store<kRow>(st, j, fwd_at, kPlT, _mm512_mask_mov_ps(_mm512_mask_mov_ps(t, add, next), stop, avx512_neg(t)));
+      pl.store<kRow>(kPlAcc + c, _mm512_mask3_fmadd_ps(w, c == 3 ? z : a.f[c], pl.load<kRow>(kPlAcc + c), add));
+    pl.store<kRow>(kPlT, _mm512_mask_mov_ps(_mm512_mask_mov_ps(t, add, next), stop, avx512_neg(t)));
     if constexpr (kRow) {
-      _mm512_mask_storeu_epi32(last + j.p[0], add, _mm512_set1_epi32(id));
+      _mm512_mask_storeu_epi32(last + s.pixel(j, 0), add, _mm512_set1_epi32(id));
     } else {
       const __m256i ids = _mm256_set1_epi32(id);
-      _mm256_mask_storeu_epi32(last + j.p[0], __mmask8(add), ids);
-      _mm256_mask_storeu_epi32(last + j.p[1], __mmask8(add >> 8), ids);
+      _mm256_mask_storeu_epi32(last + s.pixel(j, 0), __mmask8(add), ids);
+      _mm256_mask_storeu_epi32(last + s.pixel(j, 1), __mmask8(add >> 8), ids);
     }
     stops |= stop;
   }
@@ -233,13 +248,13 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
 
 // fwd_jobs_avx512 on jobs q[0..n), four at a time where it can. Nonzero if a pixel stopped.
 template <int kChannels, bool kPlane, bool kRow>
-ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const Job* q, int n,
-                                           float* st, int32_t* last, int32_t id) {
+ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
+                                           const Job* q, int n, float* st, int32_t* last, int32_t id) {
   unsigned stops = 0;
   int k = 0;
-  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
-  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
-  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, q + k, st, last, id);
+  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
+  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
+  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
   return stops;
 }
 
@@ -300,11 +315,11 @@ struct JobSums<false> {
 
 // bwd_groups_avx2 on the N jobs q[0..N).
 template <int N, bool kRow>
-ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st, const int32_t* last, int32_t i,
-                                   JobSums<kRow> g) {
+ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const Job* q, float* st, const int32_t* last,
+                                   int32_t i, JobSums<kRow> g) {
   __m512 dxs[N], npow[N], G[N];
   for (int k = 0; k < N; ++k) {
-    avx512_neg_power<kRow>(a, q[k], dxs[k], npow[k]);
+    avx512_neg_power<kRow>(a, s, q[k], dxs[k], npow[k]);
     G[k] = avx512_exp2(npow[k]);
   }
   for (int k = 0; k < N; ++k) {
@@ -314,25 +329,26 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st
     const __m512 alpha = _mm512_min_ps(raw, _mm512_set1_ps(float(kAlphaMax)));
     const __mmask16 hit = j.lanes & _mm512_cmp_ps_mask(npow[k], a.ncut, _CMP_GE_OQ) &
                           _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMin)), _CMP_GE_OQ) &
-                          _mm512_cmpgt_epi32_mask(job_load_last<kRow>(last, j), _mm512_set1_epi32(i));
+                          _mm512_cmpgt_epi32_mask(job_load_last<kRow>(last, s, j), _mm512_set1_epi32(i));
     const __m512 one_minus = _mm512_sub_ps(_mm512_set1_ps(1.0f), alpha);
-    const __m512 t = job_load<kRow>(st, j, bwd_at, kPbT);
+    const JobPlanes<kBwdPlanes> pl(st, s, j);
+    const __m512 t = pl.load<kRow>(kPbT);
     const __m512 t_in = _mm512_div_ps(t, one_minus);
     __m512 dc[kBwdCh];
-    for (int c = 0; c < kBwdCh; ++c) dc[c] = job_load<kRow>(st, j, bwd_at, kPbDC + c);
+    for (int c = 0; c < kBwdCh; ++c) dc[c] = pl.load<kRow>(kPbDC + c);
     __m512 dq = _mm512_mul_ps(dc[0], a.f[0]);
     for (int c = 1; c < kBwdCh; ++c) dq = _mm512_fmadd_ps(dc[c], a.f[c], dq);
-    const __m512 S = job_load<kRow>(st, j, bwd_at, kPbS);
+    const __m512 S = pl.load<kRow>(kPbS);
     const __m512 diff = _mm512_sub_ps(dq, S), d_alpha = _mm512_mul_ps(diff, t_in);
-    job_store<kRow>(st, j, bwd_at, kPbS, _mm512_mask3_fmadd_ps(alpha, diff, S, hit));  // α·diff + S where hit
-    job_store<kRow>(st, j, bwd_at, kPbT, _mm512_mask_mov_ps(t, hit, t_in));
+    pl.store<kRow>(kPbS, _mm512_mask3_fmadd_ps(alpha, diff, S, hit));  // α·diff + S where hit
+    pl.store<kRow>(kPbT, _mm512_mask_mov_ps(t, hit, t_in));
     // Masked lanes add exactly zero, as in bwd_groups_avx2.
     const __m512 wh = _mm512_maskz_mul_ps(hit, alpha, t_in);
     for (int c = 0; c < 4; ++c) g.fma(kGr + c, wh, dc[c]);
     const __mmask16 free = hit & _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMax)), _CMP_LE_OQ);
     g.fma_where(kGo, free, G[k], d_alpha);
     const __m512 qp = _mm512_maskz_mul_ps(free, alpha, d_alpha);  // −dL/dpower
-    const __m512 dy = job_term<kRow>(j, &Row<float>::dy), qx = _mm512_mul_ps(qp, dx), qy = _mm512_mul_ps(qp, dy);
+    const __m512 dy = job_term<kRow>(s, j, &TileRows::dy), qx = _mm512_mul_ps(qp, dx), qy = _mm512_mul_ps(qp, dy);
     g.fma(kGu, qp, dx);  // moments, see moments_to_grads
     g.fma(kGv, qp, dy);
     g.fma(kGA, qx, dx);
@@ -343,12 +359,12 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const Job* q, float* st
 
 // bwd_jobs_avx512 on jobs q[0..n), four at a time where it can.
 template <bool kRow>
-ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const Job* q, int n, float* st, const int32_t* last,
-                                       int32_t i, JobSums<kRow> g) {
+ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const JobSet& s, const Job* q, int n, float* st,
+                                       const int32_t* last, int32_t i, JobSums<kRow> g) {
   int k = 0;
-  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, q + k, st, last, i, g);
-  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, q + k, st, last, i, g);
-  if (k < n) bwd_jobs_avx512<1, kRow>(a, q + k, st, last, i, g);
+  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, s, q + k, st, last, i, g);
+  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, s, q + k, st, last, i, g);
+  if (k < n) bwd_jobs_avx512<1, kRow>(a, s, q + k, st, last, i, g);
 }
 
 }  // namespace isplat::splat
