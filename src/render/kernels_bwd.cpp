@@ -76,7 +76,7 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
 ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                       float* st, const int32_t* last, int32_t max_last, float* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
-  Job jobs[kTile];
+  JobList jobs;
   TileRows rows;
   const GroupLast group_last(last);
   for (int64_t i = max_last - 1; i >= 0; --i) {

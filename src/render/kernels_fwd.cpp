@@ -212,7 +212,7 @@ template <int kChannels, bool kPlane>
 ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                       float* st, int32_t* last, const CameraParams& cam) {
   fwd_init(x0, y0, x1, y1, st, last);
-  Job jobs[kTile];
+  JobList jobs;
   TileRows rows;
   LiveGroups live = unstopped_groups_avx512(st);
   int64_t ys, ye, g0, g1;

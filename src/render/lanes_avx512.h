@@ -122,33 +122,44 @@ ISPLAT_AVX512 LiveGroups live_for_avx512(const GroupLast& gl, int32_t i) {
   return live;
 }
 
-// Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
-ISPLAT_AVX512 int row_jobs(const TileRows& t, Job* out) {
-  int n = 0;
-  for (unsigned m = t.groups[0] | t.groups[1]; m != 0; m &= m - 1) {
-    const int r = __builtin_ctz(m);
-    const unsigned lanes = ((t.groups[0] >> r) & 1 ? 0x00ffu : 0u) | ((t.groups[1] >> r) & 1 ? 0xff00u : 0u);
-    out[n++] = {{r, r}, __mmask16(lanes)};
+// A Gaussian's jobs in a tile: the rows to visit in order, compressed from a row mask in one vector step (no loop,
+// so no branch to mispredict on the number of rows).
+struct JobList {
+  alignas(64) int32_t row[kTile];
+  alignas(64) int32_t lanes[kTile];  // row jobs: the lane mask of each row
+  int rows = 0;
+  // Job k: row k of the list (row jobs), or rows 2k and 2k + 1 (pair jobs).
+  template <bool kRow>
+  ISPLAT_AVX512 Job at(int k) const {
+    if constexpr (kRow) return {{row[k], row[k]}, __mmask16(lanes[k])};
+    return {{row[2 * k], row[2 * k + 1]}, __mmask16(0xffff)};
   }
-  return n;
+};
+ISPLAT_AVX512 void compress_rows(unsigned mask, JobList& out) {
+  const __m512i index = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  _mm512_store_si512(out.row, _mm512_maskz_compress_epi32(__mmask16(mask), index));
+  out.rows = __builtin_popcount(mask);
+}
+// Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
+// Returns the number of jobs.
+ISPLAT_AVX512 int row_jobs(const TileRows& t, JobList& out) {
+  const unsigned m = t.groups[0] | t.groups[1];
+  compress_rows(m, out);
+  const __m512i lanes = _mm512_or_si512(_mm512_maskz_mov_epi32(__mmask16(t.groups[0]), _mm512_set1_epi32(0x00ff)),
+                                        _mm512_maskz_mov_epi32(__mmask16(t.groups[1]), _mm512_set1_epi32(0xff00)));
+  _mm512_store_si512(out.lanes, _mm512_maskz_compress_epi32(__mmask16(m), lanes));
+  return out.rows;
 }
 // Pair jobs, for a Gaussian within the column of group g: its groups in row order, two per job. A last
 // unpaired group goes to `odd`; returns the number of jobs.
-ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, Job* out, Group<float>& odd, bool& has_odd) {
-  const int32_t xb = int32_t(x0) + g * kLanes;
-  int n = 0, first = -1;
-  for (unsigned m = t.groups[g]; m != 0; m &= m - 1) {
-    const int r = __builtin_ctz(m);
-    if (first < 0) {
-      first = r;
-      continue;
-    }
-    out[n++] = {{first, r}, __mmask16(0xffff)};
-    first = -1;
+ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, JobList& out, Group<float>& odd, bool& has_odd) {
+  compress_rows(t.groups[g], out);
+  has_odd = out.rows & 1;
+  if (has_odd) {
+    const int r = out.row[out.rows - 1];
+    odd = {t.row(r), int32_t(x0) + g * kLanes, r * kTile + g * kLanes};
   }
-  has_odd = first >= 0;
-  if (has_odd) odd = {t.row(first), xb, first * kTile + g * kLanes};
-  return n;
+  return out.rows / 2;
 }
 
 // A job's pixel state: plane k of its low (high) half starts at b[0] (b[1]) + k·kTile (plane_at's layout), so each
@@ -203,18 +214,19 @@ ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const JobSet& s, const
                          job_term<kRow>(s, j, &TileRows::nc));
 }
 
-// fwd_groups_avx2 on the N jobs q[0..N); returns the lanes that stopped, OR-ed over the jobs (nonzero if any).
+// fwd_groups_avx2 on the N jobs k0, ..., k0 + N − 1 of q; returns the lanes that stopped, OR-ed over the jobs (nonzero
+// if any).
 template <int N, int kChannels, bool kPlane, bool kRow>
-ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s, const Job* q,
-                                       float* st, int32_t* last, int32_t id) {
+ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
+                                       const JobList& q, int k0, float* st, int32_t* last, int32_t id) {
   __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
-    avx512_neg_power<kRow>(a, s, q[k], dxs[k], npow[k]);
+    avx512_neg_power<kRow>(a, s, q.at<kRow>(k0 + k), dxs[k], npow[k]);
     raw[k] = _mm512_mul_ps(a.opac, avx512_exp2(npow[k]));
   }
   unsigned stops = 0;
   for (int k = 0; k < N; ++k) {
-    const Job& j = q[k];
+    const Job j = q.at<kRow>(k0 + k);
     const __m512 alpha = _mm512_min_ps(raw[k], _mm512_set1_ps(float(kAlphaMax)));
     const JobPlanes<kFwdPlanes> pl(st, s, j);
     const __m512 t = pl.load<kRow>(kPlT);
@@ -246,15 +258,15 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
   return stops;
 }
 
-// fwd_jobs_avx512 on jobs q[0..n), four at a time where it can. Nonzero if a pixel stopped.
+// fwd_jobs_avx512 on the n jobs of q, four at a time where it can. Nonzero if a pixel stopped.
 template <int kChannels, bool kPlane, bool kRow>
 ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
-                                           const Job* q, int n, float* st, int32_t* last, int32_t id) {
+                                           const JobList& q, int n, float* st, int32_t* last, int32_t id) {
   unsigned stops = 0;
   int k = 0;
-  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
-  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
-  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, s, q + k, st, last, id);
+  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
+  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
+  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
   return stops;
 }
 
@@ -313,17 +325,17 @@ struct JobSums<false> {
   }
 };
 
-// bwd_groups_avx2 on the N jobs q[0..N).
+// bwd_groups_avx2 on the N jobs k0, ..., k0 + N − 1 of q.
 template <int N, bool kRow>
-ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const Job* q, float* st, const int32_t* last,
-                                   int32_t i, JobSums<kRow> g) {
+ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const JobList& q, int k0, float* st,
+                                   const int32_t* last, int32_t i, JobSums<kRow> g) {
   __m512 dxs[N], npow[N], G[N];
   for (int k = 0; k < N; ++k) {
-    avx512_neg_power<kRow>(a, s, q[k], dxs[k], npow[k]);
+    avx512_neg_power<kRow>(a, s, q.at<kRow>(k0 + k), dxs[k], npow[k]);
     G[k] = avx512_exp2(npow[k]);
   }
   for (int k = 0; k < N; ++k) {
-    const Job& j = q[k];
+    const Job j = q.at<kRow>(k0 + k);
     const __m512 dx = dxs[k];
     const __m512 raw = _mm512_mul_ps(a.opac, G[k]);
     const __m512 alpha = _mm512_min_ps(raw, _mm512_set1_ps(float(kAlphaMax)));
@@ -357,14 +369,14 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const 
   }
 }
 
-// bwd_jobs_avx512 on jobs q[0..n), four at a time where it can.
+// bwd_jobs_avx512 on the n jobs of q, four at a time where it can.
 template <bool kRow>
-ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const JobSet& s, const Job* q, int n, float* st,
+ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const JobSet& s, const JobList& q, int n, float* st,
                                        const int32_t* last, int32_t i, JobSums<kRow> g) {
   int k = 0;
-  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, s, q + k, st, last, i, g);
-  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, s, q + k, st, last, i, g);
-  if (k < n) bwd_jobs_avx512<1, kRow>(a, s, q + k, st, last, i, g);
+  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, s, q, k, st, last, i, g);
+  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, s, q, k, st, last, i, g);
+  if (k < n) bwd_jobs_avx512<1, kRow>(a, s, q, k, st, last, i, g);
 }
 
 }  // namespace isplat::splat
