@@ -145,11 +145,11 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
       T* plane = st + bwd_at(r * kTile, 0);  // plane k of this row: plane[k * kTile + lane]
       const int64_t o = py * W + x0;
       const T* dc[kBwdCh] = {g_rgb + o, g_rgb + HW + o, g_rgb + 2 * HW + o, g_depth + o, g_alpha + o};
-      std::copy_n(final_T + o, w, plane + kPbT * kTile);
-      for (int c = 0; c < kBwdCh; ++c) std::copy_n(dc[c], w, plane + (kPbDC + c) * kTile);
+      copy_row(final_T + o, w, plane + kPbT * kTile);
+      for (int c = 0; c < kBwdCh; ++c) copy_row(dc[c], w, plane + (kPbDC + c) * kTile);
       // Behind the last contributor lies the background (zero for depth and alpha).
       for (int64_t l = 0; l < w; ++l) plane[kPbS * kTile + l] = dc[0][l] * bg[0] + dc[1][l] * bg[1] + dc[2][l] * bg[2];
-      std::copy_n(n_contrib + o, w, last + r * kTile);
+      copy_row(n_contrib + o, w, last + r * kTile);
       for (int64_t l = 0; l < w; ++l) max_last = std::max(max_last, last[r * kTile + l]);
     }
     tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,

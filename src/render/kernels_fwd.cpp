@@ -317,10 +317,10 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
       for (int64_t l = 0; l < w; ++l) alpha_out[o + l] = 1 - final_T[o + l];
       for (int c = 0; c < 3; ++c)
         for (int64_t l = 0; l < w; ++l) rgb[c * HW + o + l] = plane[(kPlAcc + c) * kTile + l] + final_T[o + l] * bg[c];
-      std::copy_n(plane + (kPlAcc + 3) * kTile, w, depth_out + o);
+      copy_row(plane + (kPlAcc + 3) * kTile, w, depth_out + o);
       if (normal_out)
-        for (int c = 0; c < 3; ++c) std::copy_n(plane + (kPlAcc + 4 + c) * kTile, w, normal_out + c * HW + o);
-      std::copy_n(scratch.last.data() + r * kTile, w, n_contrib + o);
+        for (int c = 0; c < 3; ++c) copy_row(plane + (kPlAcc + 4 + c) * kTile, w, normal_out + c * HW + o);
+      copy_row(scratch.last.data() + r * kTile, w, n_contrib + o);
     }
   });
 }
