@@ -72,7 +72,7 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
 }
 
 // 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
-// groups for a narrower one (a last unpaired group runs on the AVX2 rule).
+// groups for a narrower one (a last unpaired group with its high half masked off).
 ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                       float* st, const int32_t* last, int32_t max_last, float* out) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
@@ -101,14 +101,11 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
       moments_to_grads(s, slot);
       continue;
     }
-    Group<float> odd;
-    bool has_odd;
-    const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
+    const int n = pair_jobs(rows, int(g0), jobs);
     Avx2Sums g[2];  // all in the set of column g0
     g[0].zero(), g[1].zero();
     const int32_t col = int32_t(g0) * kLanes;
     bwd_all_jobs_avx512<false>(a, {rows, col, int32_t(x0) + col}, jobs, n, st, last, int32_t(i), {g[g0]});
-    if (has_odd) bwd_groups_avx2<1>(a.low(kBwdCh), &odd, st, last, int32_t(i), g);
     reduce_sets(g, slot);
     moments_to_grads(s, slot);
   }

@@ -207,7 +207,7 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
-// groups for a narrower one (a last unpaired group runs on the AVX2 rule).
+// groups for a narrower one (a last unpaired group with its high half masked off).
 template <int kChannels, bool kPlane>
 ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                       float* st, int32_t* last, const CameraParams& cam) {
@@ -231,14 +231,10 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
       const int n = row_jobs(rows, jobs);
       stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last, id);
     } else {
-      Group<float> odd;
-      bool has_odd;
-      const int n = pair_jobs(rows, x0, int(g0), jobs, odd, has_odd);
+      const int n = pair_jobs(rows, int(g0), jobs);
       const int32_t col = int32_t(g0) * kLanes;
       stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n, st, last,
                                                             id);
-      if (has_odd)
-        stops |= unsigned(fwd_groups_avx2<1, kChannels, kPlane>(a.low(kChannels), plane.low(), &odd, st, last, id));
     }
     if (stops != 0) live = unstopped_groups_avx512(st);
   }

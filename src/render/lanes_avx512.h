@@ -15,21 +15,9 @@ static_assert(kTile == 2 * kLanes, "the AVX-512 loops take a tile row as two 8-p
 
 struct Avx512Splat {
   __m512 u, a2, opac, ncut, f[7];
-  // The same constants in 8 lanes (the low halves: no instruction), for a last unpaired group.
-  ISPLAT_AVX512 Avx2Splat low(int channels) const {
-    Avx2Splat a;
-    a.u = _mm512_castps512_ps256(u), a.a2 = _mm512_castps512_ps256(a2);
-    a.opac = _mm512_castps512_ps256(opac), a.ncut = _mm512_castps512_ps256(ncut);
-    for (int c = 0; c < channels; ++c) a.f[c] = _mm512_castps512_ps256(f[c]);
-    return a;
-  }
 };
 struct Avx512Plane {
   __m512 iz0, gx, gy, zlo, izmin;
-  ISPLAT_AVX512 Avx2Plane low() const {
-    return {_mm512_castps512_ps256(iz0), _mm512_castps512_ps256(gx), _mm512_castps512_ps256(gy),
-            _mm512_castps512_ps256(zlo), _mm512_castps512_ps256(izmin)};
-  }
 };
 ISPLAT_AVX512 Avx512Plane avx512_plane(const DepthPlane<float>& p) {
   return {_mm512_set1_ps(p.iz0), _mm512_set1_ps(p.gx), _mm512_set1_ps(p.gy), _mm512_set1_ps(p.zlo),
@@ -128,11 +116,12 @@ struct JobList {
   alignas(64) int32_t row[kTile];
   alignas(64) int32_t lanes[kTile];  // row jobs: the lane mask of each row
   int rows = 0;
-  // Job k: row k of the list (row jobs), or rows 2k and 2k + 1 (pair jobs).
+  // Job k: row k of the list (row jobs), or rows 2k and 2k + 1 (pair jobs; a last odd row has its high half
+  // masked off, see pair_jobs).
   template <bool kRow>
   ISPLAT_AVX512 Job at(int k) const {
     if constexpr (kRow) return {{row[k], row[k]}, __mmask16(lanes[k])};
-    return {{row[2 * k], row[2 * k + 1]}, __mmask16(0xffff)};
+    return {{row[2 * k], row[2 * k + 1]}, __mmask16(2 * k + 1 < rows ? 0xffff : 0x00ff)};
   }
 };
 ISPLAT_AVX512 void compress_rows(unsigned mask, JobList& out) {
@@ -150,16 +139,14 @@ ISPLAT_AVX512 int row_jobs(const TileRows& t, JobList& out) {
   _mm512_store_si512(out.lanes, _mm512_maskz_compress_epi32(__mmask16(m), lanes));
   return out.rows;
 }
-// Pair jobs, for a Gaussian within the column of group g: its groups in row order, two per job. A last
-// unpaired group goes to `odd`; returns the number of jobs.
-ISPLAT_AVX512 int pair_jobs(const TileRows& t, int64_t x0, int g, JobList& out, Group<float>& odd, bool& has_odd) {
+// Pair jobs, for a Gaussian within the column of group g: its groups in row order, two per job; returns the number
+// of jobs. A last unpaired group is a job whose masked high half names another row of the tile: a job loads and
+// stores its halves in turn, so that row's state is stored back as it was loaded, and its lanes add exact zeros
+// to the sums (as a group left out would).
+ISPLAT_AVX512 int pair_jobs(const TileRows& t, int g, JobList& out) {
   compress_rows(t.groups[g], out);
-  has_odd = out.rows & 1;
-  if (has_odd) {
-    const int r = out.row[out.rows - 1];
-    odd = {t.row(r), int32_t(x0) + g * kLanes, r * kTile + g * kLanes};
-  }
-  return out.rows / 2;
+  if (out.rows & 1) out.row[out.rows] = out.row[out.rows - 1] ^ 1;  // rows < 16 here
+  return (out.rows + 1) / 2;
 }
 
 // A job's pixel state: plane k of its low (high) half starts at b[0] (b[1]) + k·kTile (plane_at's layout), so each
