@@ -164,12 +164,15 @@ ISPLAT_INLINE Splat<T> fwd_splat(const T* rec) {
           rec[kConC], rec[kOpac], rec[kCut],  {rec[kR], rec[kG], rec[kB], rec[kDepth], rec[kNx], rec[kNy], rec[kNz]}};
 }
 
+// Row by row (each row's planes are one contiguous block), so the loops vectorize.
 template <class T>
 ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st, int32_t* last) {
-  for (int p = 0; p < kPix; ++p) {
-    const bool inside = x0 + p % kTile < x1 && y0 + p / kTile < y1;
-    st[fwd_at(p, kPlT)] = inside ? 1 : -1, last[p] = 0;  // outside: "stopped", never composited
-    for (int c = 0; c < 7; ++c) st[fwd_at(p, kPlAcc + c)] = 0;
+  std::fill(st, st + kPix * kFwdPlanes, T(0));
+  std::fill(last, last + kPix, 0);
+  const int64_t w = x1 - x0, h = y1 - y0;
+  for (int r = 0; r < kTile; ++r) {
+    T* t = st + fwd_at(r * kTile, kPlT);
+    for (int l = 0; l < kTile; ++l) t[l] = r < h && l < w ? T(1) : T(-1);  // outside: "stopped", never composited
   }
 }
 
