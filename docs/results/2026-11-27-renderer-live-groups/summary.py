@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Per case and phase: the old and new ranges and the median of the paired (same round) differences, new - old."""
+"""Per case and phase: the old and new ranges and the median of the paired (same round) differences, new - old.
+Usage: summary.py [--names OLD NEW] FILE...; --names compares two other binaries of the rounds (default old, new)."""
 import re
 import sys
 from pathlib import Path
@@ -25,13 +26,17 @@ def median(xs):
     return xs[k] if len(xs) % 2 else (xs[k - 1] + xs[k]) / 2
 
 
-for path in sys.argv[1:]:
+args = sys.argv[1:]
+names = ("old", "new")
+if args[:1] == ["--names"]:
+    names, args = (args[1], args[2]), args[3:]
+for path in args:
     rows = parse(path)
     for case in dict.fromkeys(r[0] for (_, _), v in sorted(rows.items()) for r in v):
         for col in PHASES:
             i = COLS.index(col)
             pick = lambda b: [float(r[i]) for (k, bb), v in sorted(rows.items()) if bb == b for r in v if r[0] == case]
-            old, new = pick("old"), pick("new")
+            old, new = pick(names[0]), pick(names[1])
             d = [n - o for o, n in zip(old, new)]
             print(f"{Path(path).stem:22s} {case:18s} {col:5s} old {min(old):6.1f}-{max(old):6.1f}  "
                   f"new {min(new):6.1f}-{max(new):6.1f}  new-old median {median(d):+6.2f} ({min(d):+.1f} to {max(d):+.1f})")
