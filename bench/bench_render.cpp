@@ -146,7 +146,8 @@ void run(const Case& cs) {
     const auto ras = splat::rasterize_fwd(proj.packed, bins, cp, bg);
     double t3 = now_ms(), c3 = cpu_ms();
     const auto ones = torch::ones({3, cs.H, cs.W}), one = torch::ones({1, cs.H, cs.W});
-    const auto grad2d = splat::rasterize_bwd(proj.packed, bins, cp, bg, ras.final_T, ras.n_contrib, ones, one, one);
+    const auto grad2d =
+        splat::rasterize_bwd(proj.packed, bins, cp, bg, ras.final_T, ras.n_contrib, ones, one, one, ras.group_hits);
     double t4 = now_ms();
     const auto pg = splat::project_bwd(g.means, g.scales, g.quats, g.opacities, cp, {}, grad2d);
     double t5 = now_ms(), c5 = cpu_ms();

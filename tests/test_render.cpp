@@ -545,6 +545,91 @@ TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]"
   }
 }
 
+TEST_CASE(
+    "render: the forward's group hits are the groups it composited, and the backward gives the same "
+    "gradients with or without them",
+    "[render]") {
+  if (splat::simd_supported() < splat::Simd::avx512) {
+    WARN("this CPU has no avx512: the group hits are not recorded, so not checked here");
+    return;
+  }
+  const Camera cam = make_camera(100, 84, 80.0, 80.0, 0.3, true, torch::kFloat32);
+  const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, 100, 84);
+  const Gaussians scene = concat({random_scene(1500, cam, 21), random_scene(200, cam, 22, 1.4, 4.0, 20.0)});
+  const Gaussians g = scene.to(torch::kFloat32);
+  const double bg[3] = {0.2, 0.3, 0.4};
+  struct SimdGuard {  // restores the level when the test ends, failed REQUIREs included
+    const splat::Simd before = splat::set_simd_level(splat::Simd::avx512);
+    ~SimdGuard() { splat::set_simd_level(before); }
+  } guard;
+  const splat::Projection proj = splat::project_fwd(g.means, g.scales, g.quats, g.colors, g.opacities, cp, {});
+  const splat::TileBins bins = splat::bin_tiles(proj, cp);
+  const splat::RasterOutput out = splat::rasterize_fwd(proj.packed, bins, cp, bg, {false, false});
+  REQUIRE(out.group_hits.numel() == bins.intersections());
+  // Each entry's bits against its pixels: group (row r, half h) is set iff the entry is some pixel's contributor
+  // there, by the per-pixel rule in double (1 + its tile-local index ≤ the pixel's last contributor, and it passes
+  // the cut and the 1/255 test). Pixels within 0.1% of either test's edge may go either way in float, so a bit
+  // must be set where a pixel passes with that margin, and may be set only where one passes without it.
+  splat::set_simd_level(splat::Simd::portable);
+  const splat::RasterOutput ref = splat::rasterize_fwd(proj.packed, bins, cp, bg, {false, false});
+  CHECK(ref.group_hits.numel() == 0);
+  CHECK(torch::equal(ref.n_contrib, out.n_contrib));
+  const auto offs = bins.tile_offsets.accessor<int64_t, 1>();
+  const auto ids = bins.isect_ids.accessor<int32_t, 1>();
+  const auto hits = out.group_hits.accessor<int32_t, 1>();
+  const auto rec = proj.packed.accessor<float, 2>();
+  const auto last = out.n_contrib.accessor<int32_t, 2>();
+  const int64_t tiles_x = cp.tiles_x();
+  int64_t set = 0, checked = 0, mismatched = 0;
+  for (int64_t t = 0; t + 1 < offs.size(0); ++t) {
+    const int64_t x0 = (t % tiles_x) * 16, y0 = (t / tiles_x) * 16;
+    for (int64_t k = offs[t]; k < offs[t + 1]; ++k) {
+      const int64_t i = k - offs[t];
+      const auto r = rec[ids[k]];
+      uint32_t expect = 0, maybe = 0;
+      for (int64_t py = y0; py < std::min<int64_t>(y0 + 16, 84); ++py)
+        for (int64_t px = x0; px < std::min<int64_t>(x0 + 16, 100); ++px) {
+          const double dx = px + 0.5 - r[splat::kU], dy = py + 0.5 - r[splat::kV];
+          const double power =
+              0.5 * (r[splat::kConA] * dx * dx + r[splat::kConC] * dy * dy) + r[splat::kConB] * dx * dy;
+          const double raw = r[splat::kOpac] * std::exp(-power);
+          if (power > 1.001 * r[splat::kCut] || raw < 0.999 / 255 || i + 1 > last[py][px]) continue;
+          const uint32_t bit = 1u << ((px - x0) / 8 * 16 + (py - y0));
+          maybe |= bit;
+          if (power <= 0.999 * r[splat::kCut] && raw >= 1.001 / 255) expect |= bit;
+        }
+      const uint32_t got = uint32_t(hits[k]);
+      set += got != 0;
+      ++checked;
+      mismatched += (expect & ~got) != 0 || (got & ~maybe) != 0;
+    }
+  }
+  CHECK(checked == bins.intersections());
+  CHECK(set > checked / 4);
+  CHECK(mismatched == 0);
+  // The backward with the hits (AVX-512 forward and backward), without them (portable forward, AVX-512 backward:
+  // none recorded) and with them ignored (AVX-512 forward, portable backward): the same gradients, bit for bit.
+  const Weights w = random_weights(84, 100, 23, torch::kFloat32);
+  std::vector<std::vector<Tensor>> grads;
+  for (auto [fwd, bwd] :
+       {std::pair{splat::Simd::avx512, splat::Simd::avx512}, std::pair{splat::Simd::portable, splat::Simd::avx512},
+        std::pair{splat::Simd::avx512, splat::Simd::portable}}) {
+    splat::set_simd_level(fwd);
+    const Gaussians a = with_grad(g);
+    const RenderOutput o = render(a, cam);
+    const Tensor loss = weighted_loss(o, w);
+    splat::set_simd_level(bwd);
+    loss.backward();
+    grads.push_back(grads_of(a));
+  }
+  for (size_t run = 1; run < grads.size(); ++run)
+    for (int k = 0; k < 5; ++k) {
+      CAPTURE(run, kNames[k]);
+      CHECK(torch::equal(grads[0][k], grads[run][k]));
+    }
+  CHECK(max_abs(grads[0][0]) > 0);
+}
+
 TEST_CASE("render: every SIMD level's projection agrees bit for bit, culled and non-finite inputs included",
           "[render]") {
   // The projection runs a block of Gaussians per vector (4 or 8 lanes), built once per level; this ties the levels

@@ -99,6 +99,10 @@ struct RasterOutput {
   torch::Tensor rgb, alpha, depth, normal;  // [3,H,W], [1,H,W], [1,H,W], [3,H,W]
   torch::Tensor final_T;                    // [H, W] transmittance after the last contributor
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
+  // [I] int32 per tile-list entry: the 8-pixel groups of its tile where it composited a pixel (bit r: row r's left
+  // group, bit 16 + r: its right group). The AVX-512 float loops fill it, and their backward visits exactly these
+  // groups; other levels leave it empty.
+  torch::Tensor group_hits;
 };
 
 // What the forward composites besides colour and alpha.
@@ -118,9 +122,10 @@ torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& 
 // Per-Gaussian 2D gradients [N, kGrad2d] from the image gradients (undefined tensors count as zero).
 torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
                             const double background[3], const torch::Tensor& final_T, const torch::Tensor& n_contrib,
-                            const torch::Tensor& grad_rgb,     // [3, H, W]
-                            const torch::Tensor& grad_alpha,   // [1, H, W]
-                            const torch::Tensor& grad_depth);  // [1, H, W]
+                            const torch::Tensor& grad_rgb,          // [3, H, W]
+                            const torch::Tensor& grad_alpha,        // [1, H, W]
+                            const torch::Tensor& grad_depth,        // [1, H, W]
+                            const torch::Tensor& group_hits = {});  // RasterOutput::group_hits, or undefined
 
 // Instruction sets of the pixel loops and the projection (float only; double always runs portable). The
 // kernels use the best the CPU has. All do the same IEEE operations in the same order, fusing the same multiply-adds

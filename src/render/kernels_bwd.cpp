@@ -23,7 +23,7 @@ ISPLAT_INLINE Splat<T> bwd_splat(const T* rec) {
 // Writes the tile's per-intersection gradients (kGrad2d each) to `out`. The AVX2 twin has the same loops.
 template <class T>
 void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                      const int32_t* last, int32_t max_last, T* out) {
+                      const int32_t* last, int32_t max_last, T* out, const uint32_t*) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
   Group<T> groups[kMaxGroups];
   const GroupLast group_last(last);
@@ -43,7 +43,7 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
 ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                  float* st, const int32_t* last, int32_t max_last, float* out) {
+                                  float* st, const int32_t* last, int32_t max_last, float* out, const uint32_t*) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   Group<float> groups[kMaxGroups];
   const GroupLast group_last(last);
@@ -71,10 +71,15 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
   }
 }
 
-// 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
-// groups for a narrower one (a last unpaired group with its high half masked off).
+// 16 lanes per register: whole tile rows for a Gaussian that hits both groups of a row, pairs of rows' groups for
+// one that hits a single column (a last unpaired group with its high half masked off).
+// With the forward's group hits (non-null), each entry visits exactly the groups where it composited a pixel: the
+// lanes that contribute here are the lanes it composited there, so no box or culling test is needed, and an entry
+// that composited nothing costs a load. Without them, the groups come from the box, the culling and the live set.
+// Either way, only groups without a contributing lane differ, and those add exact zeros.
 ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                      float* st, const int32_t* last, int32_t max_last, float* out) {
+                                      float* st, const int32_t* last, int32_t max_last, float* out,
+                                      const uint32_t* group_hits) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   JobList jobs;
   TileRows rows;
@@ -84,10 +89,15 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
     float* slot = out + i * kGrad2d;
     int64_t ys, ye, g0, g1;
     Splat<float> s = bwd_splat(rec);
-    if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1))
+    if (group_hits) {
+      rows.groups[0] = group_hits[i] & 0xffffu, rows.groups[1] = group_hits[i] >> 16;
+      if ((rows.groups[0] | rows.groups[1]) != 0) row_terms(s.prepare(), y0, rows);
+      g0 = rows.groups[0] != 0 ? 0 : 1, g1 = rows.groups[1] != 0 ? 2 : 1;
+    } else if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
       tile_rows(s.prepare(), x0, y0, ys, ye, g0, g1, live_for_avx512(group_last, int32_t(i)), rows);
-    else
+    } else {
       rows.groups[0] = rows.groups[1] = 0;
+    }
     if ((rows.groups[0] | rows.groups[1]) == 0) {
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;
@@ -115,7 +125,7 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
 template <class T>
 void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const double* background, const T* final_T, const int32_t* n_contrib, const T* g_rgb,
-                        const T* g_alpha, const T* g_depth, T* slots) {
+                        const T* g_alpha, const T* g_depth, const uint32_t* group_hits, T* slots) {
   const int64_t W = cam.width, HW = W * cam.height;
   auto tile_fn = bwd_tile_generic<T>;
 #ifdef ISPLAT_HAVE_AVX2_LANES
@@ -150,7 +160,7 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
       for (int64_t l = 0; l < w; ++l) max_last = std::max(max_last, last[r * kTile + l]);
     }
     tile_fn(scratch.gather(packed, ids + begin, max_last), count, x0, y0, x1, y1, st, last, max_last,
-            slots + begin * kGrad2d);
+            slots + begin * kGrad2d, group_hits ? group_hits + begin : nullptr);
   });
 }
 
@@ -179,8 +189,12 @@ void reduce_slots(const int32_t* ids, int64_t intersections, const T* slots, int
 torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
                             const double background[3], const torch::Tensor& final_T, const torch::Tensor& n_contrib,
                             const torch::Tensor& grad_rgb, const torch::Tensor& grad_alpha,
-                            const torch::Tensor& grad_depth) {
+                            const torch::Tensor& grad_depth, const torch::Tensor& group_hits) {
   const int64_t H = cam.height, W = cam.width, n = packed.size(0), isects = bins.intersections();
+  // The forward's group hits, where it left them for these bins (AVX-512, float); only the AVX-512 loops read them.
+  const uint32_t* hits = group_hits.defined() && group_hits.numel() == isects && isects > 0
+                             ? reinterpret_cast<const uint32_t*>(group_hits.data_ptr<int32_t>())
+                             : nullptr;
   const auto opts = packed.options();
   auto prepare = [&](const torch::Tensor& g, int64_t channels) {
     return g.defined() ? g.to(opts).contiguous() : torch::zeros({channels, H, W}, opts);
@@ -192,7 +206,7 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
     rasterize_bwd_impl<scalar_t>(
         packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
         background, final_T.data_ptr<scalar_t>(), n_contrib.data_ptr<int32_t>(), g_rgb.data_ptr<scalar_t>(),
-        g_alpha.data_ptr<scalar_t>(), g_depth.data_ptr<scalar_t>(), slots.data_ptr<scalar_t>());
+        g_alpha.data_ptr<scalar_t>(), g_depth.data_ptr<scalar_t>(), hits, slots.data_ptr<scalar_t>());
     reduce_slots<scalar_t>(bins.isect_ids.data_ptr<int32_t>(), isects, slots.data_ptr<scalar_t>(), n,
                            grad2d.data_ptr<scalar_t>());
   });

@@ -210,11 +210,12 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
-// groups for a narrower one (a last unpaired group with its high half masked off).
+// groups for a narrower one (a last unpaired group with its high half masked off). Writes each entry's group hits.
 template <int kChannels, bool kPlane>
 ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                      float* st, int32_t* last, const CameraParams& cam) {
+                                      float* st, int32_t* last, const CameraParams& cam, uint32_t* group_hits) {
   fwd_init(x0, y0, x1, y1, st, last);
+  if (group_hits) std::fill(group_hits, group_hits + count, 0u);  // entries skipped or never reached hit nothing
   JobList jobs;
   TileRows rows;
   LiveGroups live = unstopped_groups_avx512(st);
@@ -230,22 +231,25 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
     const Avx512Splat a = avx512_splat(s, kChannels);
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
     unsigned stops;  // nonzero if a pixel stopped
+    uint32_t hits = 0;
     if (g1 - g0 == 2) {
       const int n = row_jobs(rows, jobs);
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last, id);
+      stops =
+          fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last, id, hits);
     } else {
       const int n = pair_jobs(rows, int(g0), jobs);
       const int32_t col = int32_t(g0) * kLanes;
       stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n, st, last,
-                                                            id);
+                                                            id, hits);
     }
+    if (group_hits) group_hits[i] = hits;
     if (stops != 0) live = unstopped_groups_avx512(st);
   }
 }
 
 template <int kChannels, bool kPlane>
 ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                  float* st, int32_t* last, const CameraParams& cam) {
+                                  float* st, int32_t* last, const CameraParams& cam, uint32_t*) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<float> groups[kMaxGroups];
   LiveGroups live = unstopped_groups(st);
@@ -268,12 +272,14 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
 }
 #endif
 
+// The last argument receives the entries' group hits (AVX-512 only; the others take nullptr and ignore it).
 template <class T>
-using FwdTileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*, const CameraParams&);
+using FwdTileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*, const CameraParams&,
+                           uint32_t*);
 
 template <class T, int kChannels, bool kPlane>
 void fwd_tile_portable(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                       int32_t* last, const CameraParams& cam) {
+                       int32_t* last, const CameraParams& cam, uint32_t*) {
   fwd_tile_generic<T, kChannels, kPlane>(local, count, x0, y0, x1, y1, st, last, cam);
 }
 
@@ -298,14 +304,15 @@ FwdTileFn<T> fwd_tile_fn(const RasterChannels& ch) {
 template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const RasterChannels& channels, const double* background, T* rgb, T* alpha_out, T* depth_out,
-                        T* normal_out, T* final_T, int32_t* n_contrib) {
+                        T* normal_out, T* final_T, int32_t* n_contrib, uint32_t* group_hits) {
   const int64_t W = cam.width, HW = W * cam.height;
   const T bg[3] = {T(background[0]), T(background[1]), T(background[2])};
   const FwdTileFn<T> tile_fn = fwd_tile_fn<T>(channels);
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     T* st = scratch.pixel_planes(kFwdPlanes);
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data(), cam);
+    tile_fn(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, st, scratch.last.data(), cam,
+            group_hits ? group_hits + begin : nullptr);
     // Row by row, plane by plane: each inner loop runs over contiguous values, so it vectorizes.
     const int64_t w = x1 - x0;
     for (int64_t py = y0; py < y1; ++py) {
@@ -378,16 +385,22 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
                            const double background[3], const RasterChannels& channels) {
   const int64_t H = cam.height, W = cam.width;
   const auto opts = packed.options();
-  RasterOutput out{
-      torch::empty({3, H, W}, opts), torch::empty({1, H, W}, opts),
-      torch::empty({1, H, W}, opts), channels.normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
-      torch::empty({H, W}, opts),    torch::empty({H, W}, opts.dtype(torch::kInt32))};
+  RasterOutput out{torch::empty({3, H, W}, opts),
+                   torch::empty({1, H, W}, opts),
+                   torch::empty({1, H, W}, opts),
+                   channels.normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
+                   torch::empty({H, W}, opts),
+                   torch::empty({H, W}, opts.dtype(torch::kInt32)),
+                   torch::Tensor()};
+  const bool hits = packed.scalar_type() == torch::kFloat32 && simd_level() == Simd::avx512;
+  out.group_hits = torch::empty({hits ? bins.intersections() : 0}, opts.dtype(torch::kInt32));
+  uint32_t* group_hits = hits ? reinterpret_cast<uint32_t*>(out.group_hits.data_ptr<int32_t>()) : nullptr;
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {
     rasterize_fwd_impl<scalar_t>(
         packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
         channels, background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(),
         out.depth.data_ptr<scalar_t>(), channels.normals ? out.normal.data_ptr<scalar_t>() : nullptr,
-        out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>());
+        out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>(), group_hits);
   });
   return out;
 }

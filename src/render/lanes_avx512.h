@@ -68,8 +68,8 @@ struct JobSet {
   int32_t col, xb;
   int32_t pixel(const Job& j, int half) const { return j.r[half] * kTile + col; }  // tile pixel of the half's lane 0
 };
-ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
-                             int64_t g1, const LiveGroups& live, TileRows& t) {
+// make_row's terms of the tile's 16 rows; returns dy.
+ISPLAT_AVX512 __m512 row_terms(const Splat<float>& s, int64_t y0, TileRows& t) {
   const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512 dy =  // T(py) + T(0.5) − v, with py = y0 + lane exactly
       _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(float(y0)), lane), _mm512_set1_ps(0.5f)),
@@ -77,6 +77,11 @@ ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int6
   const __m512 nb = _mm512_mul_ps(_mm512_set1_ps(s.nbk), dy);
   const __m512 nc = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(s.nck), dy), dy);
   _mm512_store_ps(t.dy, dy), _mm512_store_ps(t.nb, nb), _mm512_store_ps(t.nc, nc);
+  return dy;
+}
+ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
+                             int64_t g1, const LiveGroups& live, TileRows& t) {
+  const __m512 dy = row_terms(s, y0, t), nb = _mm512_load_ps(t.nb), nc = _mm512_load_ps(t.nc);
   const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
   const __m512 at_min = _mm512_mul_ps(_mm512_set1_ps(s.beta), dy), a2 = _mm512_set1_ps(s.a2);
   for (int g = 0; g < 2; ++g) {
@@ -202,10 +207,10 @@ ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const JobSet& s, const
 }
 
 // fwd_groups_avx2 on the N jobs k0, ..., k0 + N − 1 of q; returns the lanes that stopped, OR-ed over the jobs (nonzero
-// if any).
+// if any). Adds to `hits` the groups where a pixel was composited (RasterOutput::group_hits' bits).
 template <int N, int kChannels, bool kPlane, bool kRow>
 ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
-                                       const JobList& q, int k0, float* st, int32_t* last, int32_t id) {
+                                       const JobList& q, int k0, float* st, int32_t* last, int32_t id, uint32_t& hits) {
   __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
     avx512_neg_power<kRow>(a, s, q.at<kRow>(k0 + k), dxs[k], npow[k]);
@@ -241,6 +246,10 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
       _mm256_mask_storeu_epi32(last + s.pixel(j, 1), __mmask8(add >> 8), ids);
     }
     stops |= stop;
+    // The low half's group: row r[0], left (row jobs) or column col (pair jobs); the high half's likewise with r[1].
+    const int shift_lo = kRow ? 0 : 2 * s.col, shift_hi = kRow ? 16 : 2 * s.col;
+    hits |= unsigned((add & 0x00ffu) != 0) << (shift_lo + j.r[0]) | unsigned((add & 0xff00u) != 0)
+                                                                        << (shift_hi + j.r[1]);
   }
   return stops;
 }
@@ -248,12 +257,15 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
 // fwd_jobs_avx512 on the n jobs of q, four at a time where it can. Nonzero if a pixel stopped.
 template <int kChannels, bool kPlane, bool kRow>
 ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
-                                           const JobList& q, int n, float* st, int32_t* last, int32_t id) {
+                                           const JobList& q, int n, float* st, int32_t* last, int32_t id,
+                                           uint32_t& hits) {
   unsigned stops = 0;
   int k = 0;
-  for (; k + 4 <= n; k += 4) stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
-  for (; k + 2 <= n; k += 2) stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
-  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id);
+  for (; k + 4 <= n; k += 4)
+    stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id, hits);
+  for (; k + 2 <= n; k += 2)
+    stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id, hits);
+  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow>(a, plane, s, q, k, st, last, id, hits);
   return stops;
 }
 

@@ -89,7 +89,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const bool plane = options.depth == "plane";
     RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(), {options.normals, plane});
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
-                            out.final_T, out.n_contrib});
+                            out.final_T, out.n_contrib, out.group_hits});
     ctx->saved_data["width"] = width;
     ctx->saved_data["height"] = height;
     ctx->saved_data["near"] = options.near;
@@ -112,8 +112,8 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const Settings s = settings_from(ctx);
     const TileBins bins{saved[7], saved[8]};
     const Tensor grad_depth = ctx->saved_data["plane_depth"].toBool() ? Tensor() : grads[2];  // plane depth: none
-    const Tensor grad2d =
-        rasterize_bwd(saved[6], bins, cam, s.background, saved[9], saved[10], grads[0], grads[1], grad_depth);
+    const Tensor grad2d = rasterize_bwd(saved[6], bins, cam, s.background, saved[9], saved[10], grads[0], grads[1],
+                                        grad_depth, saved[11]);
     variable_list out(10);
     if (ctx->needs_input_grad(3)) out[3] = grad2d.narrow(1, 6, 3).contiguous();  // colours: columns r, g, b
     if (ctx->needs_input_grad(0) || ctx->needs_input_grad(1) || ctx->needs_input_grad(2) || ctx->needs_input_grad(4)) {
