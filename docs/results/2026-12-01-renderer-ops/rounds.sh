@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # The report's alternating rounds, each binary in a fresh process. OLD: bench_render with the kernels of 4bba2b0
-# (before this change) and the --stat option of 1b17b09's bench; NEW: bench_render built at 1b17b09 (after it).
+# (before this change) and the --stat option of ed6f245's bench; NEW: bench_render built at ed6f245 (after it).
 # Usage: OLD=... NEW=... rounds.sh [OUT]; the logs go to OUT (default: this folder).
 set -euo pipefail
 OLD=${OLD:-/tmp/bench_render_old}
-NEW=${NEW:-/tmp/bench_render_final}
+NEW=${NEW:-/tmp/bench_render_final2}
 OUT=${1:-$(dirname "$0")}
 run() {  # run ROUNDS FILE ARGS...: ROUNDS rounds of old then new
   local rounds=$1 file=$2
