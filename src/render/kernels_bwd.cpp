@@ -42,8 +42,11 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 }
 
 #ifdef ISPLAT_HAVE_AVX2_LANES
+// With the forward's group hits (non-null), each entry visits exactly the groups where it composited a pixel, in
+// the row-major order collect_groups gives (see bwd_tile_avx512).
 ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                  float* st, const int32_t* last, int32_t max_last, float* out, const uint32_t*) {
+                                  float* st, const int32_t* last, int32_t max_last, float* out,
+                                  const uint32_t* group_hits) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, 0.0f);
   Group<float> groups[kMaxGroups];
   const GroupLast group_last(last);
@@ -52,9 +55,24 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     float* slot = out + i * kGrad2d;
     int64_t ys, ye, g0, g1;
     Splat<float> s = bwd_splat(rec);
-    const int n = pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)
-                      ? collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups)
-                      : 0;
+    int n = 0;
+    if (group_hits) {
+      const uint32_t m = group_hits[i];
+      if (m != 0) {
+        s.prepare();
+        for (int r = 0; r < kTile; ++r) {
+          if (((m >> r) | (m >> (16 + r))) & 1u) {
+            const Row<float> row = make_row(s, y0 + r);
+            for (int h = 0; h < 2; ++h) {
+              groups[n] = {row, int32_t(x0) + h * kLanes, r * kTile + h * kLanes};
+              n += int((m >> (16 * h + r)) & 1u);
+            }
+          }
+        }
+      }
+    } else if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
+      n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups);
+    }
     if (n == 0) {
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;

@@ -249,8 +249,9 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
 
 template <int kChannels, bool kPlane>
 ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                  float* st, int32_t* last, const CameraParams& cam, uint32_t*) {
+                                  float* st, int32_t* last, const CameraParams& cam, uint32_t* group_hits) {
   fwd_init(x0, y0, x1, y1, st, last);
+  if (group_hits) std::fill(group_hits, group_hits + count, 0u);
   Group<float> groups[kMaxGroups];
   LiveGroups live = unstopped_groups(st);
   int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
@@ -264,9 +265,11 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     const Avx2Plane plane = kPlane ? avx2_plane(depth_plane(s, cam)) : Avx2Plane{};
     const int32_t id = int32_t(i + 1);
     int k = 0, stops = 0;
-    for (; k + 4 <= n; k += 4) stops += fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id);
-    for (; k + 2 <= n; k += 2) stops += fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id);
-    if (k < n) stops += fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id);
+    uint32_t hits = 0;
+    for (; k + 4 <= n; k += 4) stops += fwd_groups_avx2<4, kChannels, kPlane>(a, plane, groups + k, st, last, id, hits);
+    for (; k + 2 <= n; k += 2) stops += fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id, hits);
+    if (k < n) stops += fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id, hits);
+    if (group_hits) group_hits[i] = hits;
     if (stops > 0) active -= stops, live = unstopped_groups(st);
   }
 }
@@ -392,7 +395,7 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
                    torch::empty({H, W}, opts),
                    torch::empty({H, W}, opts.dtype(torch::kInt32)),
                    torch::Tensor()};
-  const bool hits = packed.scalar_type() == torch::kFloat32 && simd_level() == Simd::avx512;
+  const bool hits = packed.scalar_type() == torch::kFloat32 && simd_level() != Simd::portable;
   out.group_hits = torch::empty({hits ? bins.intersections() : 0}, opts.dtype(torch::kInt32));
   uint32_t* group_hits = hits ? reinterpret_cast<uint32_t*>(out.group_hits.data_ptr<int32_t>()) : nullptr;
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {

@@ -181,6 +181,12 @@ ISPLAT_INLINE LiveGroups unstopped_groups(const T* st) {
   return live;
 }
 
+// The bit of the group whose lane 0 is tile pixel p0 in RasterOutput::group_hits: row r's left group is bit r, its
+// right group bit 16 + r.
+ISPLAT_INLINE int group_bit(int p0) {
+  return ((p0 & kLanes) << 1) | (p0 / kTile);
+}
+
 // Backward: per group, the largest `last` of its pixels (0 for pixels outside the image).
 struct GroupLast {
   alignas(64) int32_t half[2][kTile];
@@ -376,7 +382,7 @@ ISPLAT_AVX2 void avx2_neg_power(const Avx2Splat& a, const Group<float>& q, __m25
 
 template <int N, int kChannels, bool kPlane>
 ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, const Group<float>* q, float* st,
-                                int32_t* last, int32_t id) {
+                                int32_t* last, int32_t id, uint32_t& hits) {
   __m256 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
     avx2_neg_power(a, q[k], dxs[k], npow[k]);
@@ -412,6 +418,7 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
     _mm256_storeu_si256(Lp,
                         _mm256_castps_si256(_mm256_blendv_ps(lst, _mm256_castsi256_ps(_mm256_set1_epi32(id)), add)));
     stops += __builtin_popcount(unsigned(_mm256_movemask_ps(stop)));
+    hits |= unsigned(_mm256_movemask_ps(add) != 0) << group_bit(p0);
   }
   return stops;
 }
