@@ -100,8 +100,8 @@ struct RasterOutput {
   torch::Tensor final_T;                    // [H, W] transmittance after the last contributor
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
   // [I] int32 per tile-list entry: the 8-pixel groups of its tile where it composited a pixel (bit r: row r's left
-  // group, bit 16 + r: its right group). The AVX-512 float loops fill it, and their backward visits exactly these
-  // groups; other levels leave it empty.
+  // group, bit 16 + r: its right group). The AVX2 and AVX-512 float loops fill it, and their backward visits exactly
+  // these groups; the portable loops leave it empty and ignore it.
   torch::Tensor group_hits;
 };
 

@@ -209,7 +209,8 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
                             const torch::Tensor& grad_rgb, const torch::Tensor& grad_alpha,
                             const torch::Tensor& grad_depth, const torch::Tensor& group_hits) {
   const int64_t H = cam.height, W = cam.width, n = packed.size(0), isects = bins.intersections();
-  // The forward's group hits, where it left them for these bins (AVX-512, float); only the AVX-512 loops read them.
+  // The forward's group hits, where it left them for these bins (AVX2 or AVX-512, float); the portable loops ignore
+  // them.
   const uint32_t* hits = group_hits.defined() && group_hits.numel() == isects && isects > 0
                              ? reinterpret_cast<const uint32_t*>(group_hits.data_ptr<int32_t>())
                              : nullptr;
