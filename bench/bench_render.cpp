@@ -143,7 +143,7 @@ void run(const Case& cs) {
     double t1 = now_ms();
     const auto bins = splat::bin_tiles(proj, cp);
     double t2 = now_ms();
-    const auto ras = splat::rasterize_fwd(proj.packed, bins, cp, bg);
+    const auto ras = splat::rasterize_fwd(proj.packed, bins, cp, bg, {true, false, true});  // hits for the backward
     double t3 = now_ms(), c3 = cpu_ms();
     const auto ones = torch::ones({3, cs.H, cs.W}), one = torch::ones({1, cs.H, cs.W});
     const auto grad2d =

@@ -566,12 +566,13 @@ TEST_CASE(
   const splat::TileBins bins = splat::bin_tiles(proj, cp);
   auto forward_at = [&](splat::Simd level) {
     splat::set_simd_level(level);
-    return splat::rasterize_fwd(proj.packed, bins, cp, bg, {false, false});
+    return splat::rasterize_fwd(proj.packed, bins, cp, bg, {false, false, true});
   };
   const std::vector<splat::Simd> levels = simd_levels();  // portable first
   CHECK(forward_at(splat::Simd::portable).group_hits.numel() == 0);
   const splat::RasterOutput out = forward_at(splat::Simd::avx2);
   REQUIRE(out.group_hits.numel() == bins.intersections());
+  CHECK(splat::rasterize_fwd(proj.packed, bins, cp, bg, {false, false, false}).group_hits.numel() == 0);  // not asked
   if (levels.back() == splat::Simd::avx512)
     CHECK(torch::equal(forward_at(splat::Simd::avx512).group_hits, out.group_hits));
   // Each entry's bits against its pixels: group (row r, half h) is set iff the entry is some pixel's contributor

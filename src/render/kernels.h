@@ -100,8 +100,9 @@ struct RasterOutput {
   torch::Tensor final_T;                    // [H, W] transmittance after the last contributor
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
   // [I] int32 per tile-list entry: the 8-pixel groups of its tile where it composited a pixel (bit r: row r's left
-  // group, bit 16 + r: its right group). The AVX2 and AVX-512 float loops fill it, and their backward visits exactly
-  // these groups; the portable loops leave it empty and ignore it.
+  // group, bit 16 + r: its right group). The AVX2 and AVX-512 float loops fill it when RasterChannels::group_hits
+  // asks, and their backward visits exactly these groups; otherwise it is empty ([0]) and the backward finds the
+  // groups itself.
   torch::Tensor group_hits;
 };
 
@@ -109,6 +110,7 @@ struct RasterOutput {
 struct RasterChannels {
   bool normals = true;       // false skips the normal (a sixth of the pixel work); `normal` is then empty ([0])
   bool plane_depth = false;  // depth where the ray meets each Gaussian's plane instead of its mean's depth
+  bool group_hits = false;   // record RasterOutput::group_hits for a backward to follow (inference needs none)
 };
 
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,

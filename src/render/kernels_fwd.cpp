@@ -275,7 +275,8 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
 }
 #endif
 
-// The last argument receives the entries' group hits (AVX-512 only; the others take nullptr and ignore it).
+// The last argument receives the entries' group hits, or is nullptr (the vector loops then record none; the portable
+// loops always ignore it).
 template <class T>
 using FwdTileFn = void (*)(const T*, int64_t, int64_t, int64_t, int64_t, int64_t, T*, int32_t*, const CameraParams&,
                            uint32_t*);
@@ -395,7 +396,7 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
                    torch::empty({H, W}, opts),
                    torch::empty({H, W}, opts.dtype(torch::kInt32)),
                    torch::Tensor()};
-  const bool hits = packed.scalar_type() == torch::kFloat32 && simd_level() != Simd::portable;
+  const bool hits = channels.group_hits && packed.scalar_type() == torch::kFloat32 && simd_level() != Simd::portable;
   out.group_hits = torch::empty({hits ? bins.intersections() : 0}, opts.dtype(torch::kInt32));
   uint32_t* group_hits = hits ? reinterpret_cast<uint32_t*>(out.group_hits.data_ptr<int32_t>()) : nullptr;
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_fwd", [&] {

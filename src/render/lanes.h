@@ -57,11 +57,13 @@ template <class T>
 struct Splat {
   T u, v, A, B, C, opac, cut;
   T f[7];
-  T beta = 0, cut_wide = 0;    // −B/A (where a row's power is smallest), cut with the kSpanMargin slack
+  T beta = 0;                  // −B/A: where a row's power is smallest
   T a2 = 0, nbk = 0, nck = 0;  // −½·log2 e·A, −log2 e·B, −½·log2 e·C
-  T ncut = 0, ncut_wide = 0;   // −log2 e·cut and −log2 e·cut_wide: a pixel is in when neg_power ≥ ncut
+  // −log2 e·cut (a pixel is in when neg_power ≥ ncut), and the same for the cut with the kSpanMargin slack
+  T ncut = 0, ncut_wide = 0;
   Splat& prepare() {
-    beta = -B / A, cut_wide = cut * T(1 + kSpanMargin) + T(kSpanMargin);
+    const T cut_wide = cut * T(1 + kSpanMargin) + T(kSpanMargin);
+    beta = -B / A;
     a2 = T(-0.5 * kLog2e) * A, nbk = T(-kLog2e) * B, nck = T(-0.5 * kLog2e) * C;
     ncut = T(-kLog2e) * cut, ncut_wide = T(-kLog2e) * cut_wide;
     return *this;

@@ -50,7 +50,6 @@ ISPLAT_AVX512 __m512 avx512_exp2(__m512 y) {
 struct TileRows {
   alignas(64) float dy[kTile], nb[kTile], nc[kTile];
   unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
-  Row<float> row(int r) const { return {dy[r], nb[r], nc[r]}; }
 };
 
 // 16 lanes of one Gaussian: two 8-pixel groups, the low half on tile row r[0], the high half on r[1]. Row jobs

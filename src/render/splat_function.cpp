@@ -87,7 +87,11 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     for (int k = 0; k < 5; ++k) check_no_nonfinite(proj.nonfinite[k], names[k]);  // counted by the projection pass
     const TileBins bins = bin_tiles(proj, cam);
     const bool plane = options.depth == "plane";
-    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(), {options.normals, plane});
+    // Group hits only where a backward may follow (the inputs that take gradients are means to opacities).
+    const bool backward = means.requires_grad() || scales.requires_grad() || quats.requires_grad() ||
+                          colors.requires_grad() || opacities.requires_grad();
+    RasterOutput out =
+        rasterize_fwd(proj.packed, bins, cam, options.background.data(), {options.normals, plane, backward});
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
                             out.final_T, out.n_contrib, out.group_hits});
     ctx->saved_data["width"] = width;
