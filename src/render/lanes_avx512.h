@@ -49,7 +49,7 @@ ISPLAT_AVX512 __m512 avx512_exp2(__m512 y) {
 // or not never changes a result; nor does dropping a group that is not live (LiveGroups).
 struct TileRows {
   alignas(64) float dy[kTile], nb[kTile], nc[kTile];
-  unsigned groups[2];  // bit r: row r's left (0) / right (1) group may be hit; 0 outside the box
+  unsigned groups[2];  // bit r: row r's left (0) / right (1) group is to be visited; 0 outside the box
 };
 
 // 16 lanes of one Gaussian: two 8-pixel groups, the low half on tile row r[0], the high half on r[1]. Row jobs
@@ -133,7 +133,7 @@ ISPLAT_AVX512 void compress_rows(unsigned mask, JobList& out) {
   _mm512_store_si512(out.row, _mm512_maskz_compress_epi32(__mmask16(mask), index));
   out.rows = __builtin_popcount(mask);
 }
-// Row jobs, for a Gaussian whose box spans both groups of the tile's rows: every row where a group may be hit.
+// Row jobs, for a Gaussian that may reach both groups of the tile's rows: every row with a group to visit.
 // Returns the number of jobs.
 ISPLAT_AVX512 int row_jobs(const TileRows& t, JobList& out) {
   const unsigned m = t.groups[0] | t.groups[1];
