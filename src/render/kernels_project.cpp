@@ -164,13 +164,6 @@ ISPLAT_INLINE void project_block(const InputBlock<T, L>& in, const CameraParams&
   g.live = live & (T(255) * g.opac > T(1));  // otherwise α can never reach 1/255
 }
 
-// floor(x) clamped to [lo, hi] (huge or NaN x included), without a libm call.
-inline int32_t tile_floor(double x, int32_t lo, int32_t hi) {
-  const double c = std::min(double(hi), std::max(double(lo), x));
-  const int32_t i = int32_t(c);
-  return i - (double(i) > c);
-}
-
 template <class T>
 struct ProjectInputs {
   const T *means, *scales, *quats, *colors, *opac;
@@ -183,28 +176,51 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
   using V = Vec<T, L>;
   const int32_t tiles_x = int32_t(cam.tiles_x()), tiles_y = int32_t(cam.tiles_y());
   const T fx = T(cam.fx), fy = T(cam.fy), cx = T(cam.cx), cy = T(cam.cy), sk = T(cam.skew);
-  auto count_bad = [](const T* v, int k) {
-    int b = 0;
-    for (int j = 0; j < k; ++j) b += std::isfinite(v[j]) ? 0 : 1;
-    return b;
+  using D = Vec<double, L>;  // the rectangle in double, as for one Gaussian
+  using I = Vec<int32_t, L>;
+  // floor(x) clamped to [lo, hi] (huge or NaN x included: NaN gives lo), without a libm call.
+  auto floor_clamped = [](D x, int32_t lo, int32_t hi) {
+    const D c = vmin(bcast<L>(double(hi)), vmax(bcast<L>(double(lo)), x));
+    const I i = __builtin_convertvector(c, I);
+    return i + __builtin_convertvector(__builtin_convertvector(i, D) > c, I);  // the mask is −1 where true
   };
   InputBlock<T, L> in;
   GeometryBlock<T, L> g;
   for (int64_t first = begin; first < end; first += L) {
     const int count = int(std::min<int64_t>(L, end - first));
     load_block(src.means, src.scales, src.quats, src.opac, first, count, in);
-    bool clean[L];
-    for (int j = 0; j < count; ++j) {
-      const int64_t i = first + j;
-      const int b[5] = {count_bad(src.means + 3 * i, 3), count_bad(src.scales + 3 * i, 3),
-                        count_bad(src.quats + 4 * i, 4), count_bad(src.colors + 3 * i, 3), count_bad(src.opac + i, 1)};
-      for (int k = 0; k < 5; ++k) bad[k] += b[k];
-      clean[j] = b[0] + b[1] + b[2] + b[3] + b[4] == 0;
-    }
+    V col[3];
+    for (int j = 0; j < L; ++j)
+      for (int c = 0; c < 3; ++c) col[c][j] = j < count ? src.colors[3 * (first + j) + c] : T(0);
+    // Non-finite inputs, counted per input (lanes past the end hold zeros); such a Gaussian is culled. A comparison
+    // gives −1 where true, so each sum is minus the lane's count.
+    auto nonfinite = [](V x) { return finite(x) == 0; };
+    const Mask<T, L> per_input[5] = {
+        nonfinite(in.m[0]) + nonfinite(in.m[1]) + nonfinite(in.m[2]),
+        nonfinite(in.s[0]) + nonfinite(in.s[1]) + nonfinite(in.s[2]),
+        nonfinite(in.q[0]) + nonfinite(in.q[1]) + nonfinite(in.q[2]) + nonfinite(in.q[3]),
+        nonfinite(col[0]) + nonfinite(col[1]) + nonfinite(col[2]), nonfinite(in.o)};
+    Mask<T, L> dirty = per_input[0] | per_input[1] | per_input[2] | per_input[3] | per_input[4];
+    for (int k = 0; k < 5; ++k)
+      for (int j = 0; j < L; ++j) bad[k] -= per_input[k][j];
     project_block(in, cam, st, g);
     const V u = fx * g.a + sk * g.b + cx, v = fy * g.b + cy;
-    const Mask<T, L> live = g.live & finite(u) & finite(v) & finite(g.A) & finite(g.B) & finite(g.C);
+    const Mask<T, L> live =
+        g.live & finite(u) & finite(v) & finite(g.A) & finite(g.B) & finite(g.C) & (dirty == 0);
     const V scaled_opac = T(255) * g.opac;
+    // ln(255·o') only where it may be below the cap: ln 91 > 4.5.
+    V cut = bcast<L>(T(kMaxPower));
+    for (int j = 0; j < count; ++j)
+      if (live[j] && scaled_opac[j] < T(91)) cut[j] = std::min(T(kMaxPower), std::log(scaled_opac[j]));
+    // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
+    const D extent2 = 2.0 * (__builtin_convertvector(cut, D) * (1.0 + kSpanMargin) + kSpanMargin);
+    const D rx = vsqrt(extent2 * __builtin_convertvector(g.ad, D)) + kSpanMargin,
+            ry = vsqrt(extent2 * __builtin_convertvector(g.cd, D)) + kSpanMargin;
+    const D ud = __builtin_convertvector(u, D), vd = __builtin_convertvector(v, D);
+    const I tx0 = floor_clamped((ud - rx) / kTile, 0, tiles_x);
+    const I tx1 = floor_clamped((ud + rx) / kTile, -1, tiles_x - 1) + 1;
+    const I ty0 = floor_clamped((vd - ry) / kTile, 0, tiles_y);
+    const I ty1 = floor_clamped((vd + ry) / kTile, -1, tiles_y - 1) + 1;
     // Normal: the axis of the smallest scale, in camera space, flipped to face the camera.
     const Mask<T, L> smallest_y = (in.s[1] < in.s[0]) & (in.s[1] <= in.s[2]);
     const Mask<T, L> smallest_z = (in.s[2] < in.s[0]) & (in.s[2] < in.s[1]);
@@ -219,27 +235,18 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
       const int64_t i = first + j;
       T* rec = packed + i * kRec;
       int32_t* rect = rects + i * 4;
-      std::fill(rec, rec + kRec, T(0));
-      std::fill(rect, rect + 4, 0);
-      if (!clean[j] || !live[j]) continue;
-      // ln(255·o') only where it may be below the cap: ln 91 > 4.5.
-      const T cut = scaled_opac[j] >= T(91) ? T(kMaxPower) : std::min(T(kMaxPower), std::log(scaled_opac[j]));
-      // Tile rectangle of the cut ellipse's bounding box (pixel centre c lies in tile floor(c / 16)).
-      const double extent2 = 2.0 * (double(cut) * (1.0 + kSpanMargin) + kSpanMargin);
-      const double rx = std::sqrt(extent2 * double(g.ad[j])) + kSpanMargin,
-                   ry = std::sqrt(extent2 * double(g.cd[j])) + kSpanMargin;
-      const double uj = double(u[j]), vj = double(v[j]);
-      const int32_t tx0 = tile_floor((uj - rx) / kTile, 0, tiles_x);
-      const int32_t tx1 = tile_floor((uj + rx) / kTile, -1, tiles_x - 1) + 1;
-      const int32_t ty0 = tile_floor((vj - ry) / kTile, 0, tiles_y);
-      const int32_t ty1 = tile_floor((vj + ry) / kTile, -1, tiles_y - 1) + 1;
-      if (tx0 >= tx1 || ty0 >= ty1) continue;  // footprint misses the image
-      rect[0] = tx0, rect[1] = ty0, rect[2] = tx1, rect[3] = ty1;
+      // Culled, or the footprint misses the image: a zero record and an empty rectangle.
+      if (!live[j] || tx0[j] >= tx1[j] || ty0[j] >= ty1[j]) {
+        std::fill(rec, rec + kRec, T(0));
+        std::fill(rect, rect + 4, 0);
+        continue;
+      }
+      rect[0] = tx0[j], rect[1] = ty0[j], rect[2] = tx1[j], rect[3] = ty1[j];
       rec[kU] = u[j], rec[kV] = v[j], rec[kConA] = g.A[j], rec[kConB] = g.B[j], rec[kConC] = g.C[j];
-      rec[kOpac] = g.opac[j], rec[kCut] = cut, rec[kDepth] = g.t[2][j];
-      rec[kR] = src.colors[3 * i], rec[kG] = src.colors[3 * i + 1], rec[kB] = src.colors[3 * i + 2];
+      rec[kOpac] = g.opac[j], rec[kCut] = cut[j], rec[kDepth] = g.t[2][j];
+      rec[kR] = col[0][j], rec[kG] = col[1][j], rec[kB] = col[2][j];
       rec[kNx] = nrm[0][j], rec[kNy] = nrm[1][j], rec[kNz] = nrm[2][j];
-      rec[kRx] = T(rx), rec[kRy] = T(ry);
+      rec[kRx] = T(rx[j]), rec[kRy] = T(ry[j]);
     }
   }
 }
