@@ -195,18 +195,16 @@ ISPLAT_INLINE void project_fwd_range(const ProjectInputs<T>& src, int64_t begin,
     // Non-finite inputs, counted per input (lanes past the end hold zeros); such a Gaussian is culled. A comparison
     // gives −1 where true, so each sum is minus the lane's count.
     auto nonfinite = [](V x) { return finite(x) == 0; };
-    const Mask<T, L> per_input[5] = {
-        nonfinite(in.m[0]) + nonfinite(in.m[1]) + nonfinite(in.m[2]),
-        nonfinite(in.s[0]) + nonfinite(in.s[1]) + nonfinite(in.s[2]),
-        nonfinite(in.q[0]) + nonfinite(in.q[1]) + nonfinite(in.q[2]) + nonfinite(in.q[3]),
-        nonfinite(col[0]) + nonfinite(col[1]) + nonfinite(col[2]), nonfinite(in.o)};
+    const Mask<T, L> per_input[5] = {nonfinite(in.m[0]) + nonfinite(in.m[1]) + nonfinite(in.m[2]),
+                                     nonfinite(in.s[0]) + nonfinite(in.s[1]) + nonfinite(in.s[2]),
+                                     nonfinite(in.q[0]) + nonfinite(in.q[1]) + nonfinite(in.q[2]) + nonfinite(in.q[3]),
+                                     nonfinite(col[0]) + nonfinite(col[1]) + nonfinite(col[2]), nonfinite(in.o)};
     Mask<T, L> dirty = per_input[0] | per_input[1] | per_input[2] | per_input[3] | per_input[4];
     for (int k = 0; k < 5; ++k)
       for (int j = 0; j < L; ++j) bad[k] -= per_input[k][j];
     project_block(in, cam, st, g);
     const V u = fx * g.a + sk * g.b + cx, v = fy * g.b + cy;
-    const Mask<T, L> live =
-        g.live & finite(u) & finite(v) & finite(g.A) & finite(g.B) & finite(g.C) & (dirty == 0);
+    const Mask<T, L> live = g.live & finite(u) & finite(v) & finite(g.A) & finite(g.B) & finite(g.C) & (dirty == 0);
     const V scaled_opac = T(255) * g.opac;
     // ln(255·o') only where it may be below the cap: ln 91 > 4.5.
     V cut = bcast<L>(T(kMaxPower));
