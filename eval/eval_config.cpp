@@ -147,8 +147,9 @@ void ScoringOptions::visit(ConfigVisitor& v) {
   v.field("examples", examples, "example panels (source, target, prediction, mask) per dataset and method",
           Range::at_least(0));
   v.field("gallery", gallery,
-          "failure gallery: this many worst pairs by PSNR and by hole rate per dataset and method, re-rendered as "
-          "source, target, prediction, error, rendered normals, alpha (0 = none)",
+          "failure gallery: this many worst pairs by PSNR, by hole rate and by crack rate per dataset and method, "
+          "re-rendered as source, target, prediction, error, rendered normals, alpha and, where the target has depth, "
+          "the crack map (red: a farther surface seen through, blue: a nearer one drawn over; 0 = none)",
           Range::between(0, 64));
   v.field("baseline_step", baseline_step, "metres per group of the finer baseline breakdown (report and baseline.png)",
           Range::between(0.01, 100.0));

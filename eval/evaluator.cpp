@@ -225,6 +225,14 @@ std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt, const to
                      std::acos(cosang) * 180.0 / M_PI, median, half_edge);
 }
 
+StabilityOptions Evaluator::crack_options() const {
+  StabilityOptions so;
+  so.edge_margin = config_.scoring.crack_edge_margin;
+  so.holes_break = config_.scoring.crack_holes;
+  so.crack_side = parse_crack_side(config_.scoring.crack_side);
+  return so;
+}
+
 ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
                                  const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
                                  bool has_depth) {
@@ -275,11 +283,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
     r.hole_rate = hole_rate(o.alpha, mask);
     if (tgt.valid.defined() && tgt.valid.sum().item<double>() > 0) {
       const auto ref = tgt.depth * (tgt.valid > 0);
-      StabilityOptions so;
-      so.edge_margin = config_.scoring.crack_edge_margin;
-      so.holes_break = config_.scoring.crack_holes;
-      so.crack_side = parse_crack_side(config_.scoring.crack_side);
-      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, so);
+      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, crack_options());
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
   }
@@ -334,23 +338,22 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
 void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
                               const std::vector<PairResult>& results, const MethodOptions& mo,
                               const std::vector<ColmapModel>& points, bool has_depth) {
-  std::vector<const PairResult*> by_psnr, by_holes;
+  std::vector<const PairResult*> by_psnr, by_holes, by_cracks;
   for (const auto& r : results) {
     if (std::isfinite(r.psnr)) by_psnr.push_back(&r);
     if (std::isfinite(r.hole_rate) && r.hole_rate > 0) by_holes.push_back(&r);
+    if (std::isfinite(r.crack_rate) && r.crack_rate > 0) by_cracks.push_back(&r);
   }
   std::stable_sort(by_psnr.begin(), by_psnr.end(), [](auto* a, auto* b) { return a->psnr < b->psnr; });
   std::stable_sort(by_holes.begin(), by_holes.end(), [](auto* a, auto* b) { return a->hole_rate > b->hole_rate; });
+  std::stable_sort(by_cracks.begin(), by_cracks.end(), [](auto* a, auto* b) { return a->crack_rate > b->crack_rate; });
   const fs::path dir = fs::path(dataset_dir(d)) / "gallery";
   std::vector<std::pair<fs::path, int64_t>> wanted;
-  for (size_t k = 0; k < static_cast<size_t>(config_.scoring.gallery); ++k) {
-    if (k < by_psnr.size())
-      wanted.push_back(
-          {dir / cat(safe_name(mo.name), "_worst_psnr", k + 1, "_pair", by_psnr[k]->index, ".png"), by_psnr[k]->index});
-    if (k < by_holes.size())
-      wanted.push_back({dir / cat(safe_name(mo.name), "_worst_holes", k + 1, "_pair", by_holes[k]->index, ".png"),
-                        by_holes[k]->index});
-  }
+  for (size_t k = 0; k < static_cast<size_t>(config_.scoring.gallery); ++k)
+    for (const auto& [kind, worst] : {std::pair{"psnr", &by_psnr}, {"holes", &by_holes}, {"cracks", &by_cracks}})
+      if (k < worst->size())
+        wanted.push_back({dir / cat(safe_name(mo.name), "_worst_", kind, k + 1, "_pair", (*worst)[k]->index, ".png"),
+                          (*worst)[k]->index});
   // Panels of pairs that are no longer among the worst (the results changed) go.
   const std::string prefix = safe_name(mo.name) + "_worst_";
   if (fs::exists(dir))
@@ -374,8 +377,11 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
             ? (torch::nn::functional::normalize(o.normal, torch::nn::functional::NormalizeFuncOptions().dim(0)) + 1) / 2
             : torch::zeros({3, H, W});
     const auto alpha = o.alpha.defined() ? o.alpha.reshape({1, H, W}) : torch::zeros({1, H, W});
-    write_panel(path.string(),
-                {{sp.source.image, sp.target.image, outline_mask(o.image, sp.mask), error, normals, alpha}});
+    std::vector<torch::Tensor> row = {sp.source.image, sp.target.image, outline_mask(o.image, sp.mask),
+                                      error,           normals,         alpha};
+    if (o.alpha.defined() && sp.target.valid.defined() && sp.target.valid.sum().item<double>() > 0)
+      row.push_back(crack_map(o.depth, o.alpha, sp.target.depth * (sp.target.valid > 0), sp.mask, crack_options()));
+    write_panel(path.string(), {row});
   }
   if (!wanted.empty())
     log_info("eval: failure gallery of ", config_.datasets[d].name, " / ", mo.name, " in ", dir.string());

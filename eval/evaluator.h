@@ -10,6 +10,7 @@
 #include "eval/methods.h"
 #include "eval/report.h"
 #include "metrics/metrics.h"
+#include "metrics/stability.h"
 
 namespace isplat {
 
@@ -62,8 +63,11 @@ class Evaluator {
   ScoredPair score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
                         const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
                         bool has_depth);
-  // The failure gallery (scoring.gallery): the worst pairs by PSNR and by hole rate, re-rendered into
-  // <dataset>/gallery/ as source, target, prediction, error, rendered normals and alpha. Existing panels are kept.
+  // The crack measure's options from scoring (crack_edge_margin, crack_holes, crack_side).
+  StabilityOptions crack_options() const;
+  // The failure gallery (scoring.gallery): the worst pairs by PSNR, by hole rate and by crack rate, re-rendered into
+  // <dataset>/gallery/ as source, target, prediction, error, rendered normals, alpha and (where the target has
+  // depth) the crack map. Existing panels are kept.
   void write_gallery(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
                      const std::vector<PairResult>& results, const MethodOptions& mo,
                      const std::vector<ColmapModel>& points, bool has_depth);

@@ -639,14 +639,39 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   CHECK_THAT(md, Catch::Contains("| tiny@n900 | motion "));
   CHECK(fs::exists(fs::path(c.scoring.out) / "baseline.png"));
   CHECK_THAT(test::read_bytes(c.scoring.out + "/breakdown.csv"), Catch::Contains("tiny@n900,\"baseline [0,0.5)\""));
-  int64_t gallery_psnr = 0, gallery_holes = 0;
+  int64_t gallery_psnr = 0, gallery_holes = 0, gallery_cracks = 0;
+  fs::path crack_panel;
   for (const auto& e : fs::recursive_directory_iterator(c.scoring.out)) {
     const std::string f = e.path().filename().string();
     if (f.rfind("tiny_n900_worst_psnr1_pair", 0) == 0) ++gallery_psnr;
     if (f.rfind("tiny_n900_worst_holes1_pair", 0) == 0) ++gallery_holes;
+    if (f.rfind("tiny_n900_worst_cracks1_pair", 0) == 0) ++gallery_cracks, crack_panel = e.path();
   }
   CHECK(gallery_psnr == 1);
   CHECK(gallery_holes == 1);
+  // The worst pair by cracks is the one with the largest crack rate, and its panel has the crack map as a 7th tile.
+  const ResultsLog scored(c.scoring.out + "/courtyard/results_tiny_n900.jsonl");
+  int64_t most_cracked = -1;
+  double most = 0;
+  for (const auto& [i, r] : scored.done())
+    if (std::isfinite(r.crack_rate) && r.crack_rate > most) most = r.crack_rate, most_cracked = i;
+  REQUIRE(most_cracked >= 0);
+  REQUIRE(gallery_cracks == 1);
+  CHECK_THAT(crack_panel.filename().string(), Catch::EndsWith(cat("_pair", most_cracked, ".png")));
+  const cv::Mat crack_png = cv::imread(crack_panel.string());
+  REQUIRE_FALSE(crack_png.empty());
+  const int tile = crack_png.cols / 7;  // seven frames side by side (the panel writer scales small frames up)
+  REQUIRE(crack_png.cols == 7 * tile);
+  CHECK(tile * g.eval_height == crack_png.rows * g.eval_width);
+  int64_t grey = 0, broken = 0;  // in the last tile: the scored pixels, and the deviant ones (red or blue, BGR)
+  for (int y = 0; y < crack_png.rows; ++y)
+    for (int x = 6 * tile; x < 7 * tile; ++x) {
+      const cv::Vec3b px = crack_png.at<cv::Vec3b>(y, x);
+      grey += px[0] == px[1] && px[1] == px[2] && px[0] > 50 && px[0] < 100;
+      broken += (px[2] > 200 && px[0] < 100) || (px[0] > 200 && px[2] < 100);
+    }
+  CHECK(grey > 1000);
+  CHECK(broken > 0);
   // The per-pair log keeps the new fields, so a resumed run reports the same timings.
   const auto again = Evaluator(c).run();
   for (const auto& r : again)

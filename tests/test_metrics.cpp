@@ -195,6 +195,26 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   CHECK(crack_rate(flat, holed, ref, full, holes_farther) == Approx(8.0 / 180.0));
   CHECK(parse_crack_side("nearer") == CrackSide::nearer);
   CHECK_THROWS_WITH(parse_crack_side("front"), Catch::Contains("'front'"));
+
+  // The crack map puts those breaks where they are: the deviant columns 2 (blue: nearer) and 7 (red: farther), grey
+  // on every other scored pixel, black outside the mask; crack_side keeps one side.
+  auto half = full.clone();
+  half.narrow(0, 5, 5).zero_();  // only the top 5 rows are scored
+  const auto map = crack_map(sided, opaque, ref, half);
+  REQUIRE(map.sizes() == torch::IntArrayRef({3, H, W}));
+  const auto red = (map[0] == 1.0f) & (map[2] < 0.5f), blue = (map[2] == 1.0f) & (map[0] < 0.5f);
+  const auto grey = (map[0] == map[1]) & (map[1] == map[2]) & (map[0] > 0);
+  CHECK(red.narrow(0, 0, 5).select(1, 7).all().item<bool>());
+  CHECK(blue.narrow(0, 0, 5).select(1, 2).all().item<bool>());
+  CHECK(red.sum().item<int64_t>() == 5);
+  CHECK(blue.sum().item<int64_t>() == 5);
+  CHECK(grey.sum().item<int64_t>() == 40);
+  CHECK((map.narrow(1, 5, 5) == 0).all().item<bool>());
+  const auto far_only = crack_map(sided, opaque, ref, half, farther);
+  CHECK(((far_only[2] == 1.0f) & (far_only[0] < 0.5f)).sum().item<int64_t>() == 0);
+  CHECK(((far_only[0] == 1.0f) & (far_only[2] < 0.5f)).sum().item<int64_t>() == 5);
+  CHECK((crack_map(flat, opaque, ref, full).max() < 0.5f).item<bool>());  // an intact render: grey only
+  CHECK_THROWS_AS(crack_map(sided, opaque, ref, torch::ones({H, W + 1})), Error);
 }
 
 TEST_CASE("stability: normal incoherence is 0 on a coherent plane and the tilt on a checkerboard", "[metrics]") {

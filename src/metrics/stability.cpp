@@ -60,9 +60,15 @@ CrackSide parse_crack_side(const std::string& name) {
   return CrackSide::farther;
 }
 
-double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
-                  const torch::Tensor& mask, const StabilityOptions& o) {
-  ISPLAT_CHECK(mask.dim() == 2, "crack_rate: mask must be [H,W], got ", mask.sizes());
+namespace {
+
+// The neighbour pairs crack_rate scores, each with its verdict: fn(p, q, broken, deviant, nearer), where a broken
+// pair's deviant pixel is the one whose rendered depth errs more against the reference (a hole, with holes_break),
+// and nearer says which way it errs. Returns the number of pairs scored.
+template <class Fn>
+int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                             const torch::Tensor& mask, const StabilityOptions& o, const char* who, Fn&& fn) {
+  ISPLAT_CHECK(mask.dim() == 2, who, ": mask must be [H,W], got ", mask.sizes());
   const int64_t H = mask.size(0), W = mask.size(1);
   const auto ds = plane(depth_sum, H, W, "depth"), a = plane(alpha, H, W, "alpha");
   const auto r = plane(ref_depth, H, W, "reference depth"), m = plane(mask, H, W, "mask");
@@ -74,7 +80,7 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
     return pm[p] != 0 && std::isfinite(pr[p]) && pr[p] > 0 && (o.holes_break || !hole(p));
   };
   const std::vector<uint8_t> near_edge = near_reference_edge(pr, H, W, o.crack_jump, o.edge_margin);
-  int64_t pairs = 0, cracks = 0;
+  int64_t pairs = 0;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
       const int64_t p = i * W + j;
@@ -86,17 +92,55 @@ double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, co
         if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
         ++pairs;
         if (hole(p) || hole(q)) {  // only reached with holes_break; nothing drawn errs farther
-          cracks += o.crack_side != CrackSide::nearer;
+          fn(p, q, true, hole(p) ? p : q, false);
           continue;
         }
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
-        if (!(std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq))) continue;
+        const bool broken = std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq);
         const double ep = zp / pr[p] - 1, eq = zq / pr[q] - 1;
-        const bool nearer = (std::abs(ep) >= std::abs(eq) ? ep : eq) < 0;
-        cracks += o.crack_side == CrackSide::any || nearer == (o.crack_side == CrackSide::nearer);
+        const bool p_deviates = std::abs(ep) >= std::abs(eq);
+        fn(p, q, broken, p_deviates ? p : q, (p_deviates ? ep : eq) < 0);
       }
     }
+  return pairs;
+}
+
+bool counts_side(const StabilityOptions& o, bool nearer) {
+  return o.crack_side == CrackSide::any || nearer == (o.crack_side == CrackSide::nearer);
+}
+
+}  // namespace
+
+double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                  const torch::Tensor& mask, const StabilityOptions& o) {
+  int64_t cracks = 0;
+  const int64_t pairs = for_each_scored_pair(
+      depth_sum, alpha, ref_depth, mask, o, "crack_rate",
+      [&](int64_t, int64_t, bool broken, int64_t, bool nearer) { cracks += broken && counts_side(o, nearer); });
   return pairs ? static_cast<double>(cracks) / static_cast<double>(pairs) : kNaN;
+}
+
+torch::Tensor crack_map(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                        const torch::Tensor& mask, const StabilityOptions& o) {
+  ISPLAT_CHECK(mask.dim() == 2, "crack_map: mask must be [H,W], got ", mask.sizes());
+  const int64_t H = mask.size(0), W = mask.size(1), HW = H * W;
+  auto map = torch::zeros({3, H, W}, torch::kFloat32);
+  float* px = map.data_ptr<float>();
+  auto paint = [&](int64_t p, float r, float g, float b) { px[p] = r, px[HW + p] = g, px[2 * HW + p] = b; };
+  std::vector<uint8_t> deviant(static_cast<size_t>(HW), 0);  // 1 nearer, 2 farther
+  for_each_scored_pair(depth_sum, alpha, ref_depth, mask, o, "crack_map",
+                       [&](int64_t p, int64_t q, bool broken, int64_t d, bool nearer) {
+                         for (int64_t k : {p, q})
+                           if (px[k] == 0) paint(k, 0.3f, 0.3f, 0.3f);
+                         if (broken && counts_side(o, nearer)) deviant[size_t(d)] |= nearer ? 1 : 2;
+                       });
+  for (int64_t p = 0; p < HW; ++p) {
+    if (deviant[size_t(p)] & 2)
+      paint(p, 1.0f, 0.15f, 0.1f);  // farther: a surface seen through
+    else if (deviant[size_t(p)] & 1)
+      paint(p, 0.2f, 0.5f, 1.0f);  // nearer: a fringe drawn over it
+  }
+  return map;
 }
 
 double normal_incoherence_deg(const torch::Tensor& normal_sum, const torch::Tensor& alpha,

@@ -41,6 +41,13 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 
+// Where crack_rate's pairs lie, as an image [3,H,W] in [0,1]: black where no pair is scored, grey on the pixels of
+// the scored pairs, and on each broken pair's deviant pixel red where it errs farther (a surface seen through: a
+// tear, a silhouette drawn too narrow, or a hole with holes_break) and blue where it errs nearer (a fringe drawn over
+// it). A pixel deviant both ways is red. crack_side keeps only that side's breaks.
+torch::Tensor crack_map(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
+                        const torch::Tensor& mask, const StabilityOptions& options = {});
+
 // Mean angle in degrees between the rendered normals (normal_sum [3,H,W], normalized here) of neighbouring
 // pixels where the reference depth, seen through K [3,3], is planar (neighbouring reference normals within
 // planar_deg) and neither pixel is a hole. 0 for a perfectly coherent surface; NaN when nothing qualifies.
