@@ -11,7 +11,7 @@ import random
 import sys
 from pathlib import Path
 
-BINS = {"0": "[0,0.5)", "1": "[0.5,1)", "2": "[1,2)", "3": "[2,inf)"}
+BIN_NAMES = ["[0,0.5)", "[0.5,1)", "[1,2)", "[2,inf)"]
 
 
 def load(folder, name):
@@ -40,7 +40,7 @@ def main():
             parts[name, k] = {
                 i: (r["motion"], 100 * r["crack_rate"], 100 * near[i]["crack_rate"])
                 for i, r in full.items()
-                if r["bin"] == BINS[b] and r.get("crack_rate") is not None and near[i].get("crack_rate") is not None
+                if r["bin"] == int(b) and r.get("crack_rate") is not None and near[i].get("crack_rate") is not None
             }
     pairs = sorted(set.intersection(*(set(p) for p in parts.values())))
     for motion in ("lateral", "forward", "rotation", "all"):
