@@ -57,6 +57,7 @@ struct ScoringOptions {
   int64_t crack_edge_margin = 0;   // cracks skip pairs this close (px) to a reference depth edge (0 = none)
   bool crack_holes = false;        // cracks count pairs with a hole on either side as broken (false = skip them)
   std::string crack_side = "any";  // cracks count only broken pairs erring to this side: any | nearer | farther
+  double crack_min_error = 0.0;    // cracks count only breaks whose deviant pixel errs by at least this share
   std::string reference;           // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);

@@ -172,6 +172,7 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
   j["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
   j["scoring.crack_holes"] = scoring.crack_holes;
   j["scoring.crack_side"] = scoring.crack_side;
+  j["scoring.crack_min_error"] = scoring.crack_min_error;
   return j;
 }
 
@@ -230,6 +231,7 @@ StabilityOptions Evaluator::crack_options() const {
   so.edge_margin = config_.scoring.crack_edge_margin;
   so.holes_break = config_.scoring.crack_holes;
   so.crack_side = parse_crack_side(config_.scoring.crack_side);
+  so.min_error = config_.scoring.crack_min_error;
   return so;
 }
 
@@ -406,6 +408,9 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     notes_.push_back(
         "cracks count smooth neighbour pairs with a hole on either side as broken "
         "(scoring.crack_holes): holes and jumps together");
+  if (config_.scoring.crack_min_error > 0)
+    notes_.push_back(cat("cracks count only breaks whose deviant pixel errs by at least ",
+                         config_.scoring.crack_min_error, " of the reference depth (scoring.crack_min_error)"));
   if (config_.scoring.crack_side != "any")
     notes_.push_back(cat("cracks count only broken pairs that err ", config_.scoring.crack_side,
                          " than the reference depth (scoring.crack_side)"));

@@ -193,6 +193,15 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   holes_nearer.holes_break = holes_farther.holes_break = true;
   CHECK(crack_rate(flat, holed, ref, full, holes_nearer) == 0.0);
   CHECK(crack_rate(flat, holed, ref, full, holes_farther) == Approx(8.0 / 180.0));
+  // min_error keeps the breaks whose deviant pixel errs by at least that share: column 7 errs by +50%, column 2 by
+  // −25%, so 0.3 keeps only column 7's 20 pairs and 0.6 none; a hole (holes_break) always counts.
+  StabilityOptions big = {};
+  big.min_error = 0.3;
+  CHECK(crack_rate(sided, opaque, ref, full, big) == Approx(20.0 / 180.0));
+  big.min_error = 0.6;
+  CHECK(crack_rate(sided, opaque, ref, full, big) == 0.0);
+  big.holes_break = true;
+  CHECK(crack_rate(flat, holed, ref, full, big) == Approx(8.0 / 180.0));
   CHECK(parse_crack_side("nearer") == CrackSide::nearer);
   CHECK_THROWS_WITH(parse_crack_side("front"), Catch::Contains("'front'"));
 

@@ -96,10 +96,11 @@ int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor
           continue;
         }
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
-        const bool broken = std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq);
         const double ep = zp / pr[p] - 1, eq = zq / pr[q] - 1;
         const bool p_deviates = std::abs(ep) >= std::abs(eq);
-        fn(p, q, broken, p_deviates ? p : q, (p_deviates ? ep : eq) < 0);
+        const double error = p_deviates ? ep : eq;
+        const bool broken = std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq) && std::abs(error) >= o.min_error;
+        fn(p, q, broken, p_deviates ? p : q, error < 0);
       }
     }
   return pairs;

@@ -20,6 +20,9 @@ struct StabilityOptions {
   int64_t edge_margin = 0;    // crack_rate skips pairs within this many pixels of a reference depth edge
   bool holes_break = false;   // crack_rate counts a pair with a hole on either side as broken, instead of skipping it
   CrackSide crack_side = CrackSide::any;  // crack_rate counts only the broken pairs that err to this side
+  // crack_rate counts only the broken pairs whose deviant pixel's rendered depth errs by at least this share of the
+  // reference (|z / z_ref − 1|; a hole counted by holes_break always does). 0 = every broken pair.
+  double min_error = 0.0;
 };
 
 // "any" | "nearer" | "farther"; anything else fails naming the value.
@@ -37,7 +40,9 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // depth edge (a neighbour jump >= crack_jump·z, or valid next to invalid) are skipped too: what remains are
 // cracks in surfaces, not silhouettes drawn a pixel or two off. crack_side splits the broken pairs by the side their
 // deviant pixel errs to (the denominator stays every qualifying pair, so nearer + farther = any); a hole counted by
-// holes_break errs farther (nothing is drawn there). NaN when no pair qualifies.
+// holes_break errs farther (nothing is drawn there). min_error > 0 keeps only the breaks whose deviant pixel errs by
+// at least that much: a large error is another surface seen, a small one the right surface at a slightly wrong
+// depth. NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 
