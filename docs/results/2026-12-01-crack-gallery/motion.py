@@ -6,28 +6,21 @@ Intervals: seed-aware paired bootstrap (seed k of a against seed k of b, then pa
 
 usage: motion.py <any dir> <nearer dir> <bin> <seeds, e.g. 0,1> <a> <b>
   a, b: results names with {k} for the seed (e.g. full-s{k} reads results_full-s0.jsonl ...)."""
+import importlib.util
 import json
-import random
 import sys
 from pathlib import Path
 
-BIN_NAMES = ["[0,0.5)", "[0.5,1)", "[1,2)", "[2,inf)"]
+# seed_interval(d, seeds, n): the seed-aware bootstrap of docs/results/2026-11-28-seeds/seeds.py.
+_spec = importlib.util.spec_from_file_location("seeds", Path(__file__).resolve().parent.parent / "2026-11-28-seeds" / "seeds.py")
+seeds_py = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(seeds_py)
+
 
 
 def load(folder, name):
     (path,) = Path(folder).rglob(f"results_{name}.jsonl")
     return {r["index"]: r for r in map(json.loads, path.read_text().splitlines())}
-
-
-def interval(d, seeds):
-    """95% interval of the mean of d[seed][pair], seeds then pairs drawn with replacement."""
-    rng, n, out = random.Random(0), len(d[seeds[0]]), []
-    for _ in range(2000):
-        ss = [seeds[rng.randrange(len(seeds))] for _ in seeds]
-        ps = [rng.randrange(n) for _ in range(n)]
-        out.append(sum(d[k][p] for k in ss for p in ps) / (len(ss) * len(ps)))
-    out.sort()
-    return out[50], out[1949]
 
 
 def main():
@@ -52,7 +45,7 @@ def main():
         for label, f in (("cracks", lambda v: v[1]), ("nearer", lambda v: v[2]), ("farther", lambda v: v[1] - v[2])):
             mean = lambda name: sum(f(parts[name, k][i]) for k in seeds for i in mine) / (len(seeds) * len(mine))
             d = {k: [f(parts[a, k][i]) - f(parts[ref, k][i]) for i in mine] for k in seeds}
-            lo, hi = interval(d, seeds)
+            lo, hi = seeds_py.seed_interval(d, seeds, len(mine))
             line.append(f"{label} {mean(a):.3f} vs {mean(ref):.3f}: {mean(a) - mean(ref):+.3f} [{lo:+.3f}, {hi:+.3f}]")
         print(" | ".join(line))
 

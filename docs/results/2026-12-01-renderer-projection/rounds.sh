@@ -1,23 +1,12 @@
 #!/usr/bin/env bash
-# Alternating rounds of two bench_render binaries, each in a fresh process: OLD (481fa9f, before the projection's
-# vector tail) and NEW (the binary under test). Usage: OLD=... NEW=... rounds.sh [OUT]; logs go to OUT (default: this
-# folder). Each log has "## round N old|new ARGS" headers, which summary.py --names old new reads.
+# This report's rounds: OLD (bench_render of 481fa9f, before the projection's vector tail) against NEW (the binary
+# under test), each in a fresh process, through bench/rounds.sh. Usage: OLD=... NEW=... rounds.sh [OUT]; logs go to
+# OUT (default: this folder).
 set -euo pipefail
 OLD=${OLD:-/tmp/bench_render_base}
 NEW=${NEW:-/tmp/bench_render_new}
 OUT=${1:-$(dirname "$0")}
-run() {  # run ROUNDS FILE ARGS...: ROUNDS rounds of old then new
-  local rounds=$1 file=$2
-  shift 2
-  for r in $(seq 1 "$rounds"); do
-    for b in old new; do
-      local bin=$OLD
-      [ "$b" = new ] && bin=$NEW
-      echo "## round $r $b $*"
-      "$bin" "$@" | grep '^| [0-9]'
-    done
-  done > "$OUT/$file"
-}
-run 10 only_100k_min.txt --only 100k --runs-scale 3 --stat min
-run 6 only_100k_median.txt --only 100k --runs-scale 3
-run 3 quick_min.txt --quick --stat min
+rounds="$(dirname "$0")/../../../bench/rounds.sh"
+"$rounds" 10 "$OUT/only_100k_min.txt" old "$OLD" new "$NEW" --only 100k --runs-scale 3 --stat min
+"$rounds" 6 "$OUT/only_100k_median.txt" old "$OLD" new "$NEW" --only 100k --runs-scale 3
+"$rounds" 3 "$OUT/quick_min.txt" old "$OLD" new "$NEW" --quick --stat min
