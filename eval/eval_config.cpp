@@ -169,8 +169,8 @@ void ScoringOptions::visit(ConfigVisitor& v) {
   v.field("crack_min_error", crack_min_error,
           "cracks count only the broken pairs whose deviant pixel's rendered depth errs by at least this share of the "
           "reference depth (|z / z_ref - 1|): a large error is another surface seen there, a small one the right "
-          "surface at a slightly wrong depth; holes counted by crack_holes always count (0 = every broken pair, the "
-          "default measure)",
+          "surface slightly off or a blend of two at a soft edge; holes counted by crack_holes always count (0 = every "
+          "broken pair, the default measure)",
           Range::between(0.0, 100.0));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));

@@ -41,8 +41,8 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // cracks in surfaces, not silhouettes drawn a pixel or two off. crack_side splits the broken pairs by the side their
 // deviant pixel errs to (the denominator stays every qualifying pair, so nearer + farther = any); a hole counted by
 // holes_break errs farther (nothing is drawn there). min_error > 0 keeps only the breaks whose deviant pixel errs by
-// at least that much: a large error is another surface seen, a small one the right surface at a slightly wrong
-// depth. NaN when no pair qualifies.
+// at least that much: a large error is another surface seen, a small one the right surface slightly off or a blend
+// of two at a soft edge. NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 
