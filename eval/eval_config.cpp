@@ -172,6 +172,11 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "surface slightly off or a blend of two at a soft edge; holes counted by crack_holes always count (0 = every "
           "broken pair, the default measure)",
           Range::between(0.0, 100.0));
+  v.field("crack_edge_side", crack_edge_side,
+          "cracks count only the broken pairs whose deviant pixel lies, in the reference, on the near side of a depth "
+          "edge within 2 px (a silhouette drawn too narrow, or a blend there) or on its far side (what a new view "
+          "uncovers beside a silhouette, or a fringe); any = every broken pair, the default measure",
+          {"any", "near", "far"});
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

@@ -58,7 +58,8 @@ struct ScoringOptions {
   bool crack_holes = false;        // cracks count pairs with a hole on either side as broken (false = skip them)
   std::string crack_side = "any";  // cracks count only broken pairs erring to this side: any | nearer | farther
   double crack_min_error = 0.0;    // cracks count only breaks whose deviant pixel errs by at least this share
-  std::string reference;           // method the others are compared with, pair by pair (empty = none)
+  std::string crack_edge_side = "any";  // cracks count only breaks whose deviant pixel lies there: any | near | far
+  std::string reference;                // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);
 };

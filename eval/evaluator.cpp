@@ -173,6 +173,7 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
   j["scoring.crack_holes"] = scoring.crack_holes;
   j["scoring.crack_side"] = scoring.crack_side;
   j["scoring.crack_min_error"] = scoring.crack_min_error;
+  j["scoring.crack_edge_side"] = scoring.crack_edge_side;
   return j;
 }
 
@@ -232,6 +233,7 @@ StabilityOptions Evaluator::crack_options() const {
   so.holes_break = config_.scoring.crack_holes;
   so.crack_side = parse_crack_side(config_.scoring.crack_side);
   so.min_error = config_.scoring.crack_min_error;
+  so.edge_side = parse_edge_side(config_.scoring.crack_edge_side);
   return so;
 }
 
@@ -411,6 +413,9 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   if (config_.scoring.crack_min_error > 0)
     notes_.push_back(cat("cracks count only breaks whose deviant pixel errs by at least ",
                          config_.scoring.crack_min_error, " of the reference depth (scoring.crack_min_error)"));
+  if (config_.scoring.crack_edge_side != "any")
+    notes_.push_back(cat("cracks count only breaks whose deviant pixel lies on the ", config_.scoring.crack_edge_side,
+                         " side of a reference depth edge within 2 px (scoring.crack_edge_side)"));
   if (config_.scoring.crack_side != "any")
     notes_.push_back(cat("cracks count only broken pairs that err ", config_.scoring.crack_side,
                          " than the reference depth (scoring.crack_side)"));

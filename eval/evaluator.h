@@ -63,7 +63,8 @@ class Evaluator {
   ScoredPair score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
                         const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
                         bool has_depth);
-  // The crack measure's options from scoring (crack_edge_margin, crack_holes, crack_side, crack_min_error).
+  // The crack measure's options from scoring (crack_edge_margin, crack_holes, crack_side, crack_min_error,
+  // crack_edge_side).
   StabilityOptions crack_options() const;
   // The failure gallery (scoring.gallery): the worst pairs by PSNR, by hole rate and by crack rate, re-rendered into
   // <dataset>/gallery/ as source, target, prediction, error, rendered normals, alpha and (where the target has

@@ -202,6 +202,21 @@ TEST_CASE("stability: hole and crack rates on hand-built renders", "[metrics]") 
   CHECK(crack_rate(sided, opaque, ref, full, big) == 0.0);
   big.holes_break = true;
   CHECK(crack_rate(flat, holed, ref, full, big) == Approx(8.0 / 180.0));
+  // edge_side: where the deviant pixel lies in the reference. The reference steps 2 | 3 m at columns 4 | 5. Drawn
+  // one column too wide (column 5 at 2 m), the deviant pixel is on the edge's far side; one column too narrow (column
+  // 4 at 3 m), on its near side. Each breaks 10 of the 170 smooth pairs.
+  auto narrow = torch::full({1, H, W}, 2.0);
+  narrow.narrow(2, 4, 6).fill_(3.0);
+  StabilityOptions near_side, far_side;
+  near_side.edge_side = EdgeSide::near;
+  far_side.edge_side = EdgeSide::far;
+  CHECK(crack_rate(shifted, opaque, ref_edge, full, far_side) == Approx(10.0 / 170.0));
+  CHECK(crack_rate(shifted, opaque, ref_edge, full, near_side) == 0.0);
+  CHECK(crack_rate(narrow, opaque, ref_edge, full, near_side) == Approx(10.0 / 170.0));
+  CHECK(crack_rate(narrow, opaque, ref_edge, full, far_side) == 0.0);
+  CHECK(crack_rate(sided, opaque, ref, full, far_side) == 0.0);  // no reference edge anywhere: neither side
+  CHECK(parse_edge_side("far") == EdgeSide::far);
+  CHECK_THROWS_WITH(parse_edge_side("behind"), Catch::Contains("'behind'"));
   CHECK(parse_crack_side("nearer") == CrackSide::nearer);
   CHECK_THROWS_WITH(parse_crack_side("front"), Catch::Contains("'front'"));
 

@@ -53,6 +53,13 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
   return in ? static_cast<double>(holes) / static_cast<double>(in) : kNaN;
 }
 
+EdgeSide parse_edge_side(const std::string& name) {
+  if (name == "any") return EdgeSide::any;
+  if (name == "near") return EdgeSide::near;
+  ISPLAT_CHECK(name == "far", "edge side: unknown '", name, "' (any | near | far)");
+  return EdgeSide::far;
+}
+
 CrackSide parse_crack_side(const std::string& name) {
   if (name == "any") return CrackSide::any;
   if (name == "nearer") return CrackSide::nearer;
@@ -80,6 +87,19 @@ int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor
     return pm[p] != 0 && std::isfinite(pr[p]) && pr[p] > 0 && (o.holes_break || !hole(p));
   };
   const std::vector<uint8_t> near_edge = near_reference_edge(pr, H, W, o.crack_jump, o.edge_margin);
+  // Whether pixel d lies on edge_side of a reference depth edge within 2 px.
+  auto on_edge_side = [&](int64_t d) {
+    if (o.edge_side == EdgeSide::any) return true;
+    const int64_t di = d / W, dj = d % W;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (int64_t y = std::max<int64_t>(di - 2, 0); y <= std::min(di + 2, H - 1); ++y)
+      for (int64_t x = std::max<int64_t>(dj - 2, 0); x <= std::min(dj + 2, W - 1); ++x) {
+        const double z = pr[y * W + x];
+        if (std::isfinite(z) && z > 0) lo = std::min(lo, z), hi = std::max(hi, z);
+      }
+    if (!(hi >= lo * (1 + o.crack_jump))) return false;  // no edge that close
+    return (pr[d] < std::sqrt(lo * hi)) == (o.edge_side == EdgeSide::near);
+  };
   int64_t pairs = 0;
   for (int64_t i = 0; i < H; ++i)
     for (int64_t j = 0; j < W; ++j) {
@@ -92,15 +112,17 @@ int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor
         if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
         ++pairs;
         if (hole(p) || hole(q)) {  // only reached with holes_break; nothing drawn errs farther
-          fn(p, q, true, hole(p) ? p : q, false);
+          fn(p, q, on_edge_side(hole(p) ? p : q), hole(p) ? p : q, false);
           continue;
         }
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
         const double ep = zp / pr[p] - 1, eq = zq / pr[q] - 1;
         const bool p_deviates = std::abs(ep) >= std::abs(eq);
         const double error = p_deviates ? ep : eq;
-        const bool broken = std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq) && std::abs(error) >= o.min_error;
-        fn(p, q, broken, p_deviates ? p : q, error < 0);
+        const int64_t d = p_deviates ? p : q;
+        const bool broken =
+            std::abs(zp - zq) > o.crack_jump * 0.5 * (zp + zq) && std::abs(error) >= o.min_error && on_edge_side(d);
+        fn(p, q, broken, d, error < 0);
       }
     }
   return pairs;

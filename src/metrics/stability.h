@@ -12,6 +12,11 @@ namespace isplat {
 // silhouette drawn too wide) or a farther one seen through it (a tear, a silhouette drawn too narrow).
 enum class CrackSide { any, nearer, farther };
 
+// Which broken pairs crack_rate counts, by where their deviant pixel lies in the reference: on the near side of a
+// reference depth edge within 2 px (a silhouette drawn too narrow or too wide there), on its far side (what a new view
+// uncovers beside a silhouette, or a fringe over it), or either, including pixels with no edge that close.
+enum class EdgeSide { any, near, far };
+
 struct StabilityOptions {
   double hole_alpha = 0.5;    // a pixel is a hole when its rendered alpha stays below this
   double crack_jump = 0.05;   // rendered depth jump between neighbours, relative to depth, that makes a crack
@@ -23,10 +28,13 @@ struct StabilityOptions {
   // crack_rate counts only the broken pairs whose deviant pixel's rendered depth errs by at least this share of the
   // reference (|z / z_ref − 1|; a hole counted by holes_break always does). 0 = every broken pair.
   double min_error = 0.0;
+  EdgeSide edge_side = EdgeSide::any;  // crack_rate counts only the broken pairs whose deviant pixel lies on this side
 };
 
 // "any" | "nearer" | "farther"; anything else fails naming the value.
 CrackSide parse_crack_side(const std::string& name);
+// "any" | "near" | "far"; anything else fails naming the value.
+EdgeSide parse_edge_side(const std::string& name);
 
 // Share of masked pixels (mask [H,W] nonzero) whose alpha ([1,H,W] or [H,W]) is below options.hole_alpha.
 // NaN when the mask is empty.
@@ -42,7 +50,9 @@ double hole_rate(const torch::Tensor& alpha, const torch::Tensor& mask, const St
 // deviant pixel errs to (the denominator stays every qualifying pair, so nearer + farther = any); a hole counted by
 // holes_break errs farther (nothing is drawn there). min_error > 0 keeps only the breaks whose deviant pixel errs by
 // at least that much: a large error is another surface seen, a small one the right surface slightly off or a blend
-// of two at a soft edge. NaN when no pair qualifies.
+// of two at a soft edge. edge_side keeps the breaks whose deviant pixel's reference depth is on the near (far) side
+// of a reference depth edge within 2 px: below (above) the geometric mean of the least and largest valid reference
+// depths around it, where those differ by crack_jump or more. NaN when no pair qualifies.
 double crack_rate(const torch::Tensor& depth_sum, const torch::Tensor& alpha, const torch::Tensor& ref_depth,
                   const torch::Tensor& mask, const StabilityOptions& options = {});
 
