@@ -227,6 +227,12 @@ std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt, const to
                      std::acos(cosang) * 180.0 / M_PI, median, half_edge);
 }
 
+// The target's reference depth for the stability measures (0 where invalid), or undefined when it has none.
+static torch::Tensor reference_depth(const ViewTensors& view) {
+  if (!view.valid.defined() || !(view.valid.sum().item<double>() > 0)) return {};
+  return view.depth * (view.valid > 0);
+}
+
 StabilityOptions Evaluator::crack_options() const {
   StabilityOptions so;
   so.edge_margin = config_.scoring.crack_edge_margin;
@@ -285,8 +291,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   r.peak_mb = o.peak_mb;
   if (o.alpha.defined()) {
     r.hole_rate = hole_rate(o.alpha, mask);
-    if (tgt.valid.defined() && tgt.valid.sum().item<double>() > 0) {
-      const auto ref = tgt.depth * (tgt.valid > 0);
+    if (const auto ref = reference_depth(tgt); ref.defined()) {
       r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, crack_options());
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
@@ -383,8 +388,8 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
     const auto alpha = o.alpha.defined() ? o.alpha.reshape({1, H, W}) : torch::zeros({1, H, W});
     std::vector<torch::Tensor> row = {sp.source.image, sp.target.image, outline_mask(o.image, sp.mask),
                                       error,           normals,         alpha};
-    if (o.alpha.defined() && sp.target.valid.defined() && sp.target.valid.sum().item<double>() > 0)
-      row.push_back(crack_map(o.depth, o.alpha, sp.target.depth * (sp.target.valid > 0), sp.mask, crack_options()));
+    if (const auto ref = reference_depth(sp.target); o.alpha.defined() && ref.defined())
+      row.push_back(crack_map(o.depth, o.alpha, ref, sp.mask, crack_options()));
     write_panel(path.string(), {row});
   }
   if (!wanted.empty())

@@ -87,13 +87,14 @@ int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor
     return pm[p] != 0 && std::isfinite(pr[p]) && pr[p] > 0 && (o.holes_break || !hole(p));
   };
   const std::vector<uint8_t> near_edge = near_reference_edge(pr, H, W, o.crack_jump, o.edge_margin);
-  // Whether pixel d lies on edge_side of a reference depth edge within 2 px.
+  // Whether pixel d lies on edge_side of a reference depth edge within kEdgeSideReach px.
+  constexpr int64_t kEdgeSideReach = 2;
   auto on_edge_side = [&](int64_t d) {
     if (o.edge_side == EdgeSide::any) return true;
     const int64_t di = d / W, dj = d % W;
     double lo = std::numeric_limits<double>::infinity(), hi = 0;
-    for (int64_t y = std::max<int64_t>(di - 2, 0); y <= std::min(di + 2, H - 1); ++y)
-      for (int64_t x = std::max<int64_t>(dj - 2, 0); x <= std::min(dj + 2, W - 1); ++x) {
+    for (int64_t y = std::max<int64_t>(di - kEdgeSideReach, 0); y <= std::min(di + kEdgeSideReach, H - 1); ++y)
+      for (int64_t x = std::max<int64_t>(dj - kEdgeSideReach, 0); x <= std::min(dj + kEdgeSideReach, W - 1); ++x) {
         const double z = pr[y * W + x];
         if (std::isfinite(z) && z > 0) lo = std::min(lo, z), hi = std::max(hi, z);
       }
@@ -112,7 +113,8 @@ int64_t for_each_scored_pair(const torch::Tensor& depth_sum, const torch::Tensor
         if (!near_edge.empty() && (near_edge[p] || near_edge[q])) continue;
         ++pairs;
         if (hole(p) || hole(q)) {  // only reached with holes_break; nothing drawn errs farther
-          fn(p, q, on_edge_side(hole(p) ? p : q), hole(p) ? p : q, false);
+          const int64_t d = hole(p) ? p : q;
+          fn(p, q, on_edge_side(d), d, false);
           continue;
         }
         const double zp = pd[p] / pa[p], zq = pd[q] / pa[q];
