@@ -245,10 +245,10 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
       _mm256_mask_storeu_epi32(last + s.pixel(j, 1), __mmask8(add >> 8), ids);
     }
     stops |= stop;
-    // The low half's group: row r[0], left (row jobs) or column col (pair jobs); the high half's likewise with r[1].
-    const int shift_lo = kRow ? 0 : 2 * s.col, shift_hi = kRow ? 16 : 2 * s.col;
-    hits |= unsigned((add & 0x00ffu) != 0) << (shift_lo + j.r[0]) | unsigned((add & 0xff00u) != 0)
-                                                                        << (shift_hi + j.r[1]);
+    // The low half's group starts at the job's half-0 pixel; the high half's at its half-1 pixel, one group further
+    // along the row in row jobs.
+    hits |= unsigned((add & 0x00ffu) != 0) << group_bit(s.pixel(j, 0)) |
+            unsigned((add & 0xff00u) != 0) << group_bit(s.pixel(j, 1) + (kRow ? kLanes : 0));
   }
   return stops;
 }
