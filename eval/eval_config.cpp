@@ -177,6 +177,12 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "edge within 2 px (a silhouette drawn too narrow, or a blend there) or on its far side (what a new view "
           "uncovers beside a silhouette, or a fringe); any = every broken pair, the default measure",
           {"any", "near", "far"});
+  v.field("crack_depth", crack_depth,
+          "the rendered depth cracks compare with the reference: mean (the weights' mean depth, the default measure: "
+          "a pixel that blends a near surface with the one behind it reads in between, so a soft silhouette over a "
+          "drawn background breaks where one over nothing does not) or median (the depth of the Gaussian at which "
+          "the pixel's transmittance falls to 0.5: the surface it shows, as the reference's point sample does)",
+          {"mean", "median"});
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

@@ -59,6 +59,7 @@ struct ScoringOptions {
   std::string crack_side = "any";  // cracks count only broken pairs erring to this side: any | nearer | farther
   double crack_min_error = 0.0;    // cracks count only breaks whose deviant pixel errs by at least this share
   std::string crack_edge_side = "any";  // cracks count only breaks whose deviant pixel lies there: any | near | far
+  std::string crack_depth = "mean";     // the rendered depth cracks compare: mean (Σwz / Σw) | median (surface shown)
   std::string reference;                // method the others are compared with, pair by pair (empty = none)
   RenderOptions render;
   void visit(ConfigVisitor& v);

@@ -174,6 +174,7 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
   j["scoring.crack_side"] = scoring.crack_side;
   j["scoring.crack_min_error"] = scoring.crack_min_error;
   j["scoring.crack_edge_side"] = scoring.crack_edge_side;
+  j["scoring.crack_depth"] = scoring.crack_depth;
   return j;
 }
 
@@ -231,6 +232,20 @@ std::string pair_motion(const ViewTensors& src, const ViewTensors& tgt, const to
 static torch::Tensor reference_depth(const ViewTensors& view) {
   if (!view.valid.defined() || !(view.valid.sum().item<double>() > 0)) return {};
   return view.depth * (view.valid > 0);
+}
+
+// The depth sum the crack measures divide by alpha: the render's, or with scoring.crack_depth = median the median
+// depth times alpha (so the division gives the median back).
+static torch::Tensor crack_depth_sum(const MethodOutput& o, const std::string& crack_depth) {
+  if (crack_depth == "mean") return o.depth;
+  ISPLAT_CHECK(o.median_depth.defined(), "eval: scoring.crack_depth = median, but the method rendered no median depth");
+  return o.median_depth.reshape(o.alpha.sizes()) * o.alpha;
+}
+
+RenderOptions Evaluator::scoring_render() const {
+  RenderOptions r = config_.scoring.render;
+  r.median_depth = config_.scoring.crack_depth == "median";
+  return r;
 }
 
 StabilityOptions Evaluator::crack_options() const {
@@ -292,7 +307,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   if (o.alpha.defined()) {
     r.hole_rate = hole_rate(o.alpha, mask);
     if (const auto ref = reference_depth(tgt); ref.defined()) {
-      r.crack_rate = crack_rate(o.depth, o.alpha, ref, mask, crack_options());
+      r.crack_rate = crack_rate(crack_depth_sum(o, config_.scoring.crack_depth), o.alpha, ref, mask, crack_options());
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
   }
@@ -311,7 +326,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   for (int64_t i : pairs)
     if (!log.done().count(i)) todo.push_back(i);
   if (!todo.empty()) {
-    auto method = make_method(mo, config_.scoring.render);
+    auto method = make_method(mo, scoring_render());
     if (!has_depth && method->needs_source_depth(!points.empty())) {
       notes_.push_back(cat(ds.name, " / ", mo.name,
                            ": not scored; the method needs the source depth and the dataset "
@@ -375,7 +390,7 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
   std::unique_ptr<Method> method;
   for (const auto& [path, i] : wanted) {
     if (fs::exists(path)) continue;
-    if (!method) method = make_method(mo, config_.scoring.render);
+    if (!method) method = make_method(mo, scoring_render());
     const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
     const auto& o = sp.output;
     const int64_t H = sp.mask.size(0), W = sp.mask.size(1);
@@ -389,7 +404,7 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
     std::vector<torch::Tensor> row = {sp.source.image, sp.target.image, outline_mask(o.image, sp.mask),
                                       error,           normals,         alpha};
     if (const auto ref = reference_depth(sp.target); o.alpha.defined() && ref.defined())
-      row.push_back(crack_map(o.depth, o.alpha, ref, sp.mask, crack_options()));
+      row.push_back(crack_map(crack_depth_sum(o, config_.scoring.crack_depth), o.alpha, ref, sp.mask, crack_options()));
     write_panel(path.string(), {row});
   }
   if (!wanted.empty())
@@ -421,6 +436,10 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   if (config_.scoring.crack_edge_side != "any")
     notes_.push_back(cat("cracks count only breaks whose deviant pixel lies on the ", config_.scoring.crack_edge_side,
                          " side of a reference depth edge within 2 px (scoring.crack_edge_side)"));
+  if (config_.scoring.crack_depth != "mean")
+    notes_.push_back(
+        "cracks compare each pixel's median rendered depth, the surface it shows (scoring.crack_depth = median), "
+        "not the mean of the surfaces it blends");
   if (config_.scoring.crack_side != "any")
     notes_.push_back(cat("cracks count only broken pairs that err ", config_.scoring.crack_side,
                          " than the reference depth (scoring.crack_side)"));

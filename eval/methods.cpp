@@ -63,7 +63,7 @@ class ModelMethod final : public Method {
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
     out.gaussians = pr.kept.count();
-    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal;
+    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     if (peak) out.peak_mb = peak_memory_mb();
     return out;
   }
@@ -99,7 +99,7 @@ class LiftMethod final : public Method {
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, true);
     out.gaussians = out.decoded = gs.count();
-    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal;
+    out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     return out;
   }
   std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }

@@ -21,6 +21,7 @@ struct MethodOutput {
   std::map<std::string, int64_t> prune_counts;                // what pruning did (prune_counts()), when enabled
   double peak_mb = std::numeric_limits<double>::quiet_NaN();  // process peak memory during predict + render
   torch::Tensor alpha, depth, normal;  // the render's other outputs (RenderOutput), where the method renders
+  torch::Tensor median_depth;          // RenderOutput::median_depth, when the render options ask for it
 };
 
 class Method {

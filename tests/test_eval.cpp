@@ -630,6 +630,31 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
     EvalConfig side = c;
     side.scoring.crack_side = "nearer";
     CHECK_THROWS_WITH(Evaluator(side).run(), Catch::Contains("scoring.crack_side"));
+    EvalConfig median = c;
+    median.scoring.crack_depth = "median";
+    CHECK_THROWS_WITH(Evaluator(median).run(), Catch::Contains("scoring.crack_depth"));
+  }
+  {  // Cracks on the median depth: the same pairs, every crack rate measured, some read otherwise than the mean's.
+    EvalConfig median = c;
+    median.methods = {named_method("lift", "lift")};
+    median.scoring.reference.clear();
+    median.scoring.gallery = 0;
+    median.scoring.crack_depth = "median";
+    median.scoring.out = test::temp_dir("eval_sweep_median");
+    Evaluator(median).run();
+    const ResultsLog on_median(median.scoring.out + "/courtyard/results_lift.jsonl"),
+        on_mean(c.scoring.out + "/courtyard/results_lift_depth_scale1.jsonl");
+    REQUIRE(on_median.done().size() == on_mean.done().size());
+    int64_t differ = 0;
+    for (const auto& [i, r] : on_mean.done()) {
+      const PairResult& m = on_median.done().at(i);
+      CHECK(m.mask_fraction == r.mask_fraction);
+      CHECK(m.hole_rate == r.hole_rate);  // the same render
+      CHECK(std::isfinite(m.crack_rate) == std::isfinite(r.crack_rate));
+      differ += m.crack_rate != r.crack_rate;
+    }
+    CHECK(differ > 0);
+    CHECK_THAT(test::read_bytes(median.scoring.out + "/report.md"), Catch::Contains("scoring.crack_depth = median"));
   }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));

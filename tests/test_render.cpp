@@ -762,6 +762,61 @@ TEST_CASE("render: plane depth follows a slanted surface that mean depths leave 
   CHECK(render(g, cam, plane).rgb.equal(render(g, cam).rgb));  // colour does not depend on the depth mode
 }
 
+TEST_CASE("render: median depth is the surface a pixel shows, not the blend of what it sees", "[render]") {
+  const Camera cam = centred_camera(48, 32, 100.0);
+  RenderOptions opt;
+  opt.median_depth = true;
+  // A half-transparent near Gaussian (z = 2, opacity 0.6, σ = 2 px) over an opaque far one (z = 4, σ = 5 px).
+  const Gaussians g = head_on(
+      {{0.0, 0.0, 2.0, 0.04, 0.04, 0.04, 0.6, 1.0, 0.0, 0.0}, {0.0, 0.0, 4.0, 0.2, 0.2, 0.2, 1.0, 0.0, 1.0, 0.0}});
+  const RenderOutput out = render(g, cam, opt);
+  REQUIRE(out.median_depth.sizes() == torch::IntArrayRef({1, 32, 48}));
+  // Centre: T = 0.4 after the near one, so it shows z = 2; the mean depth blends 0.6·2 + 0.4·0.99·4.
+  CHECK(out.median_depth[0][16][24].item<double>() == 2.0);
+  CHECK(out.depth[0][16][24].item<double>() / out.alpha[0][16][24].item<double>() > 2.5);
+  // 2 px off the near one's centre its α is 0.6·e^(−4/(2·4.3)) < 0.5: the pixel shows the far surface.
+  CHECK(out.median_depth[0][16][26].item<double>() == 4.0);
+  // Beyond the far one's reach nothing is drawn (alpha < 0.5): 0.
+  CHECK(out.median_depth[0][16][45].item<double>() == 0.0);
+  CHECK(out.alpha[0][16][45].item<double>() < 0.5);
+  // Without the option there is none, and asking for it changes nothing else.
+  const RenderOutput plain = render(g, cam);
+  CHECK_FALSE(plain.median_depth.defined());
+  CHECK(plain.rgb.equal(out.rgb));
+  CHECK(plain.depth.equal(out.depth));
+
+  // Random scenes: the dense reference's first composited Gaussian that leaves T at 0.5 or below, in float64 and
+  // float32, with 1 and 2 threads; every pixel with alpha >= 0.5 has one, every other pixel none.
+  const Camera wide = make_camera(70, 45, 55.0, 58.0, 0.8, true);
+  const Gaussians scene = concat({random_scene(300, wide, 7), random_scene(60, wide, 9, 0.3, 3.0, 8.0, 0.9, 1.0)});
+  const RenderOutput ref = test::reference_render(scene, wide, opt);
+  const RenderOutput ours = render(scene, wide, opt);
+  CHECK(max_abs(ours.median_depth - ref.median_depth) < 1e-12);
+  CHECK(torch::equal(ours.median_depth > 0, ours.alpha >= 0.5));
+  CHECK((ours.median_depth > 0).sum().item<int64_t>() > 45 * 70 / 4);
+  const RenderOutput f32 = render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), opt);
+  // Float rounding may move a crossing that sits on 0.5 to the next Gaussian: at most a handful of pixels.
+  CHECK(((f32.median_depth.to(kF64) - ref.median_depth).abs() > 1e-4).sum().item<int64_t>() <= 45 * 70 / 200);
+  const int threads = at::get_num_threads();
+  at::set_num_threads(1);
+  const Tensor one = render(scene, wide, opt).median_depth;
+  at::set_num_threads(2);
+  CHECK(torch::equal(one, render(scene, wide, opt).median_depth));
+  at::set_num_threads(threads);
+  // Plane depth: on a slanted plane the median is the plane's depth along each pixel's ray, as the mean is.
+  const Camera slant = make_camera(96, 72, 80.0, 80.0, 0.3, true);
+  RenderOptions plane = opt;
+  plane.depth = "plane";
+  const RenderOutput sp = render(slanted_plane(slant), slant, plane);
+  const Tensor opaque = sp.alpha > 0.99;
+  REQUIRE(opaque.sum().item<int64_t>() > 72 * 96 * 9 / 10);
+  CHECK(max_abs((sp.median_depth - sp.depth / sp.alpha) * opaque) < 1e-9);
+  // Batched: one per camera.
+  const RenderOutput two = render(g, stack_cameras({cam, cam}), opt);
+  CHECK(two.median_depth.sizes() == torch::IntArrayRef({2, 1, 32, 48}));
+  CHECK(torch::equal(two.median_depth[1], out.median_depth));
+}
+
 TEST_CASE("render: plane depth has no gradient and leaves the other gradients alone", "[render]") {
   const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, torch::kFloat32);
   const Gaussians scene = random_scene(600, cam, 31).to(torch::kFloat32);

@@ -116,6 +116,11 @@ struct RasterChannels {
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
                            const double background[3], const RasterChannels& channels = {});
 
+// Per pixel [1,H,W]: the depth of the first Gaussian after which the pixel's transmittance is 0.5 or less (the
+// surface it shows; its mean or plane depth as in the forward), 0 where it never falls that far (alpha < 0.5).
+torch::Tensor rasterize_median_depth(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                                     bool plane_depth);
+
 // Per Gaussian [N]: the largest weight w = α·T it reaches at any pixel (0 if culled or never composited).
 torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam);
 

@@ -179,11 +179,14 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
 // forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
-// leaves the normal out; kPlane: plane depth (depth_plane). With kMaxWeight, best[i] receives the largest
+// leaves the normal out; kPlane: plane depth (depth_plane). kProbe max_weight: probe[i] receives the largest
 // weight α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
-template <class T, int kChannels, bool kPlane, bool kMaxWeight = false>
+// kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of the first Gaussian after which
+// the pixel's transmittance is 0.5 or less.
+enum class Probe { none, max_weight, median_depth };
+template <class T, int kChannels, bool kPlane, Probe kProbe = Probe::none>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
-                      int32_t* last, const CameraParams& cam, T* best = nullptr) {
+                      int32_t* last, const CameraParams& cam, T* probe = nullptr) {
   fwd_init(x0, y0, x1, y1, st, last);
   Group<T> groups[kMaxGroups];
   LiveGroups live = unstopped_groups(st);
@@ -195,12 +198,18 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, live, groups);
     const DepthPlane<T> plane = kPlane ? depth_plane(s, cam) : DepthPlane<T>{};
     int stops = 0;
-    if constexpr (kMaxWeight) {
+    if constexpr (kProbe == Probe::max_weight) {
       T m = 0;
-      auto keep_max = [&m](T w) { m = std::max(m, w); };
+      auto keep_max = [&m](int, T w, T, T) { m = std::max(m, w); };
       for (int k = 0; k < n; ++k)
         stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), keep_max);
-      best[i] = m;
+      probe[i] = m;
+    } else if constexpr (kProbe == Probe::median_depth) {
+      auto first_half = [probe](int p, T, T next, T z) {
+        if (next <= T(0.5) && probe[p] == T(0)) probe[p] = z;
+      };
+      for (int k = 0; k < n; ++k)
+        stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), first_half);
     } else {
       for (int k = 0; k < n; ++k) stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1));
     }
@@ -341,8 +350,23 @@ template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    fwd_tile_generic<T, 4, false, true>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
-                                        scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam, per_entry + begin);
+    fwd_tile_generic<T, 4, false, Probe::max_weight>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+                                                     scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
+                                                     per_entry + begin);
+  });
+}
+
+// Each pixel's median depth (rasterize_median_depth), tile by tile with the forward's rules.
+template <class T, bool kPlane>
+void median_depth_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* out) {
+  const int64_t W = cam.width;
+  for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
+    const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
+    T median[kPix] = {};
+    fwd_tile_generic<T, 4, kPlane, Probe::median_depth>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1,
+                                                        y1, scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
+                                                        median);
+    for (int64_t py = y0; py < y1; ++py) std::copy_n(median + (py - y0) * kTile, x1 - x0, out + py * W + x0);
   });
 }
 
@@ -405,6 +429,18 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
         channels, background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(),
         out.depth.data_ptr<scalar_t>(), channels.normals ? out.normal.data_ptr<scalar_t>() : nullptr,
         out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>(), group_hits);
+  });
+  return out;
+}
+
+torch::Tensor rasterize_median_depth(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
+                                     bool plane_depth) {
+  torch::Tensor out = torch::empty({1, cam.height, cam.width}, packed.options());
+  AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_median_depth", [&] {
+    (plane_depth
+         ? median_depth_impl<scalar_t, true>
+         : median_depth_impl<scalar_t, false>)(packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(),
+                                               bins.isect_ids.data_ptr<int32_t>(), cam, out.data_ptr<scalar_t>());
   });
   return out;
 }

@@ -263,14 +263,15 @@ ISPLAT_INLINE void moments_to_grads(const Splat<T>& s, T* out) {
 
 // ---- Portable scalar lanes ----
 
-// Ignores the weights (the renderer's case).
+// Ignores the composited pixels (the renderer's case).
 struct NoWeightSink {
   template <class T>
-  ISPLAT_INLINE void operator()(T) const {}
+  ISPLAT_INLINE void operator()(int, T, T, T) const {}
 };
 
-// Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink` sees every
-// composited weight w = α·T (the contribution measure uses it; the renderer passes NoWeightSink). The first
+// Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink(p, w, next, z)` sees
+// every composited pixel p (tile-local): its weight w = α·T, its transmittance after this Gaussian and the depth it
+// composites (the contribution measure and the median depth use them; the renderer passes NoWeightSink). The first
 // kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
 template <int kChannels, bool kPlane, class T, class Sink = NoWeightSink>
 ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const Group<T>& q, T* st, int32_t* last,
@@ -291,8 +292,8 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const
       continue;
     }
     const T w = alpha * t;
-    sink(w);
     const T z = kPlane ? plane_z(plane, dx, q.r.dy) : s.f[3];
+    sink(p, w, next, z);
     for (int c = 0; c < kChannels; ++c)
       st[fwd_at(p, kPlAcc + c)] = madd(w, c == 3 ? z : s.f[c], st[fwd_at(p, kPlAcc + c)]);
     st[fwd_at(p, kPlT)] = next;

@@ -21,6 +21,9 @@ struct RenderOptions {
   // Composite the normal map. Not a config key: callers that never read `normal` (training) turn it off and
   // save about a sixth of the forward pass; `normal` is then an empty tensor.
   bool normals = true;
+  // Also render median_depth. Not a config key: the evaluator asks for it when scoring.crack_depth = median. One more
+  // forward pass over the tiles, with no gradient.
+  bool median_depth = false;
   void visit(ConfigVisitor& v);
 };
 
@@ -29,9 +32,12 @@ struct RenderOptions {
 // Σ wᵢnᵢ with nᵢ the shortest axis in camera space facing the camera. zᵢ is the camera-space z of the mean
 // (depth "center"), or with depth "plane" the z where the pixel's ray meets the plane through the mean normal
 // to nᵢ, kept within [z/2, 2z] of the mean's z (smooth across slanted surfaces). rgb and alpha are
-// differentiable, depth only in "center" mode; normal is not (it has no gradient).
+// differentiable, depth only in "center" mode; normal is not (it has no gradient). With options.median_depth,
+// median_depth [1,H,W] is the zᵢ of the first Gaussian after which the pixel's transmittance is 0.5 or less: the
+// surface the pixel shows rather than a blend of the surfaces it sees, 0 where alpha < 0.5 (no gradient; otherwise
+// an undefined tensor).
 struct RenderOutput {
-  torch::Tensor rgb, alpha, depth, normal;
+  torch::Tensor rgb, alpha, depth, normal, median_depth;
 };
 
 // Renders Gaussians (float32 or float64, CPU) through a pinhole camera. Gradients flow to means, scales,

@@ -101,11 +101,13 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     ctx->saved_data["antialiased"] = options.antialiased;
     ctx->saved_data["background"] = options.background;
     ctx->saved_data["plane_depth"] = plane;
+    const Tensor median = options.median_depth ? rasterize_median_depth(proj.packed, bins, cam, plane)
+                                               : torch::empty({0}, means.options());
     if (plane)
-      ctx->mark_non_differentiable({out.normal, out.depth});
+      ctx->mark_non_differentiable({out.normal, out.depth, median});
     else
-      ctx->mark_non_differentiable({out.normal});
-    return {out.rgb, out.alpha, out.depth, out.normal};
+      ctx->mark_non_differentiable({out.normal, median});
+    return {out.rgb, out.alpha, out.depth, out.normal, median};
   }
 
   static variable_list backward(AutogradContext* ctx, variable_list grads) {
@@ -157,7 +159,7 @@ RenderOutput render_one(const Gaussians& g, const Camera& cam, const RenderOptio
   camera_params(cam.K, cam.T_cw, cam.width, cam.height, /*validate=*/true);
   const auto outs =
       SplatFunction::apply(means, scales, quats, colors, opacities, cam.K, cam.T_cw, cam.width, cam.height, options);
-  return {outs[0], outs[1], outs[2], outs[3]};
+  return {outs[0], outs[1], outs[2], outs[3], options.median_depth ? outs[4] : Tensor()};
 }
 
 }  // namespace
@@ -182,13 +184,15 @@ RenderOutput render(const Gaussians& gaussians, const Camera& camera, const Rend
                " Gaussian sets but ", cam_batch, " cameras");
   ISPLAT_CHECK(camera.K.dim() == camera.T_cw.dim(), "render: camera K and T_cw must both be batched or both not");
   const int64_t B = set_batched ? gaussians.batch() : cam_batch;
-  std::vector<torch::Tensor> rgb, alpha, depth, normal;
+  std::vector<torch::Tensor> rgb, alpha, depth, normal, median;
   for (int64_t b = 0; b < B; ++b) {
     const RenderOutput o = splat::render_one(set_batched ? gaussians.select(b) : gaussians,
                                              cam_batch > 0 ? camera.select(b) : camera, options);
     rgb.push_back(o.rgb), alpha.push_back(o.alpha), depth.push_back(o.depth), normal.push_back(o.normal);
+    if (options.median_depth) median.push_back(o.median_depth);
   }
-  return {torch::stack(rgb), torch::stack(alpha), torch::stack(depth), torch::stack(normal)};
+  return {torch::stack(rgb), torch::stack(alpha), torch::stack(depth), torch::stack(normal),
+          options.median_depth ? torch::stack(median) : torch::Tensor()};
 }
 
 }  // namespace isplat
