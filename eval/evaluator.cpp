@@ -439,7 +439,7 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
   if (config_.scoring.crack_depth != "mean")
     notes_.push_back(
         "cracks compare each pixel's median rendered depth, the surface it shows (scoring.crack_depth = median), "
-        "not the mean of the surfaces it blends");
+        "not the mean of the surfaces it blends; render times include the median depth's extra pass");
   if (config_.scoring.crack_side != "any")
     notes_.push_back(cat("cracks count only broken pairs that err ", config_.scoring.crack_side,
                          " than the reference depth (scoring.crack_side)"));

@@ -182,7 +182,7 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 // leaves the normal out; kPlane: plane depth (depth_plane). kProbe max_weight: probe[i] receives the largest
 // weight α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
 // kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of the first Gaussian after which
-// the pixel's transmittance is 0.5 or less.
+// the pixel's transmittance is 0.5 or less, and the pixel stops there (its sums are then not the forward's).
 enum class Probe { none, max_weight, median_depth };
 template <class T, int kChannels, bool kPlane, Probe kProbe = Probe::none>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
@@ -205,8 +205,10 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
         stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), keep_max);
       probe[i] = m;
     } else if constexpr (kProbe == Probe::median_depth) {
-      auto first_half = [probe](int p, T, T next, T z) {
-        if (next <= T(0.5) && probe[p] == T(0)) probe[p] = z;
+      auto first_half = [probe](int p, T, T next, T z) {  // found: the pixel needs no more Gaussians
+        if (!(next <= T(0.5))) return false;
+        probe[p] = z;
+        return true;
       };
       for (int k = 0; k < n; ++k)
         stops += fwd_group<kChannels, kPlane>(s, plane, groups[k], st, last, int32_t(i + 1), first_half);

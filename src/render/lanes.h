@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "render/kernels.h"
 
@@ -271,8 +272,9 @@ struct NoWeightSink {
 
 // Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink(p, w, next, z)` sees
 // every composited pixel p (tile-local): its weight w = α·T, its transmittance after this Gaussian and the depth it
-// composites (the contribution measure and the median depth use them; the renderer passes NoWeightSink). The first
-// kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
+// composites (the contribution measure and the median depth use them; the renderer passes NoWeightSink). A sink that
+// returns bool stops the pixel when it returns true (a probe that has what it needs), leaving its sums as they were.
+// The first kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
 template <int kChannels, bool kPlane, class T, class Sink = NoWeightSink>
 ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const Group<T>& q, T* st, int32_t* last,
                             int32_t id, Sink&& sink = Sink{}) {
@@ -293,7 +295,15 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const
     }
     const T w = alpha * t;
     const T z = kPlane ? plane_z(plane, dx, q.r.dy) : s.f[3];
-    sink(p, w, next, z);
+    if constexpr (std::is_same_v<decltype(sink(p, w, next, z)), bool>) {
+      if (sink(p, w, next, z)) {
+        st[fwd_at(p, kPlT)] = -next;
+        ++stops;
+        continue;
+      }
+    } else {
+      sink(p, w, next, z);
+    }
     for (int c = 0; c < kChannels; ++c)
       st[fwd_at(p, kPlAcc + c)] = madd(w, c == 3 ? z : s.f[c], st[fwd_at(p, kPlAcc + c)]);
     st[fwd_at(p, kPlT)] = next;
