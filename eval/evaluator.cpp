@@ -239,7 +239,7 @@ static torch::Tensor reference_depth(const ViewTensors& view) {
 static torch::Tensor crack_depth_sum(const MethodOutput& o, const std::string& crack_depth) {
   if (crack_depth == "mean") return o.depth;
   ISPLAT_CHECK(o.median_depth.defined(), "eval: scoring.crack_depth = median, but the method rendered no median depth");
-  return o.median_depth.reshape(o.alpha.sizes()) * o.alpha;
+  return o.median_depth * o.alpha;
 }
 
 RenderOptions Evaluator::scoring_render() const {

@@ -638,7 +638,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
     EvalConfig median = c;
     median.methods = {named_method("lift", "lift")};
     median.scoring.reference.clear();
-    median.scoring.gallery = 0;
+    median.scoring.gallery = 1;  // the crack map follows the median depth too
     median.scoring.crack_depth = "median";
     median.scoring.out = test::temp_dir("eval_sweep_median");
     Evaluator(median).run();
@@ -651,10 +651,14 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
       CHECK(m.mask_fraction == r.mask_fraction);
       CHECK(m.hole_rate == r.hole_rate);  // the same render
       CHECK(std::isfinite(m.crack_rate) == std::isfinite(r.crack_rate));
-      differ += m.crack_rate != r.crack_rate;
+      differ += std::isfinite(r.crack_rate) && m.crack_rate != r.crack_rate;
     }
     CHECK(differ > 0);
     CHECK_THAT(test::read_bytes(median.scoring.out + "/report.md"), Catch::Contains("scoring.crack_depth = median"));
+    int64_t crack_panels = 0;
+    for (const auto& e : fs::directory_iterator(median.scoring.out + "/courtyard/gallery"))
+      crack_panels += e.path().filename().string().rfind("lift_worst_cracks1_pair", 0) == 0;
+    CHECK(crack_panels == 1);
   }
   CHECK(fs::exists(fs::path(c.scoring.out) / "stability.png"));
   CHECK_THAT(md, Catch::Contains("| lift~depth_scale0.8 |"));

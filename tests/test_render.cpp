@@ -797,6 +797,8 @@ TEST_CASE("render: median depth is the surface a pixel shows, not the blend of w
   const RenderOutput f32 = render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), opt);
   // Float rounding may move a crossing that sits on 0.5 to the next Gaussian: at most a handful of pixels.
   CHECK(((f32.median_depth.to(kF64) - ref.median_depth).abs() > 1e-4).sum().item<int64_t>() <= 45 * 70 / 200);
+  CHECK(torch::equal(f32.median_depth > 0,
+                     f32.alpha >= 0.5f));  // the probe's float loop crosses where the SIMD's alpha does
   const int threads = at::get_num_threads();
   at::set_num_threads(1);
   const Tensor one = render(scene, wide, opt).median_depth;

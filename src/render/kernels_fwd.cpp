@@ -176,14 +176,17 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
   }
 }
 
+// What fwd_tile_generic measures besides compositing (kProbe).
+enum class Probe { none, max_weight, median_depth };
+
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
 // forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
-// leaves the normal out; kPlane: plane depth (depth_plane). kProbe max_weight: probe[i] receives the largest
-// weight α·T entry i reaches in this tile (the contribution measure); entries never reached keep their value.
-// kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of the first Gaussian after which
-// the pixel's transmittance is 0.5 or less, and the pixel stops there (its sums are then not the forward's).
-enum class Probe { none, max_weight, median_depth };
+// leaves the normal out, 0 composites nothing (a probe needs only T); kPlane: plane depth (depth_plane). kProbe
+// max_weight: probe[i] receives the largest weight α·T entry i reaches in this tile (the contribution measure); entries
+// never reached keep their value. kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of
+// the first Gaussian after which the pixel's transmittance is 0.5 or less, and the pixel stops there (its sums are then
+// not the forward's).
 template <class T, int kChannels, bool kPlane, Probe kProbe = Probe::none>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last, const CameraParams& cam, T* probe = nullptr) {
@@ -365,7 +368,7 @@ void median_depth_impl(const T* packed, const int64_t* offs, const int32_t* ids,
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     T median[kPix] = {};
-    fwd_tile_generic<T, 4, kPlane, Probe::median_depth>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1,
+    fwd_tile_generic<T, 0, kPlane, Probe::median_depth>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1,
                                                         y1, scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
                                                         median);
     for (int64_t py = y0; py < y1; ++py) std::copy_n(median + (py - y0) * kTile, x1 - x0, out + py * W + x0);

@@ -265,17 +265,17 @@ ISPLAT_INLINE void moments_to_grads(const Splat<T>& s, T* out) {
 // ---- Portable scalar lanes ----
 
 // Ignores the composited pixels (the renderer's case).
-struct NoWeightSink {
+struct NoSink {
   template <class T>
   ISPLAT_INLINE void operator()(int, T, T, T) const {}
 };
 
 // Front to back over the 8 pixels of group `q`. Returns how many pixels stopped here. `sink(p, w, next, z)` sees
 // every composited pixel p (tile-local): its weight w = α·T, its transmittance after this Gaussian and the depth it
-// composites (the contribution measure and the median depth use them; the renderer passes NoWeightSink). A sink that
+// composites (the contribution measure and the median depth use them; the renderer passes NoSink). A sink that
 // returns bool stops the pixel when it returns true (a probe that has what it needs), leaving its sums as they were.
 // The first kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
-template <int kChannels, bool kPlane, class T, class Sink = NoWeightSink>
+template <int kChannels, bool kPlane, class T, class Sink = NoSink>
 ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const Group<T>& q, T* st, int32_t* last,
                             int32_t id, Sink&& sink = Sink{}) {
   int stops = 0;

@@ -34,8 +34,8 @@ struct RenderOptions {
 // to nᵢ, kept within [z/2, 2z] of the mean's z (smooth across slanted surfaces). rgb and alpha are
 // differentiable, depth only in "center" mode; normal is not (it has no gradient). With options.median_depth,
 // median_depth [1,H,W] is the zᵢ of the first Gaussian after which the pixel's transmittance is 0.5 or less: the
-// surface the pixel shows rather than a blend of the surfaces it sees, 0 where alpha < 0.5 (no gradient; otherwise
-// an undefined tensor).
+// surface the pixel shows rather than a blend of the surfaces it sees, 0 where alpha < 0.5. It has no gradient;
+// without options.median_depth it is an undefined tensor.
 struct RenderOutput {
   torch::Tensor rgb, alpha, depth, normal, median_depth;
 };
