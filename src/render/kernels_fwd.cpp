@@ -355,7 +355,7 @@ template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    fwd_tile_generic<T, 4, false, Probe::max_weight>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+    fwd_tile_generic<T, 0, false, Probe::max_weight>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
                                                      scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
                                                      per_entry + begin);
   });
