@@ -713,6 +713,42 @@ TEST_CASE("render: leaving the normal map out changes nothing else", "[render]")
   }
 }
 
+TEST_CASE("render: a colour-only loss without the depth map gets the same images and gradients", "[render]") {
+  // The recipe trains on colour alone: the forward leaves the depth out (depth_map = false) and, with no gradient
+  // on depth or alpha, the backward's pixel loops leave their terms out. Against the full pass, whose loss adds
+  // zero-weighted depth and alpha terms (so their gradients are zeros, not absent), everything else is equal.
+  for (auto dtype : {torch::kFloat32, torch::kFloat64}) {
+    for (splat::Simd level : simd_levels()) {
+      CAPTURE(dtype, splat::simd_name(level));
+      const splat::Simd before = splat::set_simd_level(level);
+      const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, dtype);
+      const Gaussians scene = random_scene(800, cam, 23).to(dtype);
+      const Weights w = random_weights(80, 96, 24, dtype);
+      RenderOptions options;
+      options.normals = false;
+      RenderOptions lean_options = options;
+      lean_options.depth_map = false;
+      const Gaussians a = with_grad(scene), b = with_grad(scene);
+      const RenderOutput full = render(a, cam, options), lean = render(b, cam, lean_options);
+      ((full.rgb * w.rgb).sum() + 0.0 * full.depth.sum() + 0.0 * full.alpha.sum()).backward();
+      (lean.rgb * w.rgb).sum().backward();
+      splat::set_simd_level(before);
+      CHECK(full.depth.sizes() == torch::IntArrayRef({1, 80, 96}));
+      CHECK(lean.depth.numel() == 0);
+      CHECK(torch::equal(full.rgb, lean.rgb));
+      CHECK(torch::equal(full.alpha, lean.alpha));
+      CHECK(max_abs(full.alpha) > 0.5);
+      const auto ga = grads_of(a), gb = grads_of(b);
+      for (size_t k = 0; k < ga.size(); ++k) {
+        CAPTURE(kNames[k]);
+        REQUIRE(ga[k].defined());
+        REQUIRE(gb[k].defined());
+        CHECK(max_abs(ga[k]) > 0);
+        CHECK(torch::equal(ga[k], gb[k]));
+      }
+    }
+  }
+}
 namespace {
 // Flat, opaque Gaussians tiling the slanted plane z = 3 + 0.6·y (camera space) every 1.5 px, seen by `cam`.
 Gaussians slanted_plane(const Camera& cam) {

@@ -111,6 +111,7 @@ struct RasterChannels {
   bool normals = true;       // false skips the normal (a sixth of the pixel work); `normal` is then empty ([0])
   bool plane_depth = false;  // depth where the ray meets each Gaussian's plane instead of its mean's depth
   bool group_hits = false;   // record RasterOutput::group_hits for a backward to follow (inference needs none)
+  bool depth = true;         // without normals, false skips the depth too; `depth` is then empty ([0])
 };
 
 RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
@@ -126,7 +127,8 @@ torch::Tensor rasterize_max_weight(const torch::Tensor& packed, const TileBins& 
 
 // ---- Backward rasterization (kernels_bwd.cpp) ----
 
-// Per-Gaussian 2D gradients [N, kGrad2d] from the image gradients (undefined tensors count as zero).
+// Per-Gaussian 2D gradients [N, kGrad2d] from the image gradients (undefined tensors count as zero; with both
+// grad_alpha and grad_depth undefined, the pixel loops leave their terms out).
 torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, const CameraParams& cam,
                             const double background[3], const torch::Tensor& final_T, const torch::Tensor& n_contrib,
                             const torch::Tensor& grad_rgb,          // [3, H, W]

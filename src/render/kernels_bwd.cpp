@@ -20,8 +20,9 @@ ISPLAT_INLINE Splat<T> bwd_splat(const T* rec) {
 
 // One tile back to front. Each pixel starts at its last contributor with T = T_final and reconstructs the
 // transmittance in front of every Gaussian by division; the skip rules are evaluated exactly as in forward.
-// Writes the tile's per-intersection gradients (kGrad2d each) to `out`. The AVX2 twin has the same loops.
-template <class T>
+// Writes the tile's per-intersection gradients (kGrad2d each) to `out`. The AVX2 twin has the same loops. kCh: the
+// gradient planes read (bwd_group).
+template <class T, int kCh>
 void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       const int32_t* last, int32_t max_last, T* out, const uint32_t*) {
   std::fill(out + int64_t(max_last) * kGrad2d, out + count * kGrad2d, T(0));
@@ -34,7 +35,7 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
     Splat<T> s = bwd_splat(rec);
     if (pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) {
       const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, group_last.live_for(int32_t(i)), groups);
-      for (int k = 0; k < n; ++k) bwd_group(s, groups[k], st, last, int32_t(i), sums);
+      for (int k = 0; k < n; ++k) bwd_group<kCh>(s, groups[k], st, last, int32_t(i), sums);
     }
     sums.reduce(out + i * kGrad2d);
     moments_to_grads(s, out + i * kGrad2d);
@@ -44,6 +45,7 @@ void bwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // With the forward's group hits (non-null), each entry visits exactly the groups where it composited a pixel, in
 // the row-major order collect_groups gives (see bwd_tile_avx512).
+template <int kCh>
 ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                   float* st, const int32_t* last, int32_t max_last, float* out,
                                   const uint32_t* group_hits) {
@@ -77,13 +79,13 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;
     }
-    const Avx2Splat a = avx2_splat(s, kBwdCh);
+    const Avx2Splat a = avx2_splat(s, kCh);
     Avx2Sums g[2];
     g[0].zero(), g[1].zero();
     int k = 0;
-    for (; k + 4 <= n; k += 4) bwd_groups_avx2<4>(a, groups + k, st, last, int32_t(i), g);
-    for (; k + 2 <= n; k += 2) bwd_groups_avx2<2>(a, groups + k, st, last, int32_t(i), g);
-    if (k < n) bwd_groups_avx2<1>(a, groups + k, st, last, int32_t(i), g);
+    for (; k + 4 <= n; k += 4) bwd_groups_avx2<4, kCh>(a, groups + k, st, last, int32_t(i), g);
+    for (; k + 2 <= n; k += 2) bwd_groups_avx2<2, kCh>(a, groups + k, st, last, int32_t(i), g);
+    if (k < n) bwd_groups_avx2<1, kCh>(a, groups + k, st, last, int32_t(i), g);
     reduce_sets(g, slot);
     moments_to_grads(s, slot);
   }
@@ -95,6 +97,7 @@ ISPLAT_AVX2_FN void bwd_tile_avx2(const float* local, int64_t count, int64_t x0,
 // lanes that contribute here are the lanes it composited there, so no box or culling test is needed, and an entry
 // that composited nothing costs a load. Without them, the groups come from the box, the culling and the live set.
 // Either way, only groups without a contributing lane differ, and those add exact zeros.
+template <int kCh>
 ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
                                       float* st, const int32_t* last, int32_t max_last, float* out,
                                       const uint32_t* group_hits) {
@@ -120,11 +123,11 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
       std::fill(slot, slot + kGrad2d, 0.0f);
       continue;
     }
-    const Avx512Splat a = avx512_splat(s, kBwdCh);
+    const Avx512Splat a = avx512_splat(s, kCh);
     if (g1 - g0 == 2) {
       Avx512Sums g;
       g.zero();
-      bwd_all_jobs_avx512<true>(a, {rows, 0, int32_t(x0)}, jobs, row_jobs(rows, jobs), st, last, int32_t(i), {g});
+      bwd_all_jobs_avx512<true, kCh>(a, {rows, 0, int32_t(x0)}, jobs, row_jobs(rows, jobs), st, last, int32_t(i), {g});
       g.reduce(slot);
       moments_to_grads(s, slot);
       continue;
@@ -133,23 +136,26 @@ ISPLAT_AVX512_FN void bwd_tile_avx512(const float* local, int64_t count, int64_t
     Avx2Sums g[2];  // all in the set of column g0
     g[0].zero(), g[1].zero();
     const int32_t col = int32_t(g0) * kLanes;
-    bwd_all_jobs_avx512<false>(a, {rows, col, int32_t(x0) + col}, jobs, n, st, last, int32_t(i), {g[g0]});
+    bwd_all_jobs_avx512<false, kCh>(a, {rows, col, int32_t(x0) + col}, jobs, n, st, last, int32_t(i), {g[g0]});
     reduce_sets(g, slot);
     moments_to_grads(s, slot);
   }
 }
 #endif
 
+// g_alpha and g_depth are null when only colour has a gradient: the pixel loops then read kBwdRgb planes.
 template <class T>
 void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const double* background, const T* final_T, const int32_t* n_contrib, const T* g_rgb,
                         const T* g_alpha, const T* g_depth, const uint32_t* group_hits, T* slots) {
   const int64_t W = cam.width, HW = W * cam.height;
-  auto tile_fn = bwd_tile_generic<T>;
+  const bool rgb_only = g_alpha == nullptr;
+  const int channels = rgb_only ? kBwdRgb : kBwdCh;
+  auto tile_fn = rgb_only ? bwd_tile_generic<T, kBwdRgb> : bwd_tile_generic<T, kBwdCh>;
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>) {
-    if (simd_level() == Simd::avx512) tile_fn = bwd_tile_avx512;
-    if (simd_level() == Simd::avx2) tile_fn = bwd_tile_avx2;
+    if (simd_level() == Simd::avx512) tile_fn = rgb_only ? bwd_tile_avx512<kBwdRgb> : bwd_tile_avx512<kBwdCh>;
+    if (simd_level() == Simd::avx2) tile_fn = rgb_only ? bwd_tile_avx2<kBwdRgb> : bwd_tile_avx2<kBwdCh>;
   }
 #endif
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
@@ -169,9 +175,10 @@ void rasterize_bwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
       const int r = int(py - y0);
       T* plane = st + bwd_at(r * kTile, 0);  // plane k of this row: plane[k * kTile + lane]
       const int64_t o = py * W + x0;
-      const T* dc[kBwdCh] = {g_rgb + o, g_rgb + HW + o, g_rgb + 2 * HW + o, g_depth + o, g_alpha + o};
+      const T* dc[kBwdCh] = {g_rgb + o, g_rgb + HW + o, g_rgb + 2 * HW + o, rgb_only ? nullptr : g_depth + o,
+                             rgb_only ? nullptr : g_alpha + o};
       copy_row(final_T + o, w, plane + kPbT * kTile);
-      for (int c = 0; c < kBwdCh; ++c) copy_row(dc[c], w, plane + (kPbDC + c) * kTile);
+      for (int c = 0; c < channels; ++c) copy_row(dc[c], w, plane + (kPbDC + c) * kTile);
       // Behind the last contributor lies the background (zero for depth and alpha).
       for (int64_t l = 0; l < w; ++l) plane[kPbS * kTile + l] = dc[0][l] * bg[0] + dc[1][l] * bg[1] + dc[2][l] * bg[2];
       copy_row(n_contrib + o, w, last + r * kTile);
@@ -218,14 +225,19 @@ torch::Tensor rasterize_bwd(const torch::Tensor& packed, const TileBins& bins, c
   auto prepare = [&](const torch::Tensor& g, int64_t channels) {
     return g.defined() ? g.to(opts).contiguous() : torch::zeros({channels, H, W}, opts);
   };
-  const auto g_rgb = prepare(grad_rgb, 3), g_alpha = prepare(grad_alpha, 1), g_depth = prepare(grad_depth, 1);
+  // Only colour has a gradient (a colour loss): the depth and alpha planes are left out rather than read as zeros.
+  const bool rgb_only = !grad_alpha.defined() && !grad_depth.defined();
+  const auto g_rgb = prepare(grad_rgb, 3);
+  const auto g_alpha = rgb_only ? torch::Tensor() : prepare(grad_alpha, 1);
+  const auto g_depth = rgb_only ? torch::Tensor() : prepare(grad_depth, 1);
   auto slots = torch::empty({isects, kGrad2d}, opts);
   auto grad2d = torch::empty({n, kGrad2d}, opts);
   AT_DISPATCH_FLOATING_TYPES(packed.scalar_type(), "rasterize_bwd", [&] {
-    rasterize_bwd_impl<scalar_t>(
-        packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
-        background, final_T.data_ptr<scalar_t>(), n_contrib.data_ptr<int32_t>(), g_rgb.data_ptr<scalar_t>(),
-        g_alpha.data_ptr<scalar_t>(), g_depth.data_ptr<scalar_t>(), hits, slots.data_ptr<scalar_t>());
+    rasterize_bwd_impl<scalar_t>(packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(),
+                                 bins.isect_ids.data_ptr<int32_t>(), cam, background, final_T.data_ptr<scalar_t>(),
+                                 n_contrib.data_ptr<int32_t>(), g_rgb.data_ptr<scalar_t>(),
+                                 rgb_only ? nullptr : g_alpha.data_ptr<scalar_t>(),
+                                 rgb_only ? nullptr : g_depth.data_ptr<scalar_t>(), hits, slots.data_ptr<scalar_t>());
     reduce_slots<scalar_t>(bins.isect_ids.data_ptr<int32_t>(), isects, slots.data_ptr<scalar_t>(), n,
                            grad2d.data_ptr<scalar_t>());
   });

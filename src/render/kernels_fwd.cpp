@@ -182,11 +182,11 @@ enum class Probe { none, max_weight, median_depth };
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
 // forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
-// leaves the normal out, 0 composites nothing (a probe needs only T); kPlane: plane depth (depth_plane). kProbe
-// max_weight: probe[i] receives the largest weight α·T entry i reaches in this tile (the contribution measure); entries
-// never reached keep their value. kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of
-// the first Gaussian after which the pixel's transmittance is 0.5 or less, and the pixel stops there (its sums are then
-// not the forward's).
+// leaves the normal out, 3 the depth too, 0 composites nothing (a probe needs only T); kPlane: plane depth
+// (depth_plane). kProbe max_weight: probe[i] receives the largest weight α·T entry i reaches in this tile (the
+// contribution measure); entries never reached keep their value. kProbe median_depth: probe[p] (tile-local pixel, 0
+// beforehand) receives the depth of the first Gaussian after which the pixel's transmittance is 0.5 or less, and the
+// pixel stops there (its sums are then not the forward's).
 template <class T, int kChannels, bool kPlane, Probe kProbe = Probe::none>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last, const CameraParams& cam, T* probe = nullptr) {
@@ -304,21 +304,26 @@ void fwd_tile_portable(const T* local, int64_t count, int64_t x0, int64_t y0, in
 // The tile loop for these channels at the SIMD level in use (float), else portable.
 template <class T>
 FwdTileFn<T> fwd_tile_fn(const RasterChannels& ch) {
+  const bool rgb_only = !ch.normals && !ch.depth;  // plane depth then changes nothing
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if constexpr (std::is_same_v<T, float>) {
     if (simd_level() == Simd::avx512)
-      return ch.normals ? (ch.plane_depth ? fwd_tile_avx512<7, true> : fwd_tile_avx512<7, false>)
-                        : (ch.plane_depth ? fwd_tile_avx512<4, true> : fwd_tile_avx512<4, false>);
+      return rgb_only     ? fwd_tile_avx512<3, false>
+             : ch.normals ? (ch.plane_depth ? fwd_tile_avx512<7, true> : fwd_tile_avx512<7, false>)
+                          : (ch.plane_depth ? fwd_tile_avx512<4, true> : fwd_tile_avx512<4, false>);
     if (simd_level() == Simd::avx2)
-      return ch.normals ? (ch.plane_depth ? fwd_tile_avx2<7, true> : fwd_tile_avx2<7, false>)
-                        : (ch.plane_depth ? fwd_tile_avx2<4, true> : fwd_tile_avx2<4, false>);
+      return rgb_only     ? fwd_tile_avx2<3, false>
+             : ch.normals ? (ch.plane_depth ? fwd_tile_avx2<7, true> : fwd_tile_avx2<7, false>)
+                          : (ch.plane_depth ? fwd_tile_avx2<4, true> : fwd_tile_avx2<4, false>);
   }
 #endif
-  return ch.normals ? (ch.plane_depth ? fwd_tile_portable<T, 7, true> : fwd_tile_portable<T, 7, false>)
-                    : (ch.plane_depth ? fwd_tile_portable<T, 4, true> : fwd_tile_portable<T, 4, false>);
+  return rgb_only     ? fwd_tile_portable<T, 3, false>
+         : ch.normals ? (ch.plane_depth ? fwd_tile_portable<T, 7, true> : fwd_tile_portable<T, 7, false>)
+                      : (ch.plane_depth ? fwd_tile_portable<T, 4, true> : fwd_tile_portable<T, 4, false>);
 }
 
-// normal_out == nullptr when the channels leave the normal out: it is then neither composited nor written.
+// normal_out (depth_out) == nullptr when the channels leave the normal (depth) out: it is then neither composited nor
+// written.
 template <class T>
 void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam,
                         const RasterChannels& channels, const double* background, T* rgb, T* alpha_out, T* depth_out,
@@ -341,7 +346,7 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
       for (int64_t l = 0; l < w; ++l) alpha_out[o + l] = 1 - final_T[o + l];
       for (int c = 0; c < 3; ++c)
         for (int64_t l = 0; l < w; ++l) rgb[c * HW + o + l] = plane[(kPlAcc + c) * kTile + l] + final_T[o + l] * bg[c];
-      copy_row(plane + (kPlAcc + 3) * kTile, w, depth_out + o);
+      if (depth_out) copy_row(plane + (kPlAcc + 3) * kTile, w, depth_out + o);
       if (normal_out)
         for (int c = 0; c < 3; ++c) copy_row(plane + (kPlAcc + 4 + c) * kTile, w, normal_out + c * HW + o);
       copy_row(scratch.last.data() + r * kTile, w, n_contrib + o);
@@ -418,9 +423,10 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
                            const double background[3], const RasterChannels& channels) {
   const int64_t H = cam.height, W = cam.width;
   const auto opts = packed.options();
+  const bool depth = channels.normals || channels.depth;
   RasterOutput out{torch::empty({3, H, W}, opts),
                    torch::empty({1, H, W}, opts),
-                   torch::empty({1, H, W}, opts),
+                   depth ? torch::empty({1, H, W}, opts) : torch::empty({0}, opts),
                    channels.normals ? torch::empty({3, H, W}, opts) : torch::empty({0}, opts),
                    torch::empty({H, W}, opts),
                    torch::empty({H, W}, opts.dtype(torch::kInt32)),
@@ -432,7 +438,7 @@ RasterOutput rasterize_fwd(const torch::Tensor& packed, const TileBins& bins, co
     rasterize_fwd_impl<scalar_t>(
         packed.data_ptr<scalar_t>(), bins.tile_offsets.data_ptr<int64_t>(), bins.isect_ids.data_ptr<int32_t>(), cam,
         channels, background, out.rgb.data_ptr<scalar_t>(), out.alpha.data_ptr<scalar_t>(),
-        out.depth.data_ptr<scalar_t>(), channels.normals ? out.normal.data_ptr<scalar_t>() : nullptr,
+        depth ? out.depth.data_ptr<scalar_t>() : nullptr, channels.normals ? out.normal.data_ptr<scalar_t>() : nullptr,
         out.final_T.data_ptr<scalar_t>(), out.n_contrib.data_ptr<int32_t>(), group_hits);
   });
   return out;

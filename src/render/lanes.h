@@ -142,7 +142,9 @@ enum FwdPlane { kPlT = 0, kPlAcc = 1, kFwdPlanes = 8 };
 // Backward planes: T, S and dL/dC for r, g, b, depth, alpha. With B_c the colour of what lies behind the
 // current Gaussian (background included), S = Σ_c dL/dC_c·B_c; dL/dC is constant per pixel, so tracking S
 // replaces tracking every B_c: dL/dα = T·(Σ_c dL/dC_c·f_c − S), then S ← α·Σ_c dL/dC_c·f_c + (1 − α)·S.
-constexpr int kBwdCh = 5;
+// The pixel loops read the first kCh of them: kBwdCh, or kBwdRgb when only colour has a gradient (training on
+// colour losses), where the depth and alpha terms would add exact zeros.
+constexpr int kBwdCh = 5, kBwdRgb = 3;
 enum BwdPlane { kPbT = 0, kPbS = 1, kPbDC = 2, kBwdPlanes = 2 + kBwdCh };
 
 // Index of pixel p's value in `plane`. Layout [tile row][plane][pixel of the row]: a row's state is one
@@ -313,7 +315,8 @@ ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const
 }
 
 // Back to front over the 8 pixels of group `q` for Gaussian `i` (tile-local), adding to the group's lane sums.
-template <class T>
+// kCh: the gradient planes read (kBwdCh or kBwdRgb).
+template <int kCh, class T>
 ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const int32_t* last, int32_t i,
                              LaneSums<T>& sums) {
   const Row<T>& r = q.r;
@@ -330,12 +333,12 @@ ISPLAT_INLINE void bwd_group(const Splat<T>& s, const Group<T>& q, T* st, const 
     const T t_in = st[bwd_at(p, kPbT)] / (T(1) - alpha);  // transmittance in front of this Gaussian
     const T w = alpha * t_in;
     T dq = st[bwd_at(p, kPbDC)] * s.f[0];  // Σ_c dL/dC_c·f_c
-    for (int c = 1; c < kBwdCh; ++c) dq = madd(st[bwd_at(p, kPbDC + c)], s.f[c], dq);
+    for (int c = 1; c < kCh; ++c) dq = madd(st[bwd_at(p, kPbDC + c)], s.f[c], dq);
     T& S = st[bwd_at(p, kPbS)];
     const T diff = dq - S, d_alpha = diff * t_in;
     S = madd(alpha, diff, S);  // α·dq + (1 − α)·S
     st[bwd_at(p, kPbT)] = t_in;
-    for (int c = 0; c < 4; ++c) g[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g[kGr + c][l]);
+    for (int c = 0; c < std::min(kCh, 4); ++c) g[kGr + c][l] = madd(w, st[bwd_at(p, kPbDC + c)], g[kGr + c][l]);
     if (raw > T(kAlphaMax)) continue;  // α clamped: it does not depend on the parameters
     g[kGo][l] = madd(G, d_alpha, g[kGo][l]);
     const T q = alpha * d_alpha;  // −dL/dpower; its moments, see moments_to_grads
@@ -461,8 +464,8 @@ ISPLAT_AVX2 void reduce_sets(const Avx2Sums* sets, float* out) {
   }
 }
 
-// Groups q[0..N), each into its lane-sum set sums[lane_set].
-template <int N>
+// Groups q[0..N), each into its lane-sum set sums[lane_set]; kCh as in bwd_group.
+template <int N, int kCh>
 ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, float* st, const int32_t* last, int32_t i,
                                  Avx2Sums* sums) {
   __m256 dxs[N], npow[N], G[N];
@@ -487,10 +490,10 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     const __m256 t = _mm256_loadu_ps(Tp);
     const __m256 t_in = _mm256_div_ps(t, one_minus);
     const __m256 w = _mm256_mul_ps(alpha, t_in);
-    __m256 dc[kBwdCh];
-    for (int c = 0; c < kBwdCh; ++c) dc[c] = _mm256_loadu_ps(base + (kPbDC + c) * kTile);
+    __m256 dc[kCh];
+    for (int c = 0; c < kCh; ++c) dc[c] = _mm256_loadu_ps(base + (kPbDC + c) * kTile);
     __m256 dq = _mm256_mul_ps(dc[0], a.f[0]);
-    for (int c = 1; c < kBwdCh; ++c) dq = _mm256_fmadd_ps(dc[c], a.f[c], dq);
+    for (int c = 1; c < kCh; ++c) dq = _mm256_fmadd_ps(dc[c], a.f[c], dq);
     float* Sp = base + kPbS * kTile;
     const __m256 S = _mm256_loadu_ps(Sp);
     const __m256 diff = _mm256_sub_ps(dq, S), d_alpha = _mm256_mul_ps(diff, t_in);
@@ -499,7 +502,7 @@ ISPLAT_AVX2 void bwd_groups_avx2(const Avx2Splat& a, const Group<float>* q, floa
     _mm256_storeu_ps(Tp, _mm256_blendv_ps(t, t_in, hit));
     // Masked lanes add exactly zero: wh and dp are 0 there, and every factor they meet is finite.
     const __m256 wh = _mm256_and_ps(hit, w);
-    for (int c = 0; c < 4; ++c) g.s[kGr + c] = _mm256_fmadd_ps(wh, dc[c], g.s[kGr + c]);
+    for (int c = 0; c < std::min(kCh, 4); ++c) g.s[kGr + c] = _mm256_fmadd_ps(wh, dc[c], g.s[kGr + c]);
     const __m256 free = _mm256_and_ps(hit, _mm256_cmp_ps(raw, _mm256_set1_ps(float(kAlphaMax)), _CMP_LE_OQ));
     g.s[kGo] = _mm256_blendv_ps(g.s[kGo], _mm256_fmadd_ps(G[k], d_alpha, g.s[kGo]), free);
     const __m256 qp = _mm256_and_ps(free, _mm256_mul_ps(alpha, d_alpha));  // −dL/dpower

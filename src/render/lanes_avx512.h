@@ -324,7 +324,7 @@ struct JobSums<false> {
 };
 
 // bwd_groups_avx2 on the N jobs k0, ..., k0 + N − 1 of q.
-template <int N, bool kRow>
+template <int N, bool kRow, int kCh>
 ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const JobList& q, int k0, float* st,
                                    const int32_t* last, int32_t i, JobSums<kRow> g) {
   __m512 dxs[N], npow[N], G[N];
@@ -344,17 +344,17 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const 
     const JobPlanes<kBwdPlanes> pl(st, s, j);
     const __m512 t = pl.load<kRow>(kPbT);
     const __m512 t_in = _mm512_div_ps(t, one_minus);
-    __m512 dc[kBwdCh];
-    for (int c = 0; c < kBwdCh; ++c) dc[c] = pl.load<kRow>(kPbDC + c);
+    __m512 dc[kCh];
+    for (int c = 0; c < kCh; ++c) dc[c] = pl.load<kRow>(kPbDC + c);
     __m512 dq = _mm512_mul_ps(dc[0], a.f[0]);
-    for (int c = 1; c < kBwdCh; ++c) dq = _mm512_fmadd_ps(dc[c], a.f[c], dq);
+    for (int c = 1; c < kCh; ++c) dq = _mm512_fmadd_ps(dc[c], a.f[c], dq);
     const __m512 S = pl.load<kRow>(kPbS);
     const __m512 diff = _mm512_sub_ps(dq, S), d_alpha = _mm512_mul_ps(diff, t_in);
     pl.store<kRow>(kPbS, _mm512_mask3_fmadd_ps(alpha, diff, S, hit));  // α·diff + S where hit
     pl.store<kRow>(kPbT, _mm512_mask_mov_ps(t, hit, t_in));
     // Masked lanes add exactly zero, as in bwd_groups_avx2.
     const __m512 wh = _mm512_maskz_mul_ps(hit, alpha, t_in);
-    for (int c = 0; c < 4; ++c) g.fma(kGr + c, wh, dc[c]);
+    for (int c = 0; c < std::min(kCh, 4); ++c) g.fma(kGr + c, wh, dc[c]);
     const __mmask16 free = hit & _mm512_cmp_ps_mask(raw, _mm512_set1_ps(float(kAlphaMax)), _CMP_LE_OQ);
     g.fma_where(kGo, free, G[k], d_alpha);
     const __m512 qp = _mm512_maskz_mul_ps(free, alpha, d_alpha);  // −dL/dpower
@@ -368,13 +368,13 @@ ISPLAT_AVX512 void bwd_jobs_avx512(const Avx512Splat& a, const JobSet& s, const 
 }
 
 // bwd_jobs_avx512 on the n jobs of q, four at a time where it can.
-template <bool kRow>
+template <bool kRow, int kCh>
 ISPLAT_AVX512 void bwd_all_jobs_avx512(const Avx512Splat& a, const JobSet& s, const JobList& q, int n, float* st,
                                        const int32_t* last, int32_t i, JobSums<kRow> g) {
   int k = 0;
-  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow>(a, s, q, k, st, last, i, g);
-  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow>(a, s, q, k, st, last, i, g);
-  if (k < n) bwd_jobs_avx512<1, kRow>(a, s, q, k, st, last, i, g);
+  for (; k + 4 <= n; k += 4) bwd_jobs_avx512<4, kRow, kCh>(a, s, q, k, st, last, i, g);
+  for (; k + 2 <= n; k += 2) bwd_jobs_avx512<2, kRow, kCh>(a, s, q, k, st, last, i, g);
+  if (k < n) bwd_jobs_avx512<1, kRow, kCh>(a, s, q, k, st, last, i, g);
 }
 
 }  // namespace isplat::splat

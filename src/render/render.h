@@ -21,6 +21,9 @@ struct RenderOptions {
   // Composite the normal map. Not a config key: callers that never read `normal` (training) turn it off and
   // save about a sixth of the forward pass; `normal` is then an empty tensor.
   bool normals = true;
+  // Composite the depth map. Not a config key: training turns it off when no loss reads `depth` (with normals off;
+  // `depth` is then an empty tensor). Colour-only losses also leave the backward's depth and alpha terms out.
+  bool depth_map = true;
   // Also render median_depth. Not a config key: the evaluator asks for it when scoring.crack_depth = median. One more
   // forward pass over the tiles, with no gradient.
   bool median_depth = false;

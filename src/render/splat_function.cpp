@@ -90,8 +90,10 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     // Group hits only where a backward may follow (the inputs that take gradients are means to opacities).
     const bool backward = means.requires_grad() || scales.requires_grad() || quats.requires_grad() ||
                           colors.requires_grad() || opacities.requires_grad();
-    RasterOutput out =
-        rasterize_fwd(proj.packed, bins, cam, options.background.data(), {options.normals, plane, backward});
+    RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(),
+                                     {options.normals, plane, backward, options.depth_map});
+    // Outputs no loss reads get undefined gradients, so a colour-only loss runs the backward's colour-only loops.
+    ctx->set_materialize_grads(false);
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
                             out.final_T, out.n_contrib, out.group_hits});
     ctx->saved_data["width"] = width;
@@ -103,7 +105,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     ctx->saved_data["plane_depth"] = plane;
     const Tensor median = options.median_depth ? rasterize_median_depth(proj.packed, bins, cam, plane)
                                                : torch::empty({0}, means.options());
-    if (plane)
+    if (plane || out.depth.numel() == 0)
       ctx->mark_non_differentiable({out.normal, out.depth, median});
     else
       ctx->mark_non_differentiable({out.normal, median});

@@ -5,8 +5,9 @@ import re
 import sys
 from pathlib import Path
 
-COLS = ["case", "N", "image", "visible", "isects", "first", "fwd", "fb", "Misect", "proj", "bin", "rast", "rbwd", "pbwd"]
-PHASES = ["fwd", "fb", "proj", "bin", "rast", "rbwd", "pbwd"]
+COLS = ["case", "N", "image", "visible", "isects", "first", "fwd", "fb", "Misect", "proj", "bin", "rast", "rbwd", "pbwd",
+        "peakF", "peakFB", "rss0", "bufF", "bufB", "build", "cpuF", "cpuB", "fbrgb"]
+PHASES = ["fwd", "fb", "proj", "bin", "rast", "rbwd", "pbwd", "fbrgb"]  # fbrgb: only in rows that have it (2026-12-02)
 
 
 def parse(path):
@@ -35,8 +36,11 @@ for path in args:
     for case in dict.fromkeys(r[0] for (_, _), v in sorted(rows.items()) for r in v):
         for col in PHASES:
             i = COLS.index(col)
-            pick = lambda b: [float(r[i]) for (k, bb), v in sorted(rows.items()) if bb == b for r in v if r[0] == case]
+            pick = lambda b: [float(r[i]) for (k, bb), v in sorted(rows.items()) if bb == b for r in v
+                              if r[0] == case and len(r) > i]
             old, new = pick(names[0]), pick(names[1])
+            if not old or not new:
+                continue
             d = [n - o for o, n in zip(old, new)]
             print(f"{Path(path).stem:22s} {case:18s} {col:5s} old {min(old):6.1f}-{max(old):6.1f}  "
                   f"new {min(new):6.1f}-{max(new):6.1f}  new-old median {median(d):+6.2f} ({min(d):+.1f} to {max(d):+.1f})")
