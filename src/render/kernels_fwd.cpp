@@ -232,11 +232,13 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
   if (group_hits) std::fill(group_hits, group_hits + count, 0u);  // entries skipped or never reached hit nothing
   JobList jobs;
   TileRows rows;
+  PixelBoxes boxes;
   LiveGroups live = unstopped_groups_avx512(st);
   int64_t ys, ye, g0, g1;
   for (int64_t i = 0; i < count && (live.half[0] | live.half[1]) != 0; ++i) {  // until every pixel has stopped
     const float* rec = local + i * kRec;
-    if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
+    if (i % 16 == 0) pixel_boxes(rec, count - i, x0, y0, x1, y1, boxes);  // the next 16 entries' boxes
+    if (!boxes.unpack(int(i % 16), y0, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
     s.prepare();
     tile_rows(s, x0, y0, ys, ye, g0, g1, live, rows);

@@ -93,6 +93,66 @@ ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int6
   }
 }
 
+// pixel_box (tile_loop.h) of up to 16 consecutive float records at once, on vectors and in double as pixel_box
+// computes it, so every box is the one the scalar code gives. (Splat::prepare's constants done the same way, with
+// four more gathers, made the forward slower.)
+struct PixelBoxes {
+  // Per entry, its box packed into one word: bits 0-3 ys − y0, 4-8 ye − y0, 9 g0, 10-11 g1, 12 the box is not empty.
+  alignas(64) uint32_t box[16];
+  bool unpack(int k, int64_t y0, int64_t& ys, int64_t& ye, int64_t& g0, int64_t& g1) const {
+    const uint32_t b = box[k];
+    ys = y0 + int64_t(b & 15u), ye = y0 + int64_t((b >> 4) & 31u), g0 = int64_t((b >> 9) & 1u),
+    g1 = int64_t((b >> 10) & 3u);
+    return (b >> 12) & 1u;
+  }
+};
+// The box's [lo, hi) along one axis for 8 records, tile span [a, b): pixel_box's lo and hi.
+ISPLAT_AVX512 void axis_span(__m512d m, __m512d r, int64_t a, int64_t b, __m256i& lo, __m256i& hi) {
+  const __m512d da = _mm512_set1_pd(double(a)), db = _mm512_set1_pd(double(b)), half = _mm512_set1_pd(0.5);
+  // ifloor of a value clamped to a small range is floor: both give the same integer.
+  const __m512d l = _mm512_roundscale_pd(
+      _mm512_max_pd(_mm512_sub_pd(_mm512_sub_pd(m, r), half), _mm512_sub_pd(da, _mm512_set1_pd(1.0))),
+      _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512d h = _mm512_roundscale_pd(
+      _mm512_min_pd(_mm512_sub_pd(_mm512_add_pd(m, r), half), _mm512_add_pd(db, _mm512_set1_pd(1.0))),
+      _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  lo = _mm512_cvtpd_epi32(_mm512_max_pd(da, l));
+  hi = _mm512_cvtpd_epi32(_mm512_min_pd(db, _mm512_add_pd(h, _mm512_set1_pd(1.0))));
+}
+// The boxes of the n ≥ 1 records from `rec` (at most 16 are read) in tile (x0, y0, x1, y1).
+ISPLAT_AVX512 void pixel_boxes(const float* rec, int64_t n, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                               PixelBoxes& out) {
+  const __mmask16 in = __mmask16(n >= 16 ? 0xffffu : (1u << n) - 1u);
+  const __m512i at = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                                        _mm512_set1_epi32(kRec));
+  enum { U, V, RX, RY };
+  const int fields[4] = {kU, kV, kRx, kRy};
+  __m512 f[4];  // each record's fields (entries past n: 0, unused)
+  for (int k = 0; k < 4; ++k)
+    f[k] =
+        _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in, _mm512_add_epi32(at, _mm512_set1_epi32(fields[k])), rec, 4);
+  __m256i span[4][2];  // ys, ye, xs, xe of each half
+  for (int h = 0; h < 2; ++h) {
+    __m512d d[4];
+    for (int k = 0; k < 4; ++k)
+      d[k] = _mm512_cvtps_pd(h == 0 ? _mm512_castps512_ps256(f[k]) : _mm512_extractf32x8_ps(f[k], 1));
+    axis_span(d[V], d[RY], y0, y1, span[0][h], span[1][h]);
+    axis_span(d[U], d[RX], x0, x1, span[2][h], span[3][h]);
+  }
+  __m512i joined[4];
+  for (int k = 0; k < 4; ++k) joined[k] = _mm512_inserti32x8(_mm512_castsi256_si512(span[k][0]), span[k][1], 1);
+  const __m512i Ys = joined[0], Ye = joined[1], Xs = joined[2], Xe = joined[3];
+  const __mmask16 nonempty = in & _mm512_cmplt_epi32_mask(Ys, Ye) & _mm512_cmplt_epi32_mask(Xs, Xe);
+  const __m512i X0 = _mm512_set1_epi32(int32_t(x0)), Y0 = _mm512_set1_epi32(int32_t(y0));
+  const __m512i g0 = _mm512_srli_epi32(_mm512_sub_epi32(Xs, X0), 3);  // xs ≥ x0
+  const __m512i g1 = _mm512_add_epi32(
+      _mm512_srli_epi32(_mm512_sub_epi32(_mm512_sub_epi32(Xe, X0), _mm512_set1_epi32(1)), 3), _mm512_set1_epi32(1));
+  __m512i b = _mm512_or_si512(_mm512_sub_epi32(Ys, Y0), _mm512_slli_epi32(_mm512_sub_epi32(Ye, Y0), 4));
+  b = _mm512_or_si512(b, _mm512_or_si512(_mm512_slli_epi32(g0, 9), _mm512_slli_epi32(g1, 10)));
+  b = _mm512_mask_or_epi32(_mm512_setzero_si512(), nonempty, b, _mm512_set1_epi32(1 << 12));
+  _mm512_store_si512(out.box, b);
+}
+
 // unstopped_groups on vectors: one tile row's T plane per register.
 ISPLAT_AVX512 LiveGroups unstopped_groups_avx512(const float* st) {
   unsigned m[2] = {0, 0};
