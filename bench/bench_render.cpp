@@ -163,12 +163,15 @@ void run(const Case& cs) {
                   mb(pg.scales) + mb(pg.quats) + mb(pg.opacities) + mb(ones) + 2 * mb(one);
   }
 
-  // Forward through the public API (no autograd state).
-  std::vector<double> fwd;
-  for (int r = 0; r < cs.fwd_runs; ++r) {
+  // Forward through the public API (no autograd state), and in alternate runs with the median depth (the evaluator's
+  // render under scoring.crack_depth = median).
+  std::vector<double> fwd, fwd_median;
+  RenderOptions with_median;
+  with_median.median_depth = true;
+  for (int r = 0; r < 2 * cs.fwd_runs; ++r) {
     const double t0 = now_ms();
-    const RenderOutput out = render(g, cam);
-    fwd.push_back(now_ms() - t0);
+    const RenderOutput out = render(g, cam, r % 2 == 1 ? with_median : RenderOptions{});
+    (r % 2 == 1 ? fwd_median : fwd).push_back(now_ms() - t0);
   }
   const double peak_fwd = peak_memory_mb();
 
@@ -198,7 +201,7 @@ void run(const Case& cs) {
   }
   const double peak_all = peak_memory_mb();
 
-  const double f = stat(fwd), b = stat(fb), b_rgb = stat(fb_rgb);
+  const double f = stat(fwd), b = stat(fb), b_rgb = stat(fb_rgb), f_median = stat(fwd_median);
   std::cout << std::fixed << std::setprecision(1);
   std::cout << "| " << std::left << std::setw(20) << cs.name << std::right << " | " << std::setw(8) << cs.n << " | "
             << std::setw(9) << (std::to_string(cs.W) + "x" + std::to_string(cs.H)) << " | " << std::setw(8) << visible
@@ -210,7 +213,7 @@ void run(const Case& cs) {
             << (cs.bwd_runs ? peak_all : NAN) << " | " << std::setw(6) << rss0 << " | " << std::setw(6) << buffers_fwd
             << " | " << std::setw(6) << buffers_bwd << " | " << std::setw(6) << build_ms / 1000 << " | " << std::setw(6)
             << stat(c_fwd) << " | " << std::setw(6) << stat(c_bwd) << " | " << std::setw(8)
-            << (cs.bwd_runs ? b_rgb : NAN) << " |" << std::endl;
+            << (cs.bwd_runs ? b_rgb : NAN) << " | " << std::setw(8) << f_median << " |" << std::endl;
 }
 
 }  // namespace
@@ -253,7 +256,8 @@ int main(int argc, char** argv) {
            "gives glibc's default instead\n"
         << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "
            "render without the normal map (as in training) + L1 loss with light depth and alpha terms + backward "
-           "(last column, f+b rgb: the L1 loss alone and no depth map, as the recipe trains);\n      Misect/s = "
+           "(f+b rgb: the L1 loss alone and no depth map, as the recipe trains);\n      fwd med = fwd with the median "
+           "depth too (the evaluator's render under scoring.crack_depth = median); Misect/s = "
            "intersections per second of fwd;\n      proj/bin/rast/rbwd/pbwd = phases (project, tile binning, rasterize "
            "fwd, rasterize bwd, "
            "project bwd);\n      peakF/peakFB = VmHWM (MB, process peak reset before the case) after the fwd "
@@ -264,7 +268,7 @@ int main(int argc, char** argv) {
         << "| case                 |        N |     image |  visible |    isects | first ms |   fwd ms | f+b ms   | "
            "Misect/s "
            "|  proj |   bin |    rast |    rbwd |  pbwd |   peakF |  peakFB |   rss0 |   bufF |   bufB | build s | "
-           "cpuF   | cpuB   | f+b rgb  |\n";
+           "cpuF   | cpuB   | f+b rgb  | fwd med  |\n";
     const int k = int(std::max<int64_t>(1, runs_scale));
     std::vector<Case> cases = {{"20k", 20000, 256, 192, 1.0, 11 * k, 11 * k},
                                {"20k large splats", 20000, 256, 192, 3.0, 11 * k, 11 * k},

@@ -225,9 +225,11 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
 // groups for a narrower one (a last unpaired group with its high half masked off). Writes each entry's group hits.
-template <int kChannels, bool kPlane>
-ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
-                                      float* st, int32_t* last, const CameraParams& cam, uint32_t* group_hits) {
+// kMedian: fwd_tile_generic's median-depth probe instead (kChannels 0, group_hits null), into median[kPix].
+template <int kChannels, bool kPlane, bool kMedian = false>
+ISPLAT_AVX512_FN void fwd_tile_avx512_impl(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1,
+                                           int64_t y1, float* st, int32_t* last, const CameraParams& cam,
+                                           uint32_t* group_hits, float* median) {
   fwd_init(x0, y0, x1, y1, st, last);
   if (group_hits) std::fill(group_hits, group_hits + count, 0u);  // entries skipped or never reached hit nothing
   JobList jobs;
@@ -244,23 +246,28 @@ ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t
     tile_rows(s, x0, y0, ys, ye, g0, g1, live, rows);
     if ((rows.groups[0] | rows.groups[1]) == 0) continue;
     const int32_t id = int32_t(i + 1);
-    const Avx512Splat a = avx512_splat(s, kChannels);
+    const Avx512Splat a = avx512_splat(s, kMedian ? 4 : kChannels);  // the probe reads the depth, f[3]
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
     unsigned stops;  // nonzero if a pixel stopped
     uint32_t hits = 0;
     if (g1 - g0 == 2) {
       const int n = row_jobs(rows, jobs);
-      stops =
-          fwd_all_jobs_avx512<kChannels, kPlane, true>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last, id, hits);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, true, kMedian>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last,
+                                                                    id, hits, median);
     } else {
       const int n = pair_jobs(rows, int(g0), jobs);
       const int32_t col = int32_t(g0) * kLanes;
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, false>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n, st, last,
-                                                            id, hits);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, false, kMedian>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n,
+                                                                     st, last, id, hits, median);
     }
     if (group_hits) group_hits[i] = hits;
     if (stops != 0) live = unstopped_groups_avx512(st);
   }
+}
+template <int kChannels, bool kPlane>
+ISPLAT_AVX512_FN void fwd_tile_avx512(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+                                      float* st, int32_t* last, const CameraParams& cam, uint32_t* group_hits) {
+  fwd_tile_avx512_impl<kChannels, kPlane>(local, count, x0, y0, x1, y1, st, last, cam, group_hits, nullptr);
 }
 
 template <int kChannels, bool kPlane>
@@ -368,16 +375,28 @@ void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, c
   });
 }
 
-// Each pixel's median depth (rasterize_median_depth), tile by tile with the forward's rules.
+// Each pixel's median depth (rasterize_median_depth), tile by tile with the forward's rules: the AVX-512 loops where
+// the CPU has them (float), else the portable ones (the same depths bit for bit).
 template <class T, bool kPlane>
 void median_depth_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* out) {
   const int64_t W = cam.width;
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    T median[kPix] = {};
-    fwd_tile_generic<T, 0, kPlane, Probe::median_depth>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1,
-                                                        y1, scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
-                                                        median);
+    alignas(64) T median[kPix] = {};
+    const T* local = scratch.gather(packed, ids + begin, count);
+    T* st = scratch.pixel_planes(kFwdPlanes);
+    bool vector = false;
+#ifdef ISPLAT_HAVE_AVX2_LANES
+    if constexpr (std::is_same_v<T, float>) {
+      vector = simd_level() == Simd::avx512;
+      if (vector)
+        fwd_tile_avx512_impl<0, kPlane, true>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam, nullptr,
+                                              median);
+    }
+#endif
+    if (!vector)
+      fwd_tile_generic<T, 0, kPlane, Probe::median_depth>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
+                                                          median);
     for (int64_t py = y0; py < y1; ++py) std::copy_n(median + (py - y0) * kTile, x1 - x0, out + py * W + x0);
   });
 }
