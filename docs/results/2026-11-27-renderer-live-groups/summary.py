@@ -6,8 +6,9 @@ import sys
 from pathlib import Path
 
 COLS = ["case", "N", "image", "visible", "isects", "first", "fwd", "fb", "Misect", "proj", "bin", "rast", "rbwd", "pbwd",
-        "peakF", "peakFB", "rss0", "bufF", "bufB", "build", "cpuF", "cpuB", "fbrgb"]
-PHASES = ["fwd", "fb", "proj", "bin", "rast", "rbwd", "pbwd", "fbrgb"]  # fbrgb: only in rows that have it (2026-12-02)
+        "peakF", "peakFB", "rss0", "bufF", "bufB", "build", "cpuF", "cpuB", "fbrgb", "fwdmed"]
+# fbrgb, fwdmed: only in rows that have them (2026-12-02)
+PHASES = ["fwd", "fb", "proj", "bin", "rast", "rbwd", "pbwd", "fbrgb", "fwdmed"]
 
 
 def parse(path):
