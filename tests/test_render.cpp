@@ -989,6 +989,22 @@ TEST_CASE("prune: the contribution measure equals the dense reference's largest 
   CHECK((ref == 0).sum().item<int64_t>() > 0);     // and some (outside the frustum or occluded) do not
   // Float precision agrees with the double-precision measure.
   CHECK(max_abs(max_contribution(scene.to(torch::kFloat32), cam.to(torch::kFloat32)).to(kF64) - ref) < 1e-4);
+  // Every SIMD level's probe gives the portable loop's weights bit for bit (AVX-512 has its own), on a scene large
+  // enough for whole-row and paired jobs and for tiles that fill up.
+  const Camera wide = make_camera(90, 60, 70.0, 70.0, 0.3, true, torch::kFloat32);
+  const Gaussians many =
+      concat({random_scene(500, wide, 33), random_scene(80, wide, 34, 0.3, 3.0, 8.0, 0.9, 1.0)}).to(torch::kFloat32);
+  std::vector<Tensor> weights;
+  for (splat::Simd level : simd_levels()) {
+    const splat::Simd before = splat::set_simd_level(level);
+    weights.push_back(max_contribution(many, wide));
+    splat::set_simd_level(before);
+  }
+  CHECK((weights[0] > 0.05f).sum().item<int64_t>() > 100);
+  for (size_t k = 1; k < weights.size(); ++k) {
+    CAPTURE(k);
+    CHECK(torch::equal(weights[0], weights[k]));
+  }
 }
 
 TEST_CASE("prune: never removes a Gaussian that contributes at least the threshold in any view", "[render]") {

@@ -176,9 +176,6 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
   }
 }
 
-// What fwd_tile_generic measures besides compositing (kProbe).
-enum class Probe { none, max_weight, median_depth };
-
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
 // forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
@@ -225,11 +222,11 @@ void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int
 #ifdef ISPLAT_HAVE_AVX2_LANES
 // 16 lanes per register: whole tile rows for a Gaussian whose box spans both groups of a row, pairs of rows'
 // groups for a narrower one (a last unpaired group with its high half masked off). Writes each entry's group hits.
-// kMedian: fwd_tile_generic's median-depth probe instead (kChannels 0, group_hits null), into median[kPix].
-template <int kChannels, bool kPlane, bool kMedian = false>
+// kProbe: one of fwd_tile_generic's probes instead (kChannels 0, group_hits null), into `probe` as it says.
+template <int kChannels, bool kPlane, Probe kProbe = Probe::none>
 ISPLAT_AVX512_FN void fwd_tile_avx512_impl(const float* local, int64_t count, int64_t x0, int64_t y0, int64_t x1,
                                            int64_t y1, float* st, int32_t* last, const CameraParams& cam,
-                                           uint32_t* group_hits, float* median) {
+                                           uint32_t* group_hits, float* probe) {
   fwd_init(x0, y0, x1, y1, st, last);
   if (group_hits) std::fill(group_hits, group_hits + count, 0u);  // entries skipped or never reached hit nothing
   JobList jobs;
@@ -246,20 +243,24 @@ ISPLAT_AVX512_FN void fwd_tile_avx512_impl(const float* local, int64_t count, in
     tile_rows(s, x0, y0, ys, ye, g0, g1, live, rows);
     if ((rows.groups[0] | rows.groups[1]) == 0) continue;
     const int32_t id = int32_t(i + 1);
-    const Avx512Splat a = avx512_splat(s, kMedian ? 4 : kChannels);  // the probe reads the depth, f[3]
+    // The median probe reads the depth, f[3].
+    const Avx512Splat a = avx512_splat(s, kProbe == Probe::median_depth ? 4 : kChannels);
     const Avx512Plane plane = kPlane ? avx512_plane(depth_plane(s, cam)) : Avx512Plane{};
     unsigned stops;  // nonzero if a pixel stopped
     uint32_t hits = 0;
+    ProbeOut out{_mm512_setzero_ps(), probe};
     if (g1 - g0 == 2) {
       const int n = row_jobs(rows, jobs);
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, true, kMedian>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last,
-                                                                    id, hits, median);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, true, kProbe>(a, plane, {rows, 0, int32_t(x0)}, jobs, n, st, last,
+                                                                   id, hits, out);
     } else {
       const int n = pair_jobs(rows, int(g0), jobs);
       const int32_t col = int32_t(g0) * kLanes;
-      stops = fwd_all_jobs_avx512<kChannels, kPlane, false, kMedian>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n,
-                                                                     st, last, id, hits, median);
+      stops = fwd_all_jobs_avx512<kChannels, kPlane, false, kProbe>(a, plane, {rows, col, int32_t(x0) + col}, jobs, n,
+                                                                    st, last, id, hits, out);
     }
+    // An entry with no group to visit keeps its value, 0: the portable loop's m stays 0 there.
+    if constexpr (kProbe == Probe::max_weight) probe[i] = _mm512_reduce_max_ps(out.max_weight);
     if (group_hits) group_hits[i] = hits;
     if (stops != 0) live = unstopped_groups_avx512(st);
   }
@@ -364,13 +365,24 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
 }
 
 // The largest weight w = α·T each tile-list entry reaches in its tile, written at the entry's position in the
-// intersection list (so no two threads ever write the same place). Same rule as fwd_tile_generic.
+// intersection list (so no two threads ever write the same place). Same rule as fwd_tile_generic, whose loop it runs
+// except on AVX-512 (float), which gives the same weights bit for bit.
 template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    fwd_tile_generic<T, 0, false, Probe::max_weight>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
-                                                     scratch.pixel_planes(kFwdPlanes), scratch.last.data(), cam,
+    const T* local = scratch.gather(packed, ids + begin, count);
+    T* st = scratch.pixel_planes(kFwdPlanes);
+#ifdef ISPLAT_HAVE_AVX2_LANES
+    if constexpr (std::is_same_v<T, float>) {
+      if (simd_level() == Simd::avx512) {
+        fwd_tile_avx512_impl<0, false, Probe::max_weight>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
+                                                          nullptr, per_entry + begin);
+        return;
+      }
+    }
+#endif
+    fwd_tile_generic<T, 0, false, Probe::max_weight>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
                                                      per_entry + begin);
   });
 }
@@ -390,8 +402,8 @@ void median_depth_impl(const T* packed, const int64_t* offs, const int32_t* ids,
     if constexpr (std::is_same_v<T, float>) {
       vector = simd_level() == Simd::avx512;
       if (vector)
-        fwd_tile_avx512_impl<0, kPlane, true>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam, nullptr,
-                                              median);
+        fwd_tile_avx512_impl<0, kPlane, Probe::median_depth>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
+                                                             nullptr, median);
     }
 #endif
     if (!vector)

@@ -264,6 +264,10 @@ ISPLAT_INLINE void moments_to_grads(const Splat<T>& s, T* out) {
   out[kGA] = T(0) - T(0.5) * qxx, out[kGB] = T(0) - qxy, out[kGC] = T(0) - T(0.5) * qyy;
 }
 
+// What a forward tile loop measures besides compositing (kProbe of fwd_tile_generic and the AVX-512 loops): nothing
+// (the renderer), each entry's largest weight α·T (the contribution measure), or each pixel's median depth.
+enum class Probe { none, max_weight, median_depth };
+
 // ---- Portable scalar lanes ----
 
 // Ignores the composited pixels (the renderer's case).

@@ -265,14 +265,21 @@ ISPLAT_AVX512 void avx512_neg_power(const Avx512Splat& a, const JobSet& s, const
                          job_term<kRow>(s, j, &TileRows::nc));
 }
 
+// What the probes of fwd_tile_generic measure, on vectors (kChannels 0): the entry's largest weight so far
+// (max_weight), and each tile pixel's median depth, 0 until found (median_depth).
+struct ProbeOut {
+  __m512 max_weight;
+  float* median;
+};
+
 // fwd_groups_avx2 on the N jobs k0, ..., k0 + N − 1 of q; returns the lanes that stopped, OR-ed over the jobs (nonzero
-// if any). Adds to `hits` the groups where a pixel was composited (RasterOutput::group_hits' bits). kMedian: the
-// median-depth probe of fwd_tile_generic instead (kChannels 0): a pixel whose transmittance this Gaussian takes to
-// 0.5 or less gets its depth in median[p] (tile-local pixel) and stops there.
-template <int N, int kChannels, bool kPlane, bool kRow, bool kMedian = false>
+// if any). Adds to `hits` the groups where a pixel was composited (RasterOutput::group_hits' bits). kProbe as in
+// fwd_tile_generic: max_weight takes the largest weight of the composited lanes into probe.max_weight; median_depth
+// gives a pixel whose transmittance this Gaussian takes to 0.5 or less its depth in probe.median and stops it there.
+template <int N, int kChannels, bool kPlane, bool kRow, Probe kProbe = Probe::none>
 ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
                                        const JobList& q, int k0, float* st, int32_t* last, int32_t id, uint32_t& hits,
-                                       float* median = nullptr) {
+                                       ProbeOut& probe) {
   __m512 raw[N], npow[N], dxs[N];
   for (int k = 0; k < N; ++k) {
     avx512_neg_power<kRow>(a, s, q.at<kRow>(k0 + k), dxs[k], npow[k]);
@@ -297,13 +304,15 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
       const __m512 iz = _mm512_fmadd_ps(plane.gx, dxs[k], _mm512_fmadd_ps(plane.gy, dy, plane.iz0));
       z = _mm512_max_ps(plane.zlo, _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_max_ps(iz, plane.izmin)));
     }
-    if constexpr (kMedian) {  // fwd_group's first_half sink: found where next ≤ 0.5; the pixel stops at −next
+    if constexpr (kProbe == Probe::max_weight)  // fwd_group's keep_max sink
+      probe.max_weight = _mm512_mask_max_ps(probe.max_weight, add, w, probe.max_weight);
+    if constexpr (kProbe == Probe::median_depth) {  // its first_half sink: found where next ≤ 0.5; stops at −next
       const __mmask16 found = add & _mm512_cmp_ps_mask(next, _mm512_set1_ps(0.5f), _CMP_LE_OQ);
       if constexpr (kRow) {
-        _mm512_mask_storeu_ps(median + s.pixel(j, 0), found, z);
+        _mm512_mask_storeu_ps(probe.median + s.pixel(j, 0), found, z);
       } else {
-        _mm256_mask_storeu_ps(median + s.pixel(j, 0), __mmask8(found), _mm512_castps512_ps256(z));
-        _mm256_mask_storeu_ps(median + s.pixel(j, 1), __mmask8(found >> 8), _mm512_extractf32x8_ps(z, 1));
+        _mm256_mask_storeu_ps(probe.median + s.pixel(j, 0), __mmask8(found), _mm512_castps512_ps256(z));
+        _mm256_mask_storeu_ps(probe.median + s.pixel(j, 1), __mmask8(found >> 8), _mm512_extractf32x8_ps(z, 1));
       }
       const __m512 kept = _mm512_mask_mov_ps(t, add & ~found, next);
       pl.store<kRow>(kPlT, _mm512_mask_mov_ps(_mm512_mask_mov_ps(kept, stop, avx512_neg(t)), found, avx512_neg(next)));
@@ -330,18 +339,17 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
 }
 
 // fwd_jobs_avx512 on the n jobs of q, four at a time where it can. Nonzero if a pixel stopped.
-template <int kChannels, bool kPlane, bool kRow, bool kMedian = false>
+template <int kChannels, bool kPlane, bool kRow, Probe kProbe = Probe::none>
 ISPLAT_AVX512 unsigned fwd_all_jobs_avx512(const Avx512Splat& a, const Avx512Plane& plane, const JobSet& s,
                                            const JobList& q, int n, float* st, int32_t* last, int32_t id,
-                                           uint32_t& hits, float* median = nullptr) {
+                                           uint32_t& hits, ProbeOut& probe) {
   unsigned stops = 0;
   int k = 0;
   for (; k + 4 <= n; k += 4)
-    stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow, kMedian>(a, plane, s, q, k, st, last, id, hits, median);
+    stops |= fwd_jobs_avx512<4, kChannels, kPlane, kRow, kProbe>(a, plane, s, q, k, st, last, id, hits, probe);
   for (; k + 2 <= n; k += 2)
-    stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow, kMedian>(a, plane, s, q, k, st, last, id, hits, median);
-  if (k < n)
-    stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow, kMedian>(a, plane, s, q, k, st, last, id, hits, median);
+    stops |= fwd_jobs_avx512<2, kChannels, kPlane, kRow, kProbe>(a, plane, s, q, k, st, last, id, hits, probe);
+  if (k < n) stops |= fwd_jobs_avx512<1, kChannels, kPlane, kRow, kProbe>(a, plane, s, q, k, st, last, id, hits, probe);
   return stops;
 }
 
