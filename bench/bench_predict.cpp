@@ -1,7 +1,7 @@
 // Benchmark: one prediction (no autograd) from image + depth to Gaussians, and where its time and memory go:
 // the quickstart setting (ViT-S, 100k supports, 256x192) and, with --paper, the paper's (ViT-L, 1.5M supports,
 // 1536x1152). Untrained weights: the time does not depend on their values.
-// usage: bench_predict [--paper] [--threads N] [--runs N]
+// usage: bench_predict [--paper] [--threads N] [--runs N] (--help)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +13,9 @@
 
 #include <torch/torch.h>
 
+#include "core/app.h"
+#include "core/args.h"
+#include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
 #include "core/runtime.h"
@@ -63,10 +66,11 @@ void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int run
     std::printf(" %s %8.1f", k, median(ms[k]));
   std::printf(" ms | peak %7.0f MB\n", peak);
   if (!model->decoder || !warm_up) return;
-  // The decoder's two parts on the same supports: the fused feature query and the MLP.
+  // The decoder's parts on the same supports: one plain feature query, the whole decoder, and its MLP alone; the
+  // decoder minus the MLP is the fused query of both branches with the gate.
   const auto f = model->encoder->forward(image.unsqueeze(0));
   const auto uv = model->predict(image, K, torch::eye(4), depth, valid).supports.uv;
-  std::vector<double> query, mlp;
+  std::vector<double> query, mlp, fused;
   for (int r = 0; r < runs; ++r) {
     auto& d = model->decoder;
     auto h = torch::randn({uv.size(0), d->dino_dim > 0 ? d->dino_dim : d->cnn_dim});
@@ -76,43 +80,52 @@ void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int run
     t0 = Clock::now();
     auto out = d->mlp_head(h);
     mlp.push_back(ms_since(t0));
+    t0 = Clock::now();
+    auto delta = d->forward(uv, W, H, f);
+    fused.push_back(ms_since(t0) - mlp.back());
   }
   int64_t macs = 0;
   for (const auto& p : model->decoder->mlp->parameters())
     if (p.dim() == 2) macs += p.numel();
   macs += model->decoder->head->weight.numel();
-  std::printf("%-40s one %lld-channel query %6.1f ms, MLP+head %7.1f ms (%.1f GFLOP/s; matmul 1024^2: %.1f GFLOP/s)\n",
-              "  decoder parts", (long long)f.dino.size(1), median(query), median(mlp),
-              2.0 * macs * uv.size(0) / (median(mlp) * 1e6), matmul_gflops(1024));
+  std::printf(
+      "%-40s one %lld-channel query %6.1f ms, fused query and gate %6.1f ms, MLP+head %7.1f ms (%.1f GFLOP/s; matmul "
+      "1024^2: %.1f GFLOP/s)\n",
+      "  decoder parts", (long long)f.dino.size(1), median(query), median(fused), median(mlp),
+      2.0 * macs * uv.size(0) / (median(mlp) * 1e6), matmul_gflops(1024));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool paper = false;
-  int64_t threads = 0, runs = 5;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--paper")) paper = true;
-    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoll(argv[++i]);
-    if (!std::strcmp(argv[i], "--runs") && i + 1 < argc) runs = std::atoll(argv[++i]);
-  }
-  keep_freed_memory();  // as every executable does (run_main)
-  configure_threads(threads);
-  set_log_level(LogLevel::Warn);
-  torch::NoGradGuard no_grad;
-  std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, BLAS: %s\n", (long long)runs,
-              at::get_num_threads(), loaded_blas().c_str());
-  ModelOptions o;
-  o.sampler.budget_mode = "fixed";
-  o.sampler.budget = 100000;
-  o.encoder.vit.size = "S";
-  run("quickstart: ViT-S, 100k supports", o, 256, 192, static_cast<int>(runs));
-  o.sampler.budget = 40000;
-  run("ViT-S, 40k supports (0.85 per pixel)", o, 256, 192, static_cast<int>(runs));
-  if (paper) {
-    o.encoder.vit.size = "L";
-    o.sampler.budget = 1500000;
-    run("paper: ViT-L, 1.5M supports (one cold run)", o, 1536, 1152, 1, /*warm_up=*/false);
-  }
-  return 0;
+  return run_main("bench_predict", [&] {
+    bool paper = false;
+    int64_t threads = 0, runs = 5;
+    ArgParser parser("bench_predict",
+                     "Times one prediction (no autograd) from image and depth to Gaussians, stage by stage, with "
+                     "untrained weights: ViT-S with 100k and 40k supports at 256x192.");
+    parser.flag("--paper", paper, "also the paper's setting: ViT-L, 1.5M supports, 1536x1152 (one cold run)");
+    parser.option("--threads", threads, "threads (0 = all cores)");
+    parser.option("--runs", runs, "timed runs per setting (after one warm-up)");
+    if (!parser.parse(argc, argv)) return 0;
+    ISPLAT_CHECK(runs >= 1, "bench_predict: --runs must be at least 1, got ", runs);
+    configure_threads(threads);
+    set_log_level(LogLevel::Warn);
+    torch::NoGradGuard no_grad;
+    std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, BLAS: %s\n", (long long)runs,
+                at::get_num_threads(), loaded_blas().c_str());
+    ModelOptions o;
+    o.sampler.budget_mode = "fixed";
+    o.sampler.budget = 100000;
+    o.encoder.vit.size = "S";
+    run("quickstart: ViT-S, 100k supports", o, 256, 192, static_cast<int>(runs));
+    o.sampler.budget = 40000;
+    run("ViT-S, 40k supports (0.85 per pixel)", o, 256, 192, static_cast<int>(runs));
+    if (paper) {
+      o.encoder.vit.size = "L";
+      o.sampler.budget = 1500000;
+      run("paper: ViT-L, 1.5M supports (one cold run)", o, 1536, 1152, 1, /*warm_up=*/false);
+    }
+    return 0;
+  });
 }

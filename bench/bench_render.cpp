@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/app.h"
 #include "core/args.h"
 #include "core/error.h"
 #include "core/runtime.h"
@@ -219,7 +220,7 @@ void run(const Case& cs) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
+  return run_main("bench_render", [&] {
     int64_t threads = 0, runs_scale = 1;
     bool quick = false, huge_large = false;
     std::string only, simd = "best", statistic = "median";
@@ -236,18 +237,18 @@ int main(int argc, char** argv) {
     parser.option("--stat", statistic, "statistic of the timed runs: median, or min (steadier on a shared machine)",
                   "STAT");
     if (!parser.parse(argc, argv)) return 0;
-    ISPLAT_CHECK(statistic == "median" || statistic == "min", "--stat: '", statistic, "' is not median or min");
+    ISPLAT_CHECK(statistic == "median" || statistic == "min", "bench_render: --stat: '", statistic,
+                 "' is not median or min");
     g_use_min = statistic == "min";
     const std::vector<std::string> levels = {"portable", "avx2", "avx512"};
     if (simd != "best") {
       const auto it = std::find(levels.begin(), levels.end(), simd);
-      ISPLAT_CHECK(it != levels.end(), "--simd: '", simd, "' is not best, avx512, avx2 or portable");
+      ISPLAT_CHECK(it != levels.end(), "bench_render: --simd: '", simd, "' is not best, avx512, avx2 or portable");
       const auto wanted = splat::Simd(it - levels.begin());
       splat::set_simd_level(wanted);
-      ISPLAT_CHECK(splat::simd_level() == wanted, "--simd: this CPU has no ", simd,
+      ISPLAT_CHECK(splat::simd_level() == wanted, "bench_render: --simd: this CPU has no ", simd,
                    " (best: ", splat::simd_name(splat::simd_supported()), ")");
     }
-    keep_freed_memory();  // as every executable does (run_main)
     const int used = configure_threads(threads);
     std::cout
         << "bench_render: " << used << " threads, " << splat::simd_name(splat::simd_level()) << " kernels, "
@@ -261,7 +262,8 @@ int main(int argc, char** argv) {
            "intersections per second of fwd;\n      proj/bin/rast/rbwd/pbwd = phases (project, tile binning, rasterize "
            "fwd, rasterize bwd, "
            "project bwd);\n      peakF/peakFB = VmHWM (MB, process peak reset before the case) after the fwd "
-           "runs / after fwd+bwd;\n      rss0 = VmRSS at the start of the case (scene inputs included); bufF/bufB "
+           "runs (fwd med's included) / after fwd+bwd;\n      rss0 = VmRSS at the start of the case (scene inputs "
+           "included); bufF/bufB "
            "= renderer's own buffers (MB);\n      cpuF/cpuB = process CPU ms of the kernel phases fwd (proj+bin+rast) "
            "/ bwd (rbwd+pbwd)\n\n";
     std::cout
@@ -281,8 +283,5 @@ int main(int argc, char** argv) {
     for (const Case& c : cases)
       if (only.empty() || c.name == only) run(c);
     return 0;
-  } catch (const std::exception& e) {
-    std::cerr << "bench_render: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

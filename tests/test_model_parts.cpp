@@ -341,6 +341,20 @@ TEST_CASE("decoder: the fused gated query equals the unfused ops, values and gra
   auto ga = torch::autograd::grad({(fused * w).sum()}, {d, gd, cp, gc});
   auto gb = torch::autograd::grad({(ref * w).sum()}, {d, gd, cp, gc});
   for (int k = 0; k < 4; ++k) CHECK(torch::allclose(ga[k], gb[k], 1e-10, 1e-12));
+  // Float: the gate goes through exp2_poly instead of std::exp, within float rounding of the double result, with
+  // gates driven to saturation (|s| up to 200) included.
+  {
+    torch::NoGradGuard no_grad;
+    const auto f32 = [](const torch::Tensor& t) { return t.detach().to(torch::kFloat32); };
+    const auto big = torch::randn({1, 6, 3, 4}, torch::kFloat64) * 60.0;
+    const auto fused32 = gated_sample(f32(d), f32(big), f32(cp), f32(gc), f32(uv), 64, 48);
+    const auto g64 = torch::sigmoid(query_features(big, uv, 64, 48) + query_features(gc.detach(), uv, 64, 48));
+    const auto ref64 =
+        g64 * query_features(d.detach(), uv, 64, 48) + (1 - g64) * query_features(cp.detach(), uv, 64, 48);
+    CHECK(torch::allclose(fused32.to(torch::kFloat64), ref64, 1e-5, 1e-5));
+    CHECK((g64 > 0.999).sum().item<int64_t>() > 0);
+    CHECK((g64 < 0.001).sum().item<int64_t>() > 0);
+  }
   CHECK_THROWS_WITH(gated_sample(d, gd, cp.narrow(1, 0, 5), gc.narrow(1, 0, 5), uv, 64, 48),
                     Catch::Contains("dino's C"));
 }

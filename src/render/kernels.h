@@ -96,7 +96,7 @@ struct TileBins {
 TileBins bin_tiles(const Projection& proj, const CameraParams& cam);
 
 struct RasterOutput {
-  torch::Tensor rgb, alpha, depth, normal;  // [3,H,W], [1,H,W], [1,H,W], [3,H,W]
+  torch::Tensor rgb, alpha, depth, normal;  // [3,H,W], [1,H,W], [1,H,W], [3,H,W]; [0] where RasterChannels leave out
   torch::Tensor final_T;                    // [H, W] transmittance after the last contributor
   torch::Tensor n_contrib;                  // [H, W] int32: 1 + tile-local index of the last contributor
   // [I] int32 per tile-list entry: the 8-pixel groups of its tile where it composited a pixel (bit r: row r's left

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "core/fast_exp.h"
 #include "render/kernels.h"
 
 #define ISPLAT_INLINE inline __attribute__((always_inline))
@@ -35,9 +36,7 @@ ISPLAT_INLINE double madd(double a, double b, double c) {
 // 2^y for the splat weights, y ≤ 0. float: 2^y = 2^n · p(y − n) with n = y rounded to the nearest integer and p
 // a degree-5 fit of 2^r on [−0.5, 0.5] (relative error below 2e-7); the scaling by 2^n is exact, so every lane
 // width gives the same bits. double (the tests' precision): std::exp2. Forward and backward call the same one.
-// The polynomial's coefficients, highest degree first, for every lane width (p(0) = 1 exactly).
-constexpr float kExp2Poly[6] = {1.326474594e-03f, 9.671520442e-03f, 5.550733954e-02f,
-                                2.402224243e-01f, 6.931470037e-01f, 1.0f};
+// The polynomial's coefficients: kExp2Poly (core/fast_exp.h), for every lane width.
 constexpr float kExp2Floor = -16.0f;  // far below any cut (at most 4.5·log2 e): keeps 2^n normal
 ISPLAT_INLINE float splat_exp2(float y) {
   y = std::max(y, kExp2Floor);
@@ -280,7 +279,8 @@ struct NoSink {
 // every composited pixel p (tile-local): its weight w = α·T, its transmittance after this Gaussian and the depth it
 // composites (the contribution measure and the median depth use them; the renderer passes NoSink). A sink that
 // returns bool stops the pixel when it returns true (a probe that has what it needs), leaving its sums as they were.
-// The first kChannels of f are accumulated (7 with normals, 4 without); with kPlane, depth is plane_z instead of f[3].
+// The first kChannels of f are accumulated (7 with normals, 4 without, 3 without the depth too, 0 for a probe); with
+// kPlane, depth is plane_z instead of f[3].
 template <int kChannels, bool kPlane, class T, class Sink = NoSink>
 ISPLAT_INLINE int fwd_group(const Splat<T>& s, const DepthPlane<T>& plane, const Group<T>& q, T* st, int32_t* last,
                             int32_t id, Sink&& sink = Sink{}) {
@@ -422,7 +422,8 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
     const __m256 stop = _mm256_and_ps(hit, _mm256_cmp_ps(next, _mm256_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ));
     const __m256 add = _mm256_andnot_ps(stop, hit);
     const __m256 w = _mm256_and_ps(add, _mm256_mul_ps(alpha, t));
-    __m256 z = a.f[3];
+    __m256 z = _mm256_setzero_ps();  // the composited depth, read where kChannels > 3
+    if constexpr (kChannels > 3) z = a.f[3];
     if constexpr (kPlane) {  // plane_z
       const __m256 iz =
           _mm256_fmadd_ps(plane.gx, dxs[k], _mm256_fmadd_ps(plane.gy, _mm256_set1_ps(q[k].r.dy), plane.iz0));

@@ -109,13 +109,15 @@ struct PixelBoxes {
 // The box's [lo, hi) along one axis for 8 records, tile span [a, b): pixel_box's lo and hi.
 ISPLAT_AVX512 void axis_span(__m512d m, __m512d r, int64_t a, int64_t b, __m256i& lo, __m256i& hi) {
   const __m512d da = _mm512_set1_pd(double(a)), db = _mm512_set1_pd(double(b)), half = _mm512_set1_pd(0.5);
-  // ifloor of a value clamped to a small range is floor: both give the same integer.
-  const __m512d l = _mm512_roundscale_pd(
-      _mm512_max_pd(_mm512_sub_pd(_mm512_sub_pd(m, r), half), _mm512_sub_pd(da, _mm512_set1_pd(1.0))),
-      _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-  const __m512d h = _mm512_roundscale_pd(
-      _mm512_min_pd(_mm512_sub_pd(_mm512_add_pd(m, r), half), _mm512_add_pd(db, _mm512_set1_pd(1.0))),
-      _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  // ifloor of a value clamped to a small range is floor: both give the same integer. Each side is also clamped on
+  // its other end (lo to b + 1, hi to a − 1), so an int32 holds it; a box that clamp touches is empty either way.
+  // (A NaN extent, which the projection culls, gives an empty box.)
+  const __m512d below = _mm512_sub_pd(da, _mm512_set1_pd(1.0)), above = _mm512_add_pd(db, _mm512_set1_pd(1.0));
+  const __m512d lo_at = _mm512_sub_pd(_mm512_sub_pd(m, r), half), hi_at = _mm512_sub_pd(_mm512_add_pd(m, r), half);
+  const __m512d l = _mm512_roundscale_pd(_mm512_min_pd(_mm512_max_pd(lo_at, below), above),
+                                         _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512d h = _mm512_roundscale_pd(_mm512_min_pd(_mm512_max_pd(hi_at, below), above),
+                                         _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
   lo = _mm512_cvtpd_epi32(_mm512_max_pd(da, l));
   hi = _mm512_cvtpd_epi32(_mm512_min_pd(db, _mm512_add_pd(h, _mm512_set1_pd(1.0))));
 }
@@ -298,7 +300,8 @@ ISPLAT_AVX512 unsigned fwd_jobs_avx512(const Avx512Splat& a, const Avx512Plane& 
     const __mmask16 stop = hit & _mm512_cmp_ps_mask(next, _mm512_set1_ps(float(kTransmittanceMin)), _CMP_LT_OQ);
     const __mmask16 add = hit & ~stop;
     const __m512 w = _mm512_mul_ps(alpha, t);
-    __m512 z = a.f[3];
+    __m512 z = _mm512_setzero_ps();  // the composited depth: read by kChannels > 3 and the median probe
+    if constexpr (kChannels > 3 || kProbe == Probe::median_depth) z = a.f[3];
     if constexpr (kPlane) {  // plane_z
       const __m512 dy = job_term<kRow>(s, j, &TileRows::dy);
       const __m512 iz = _mm512_fmadd_ps(plane.gx, dxs[k], _mm512_fmadd_ps(plane.gy, dy, plane.iz0));

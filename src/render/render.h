@@ -30,7 +30,8 @@ struct RenderOptions {
   void visit(ConfigVisitor& v);
 };
 
-// Unbatched: rgb [3,H,W], alpha [1,H,W], depth [1,H,W], normal [3,H,W]; batched: a leading [B] on each.
+// Unbatched: rgb [3,H,W], alpha [1,H,W], depth [1,H,W], normal [3,H,W] (normal and depth [0] where the options
+// leave them out); batched: a leading [B] on each.
 // rgb = Σ wᵢcᵢ + T_final·bg, alpha = Σ wᵢ = 1 − T_final, depth = Σ wᵢzᵢ (not normalized by alpha), normal =
 // Σ wᵢnᵢ with nᵢ the shortest axis in camera space facing the camera. zᵢ is the camera-space z of the mean
 // (depth "center"), or with depth "plane" the z where the pixel's ray meets the plane through the mean normal
