@@ -785,6 +785,35 @@ TEST_CASE("render: leaving the normal map out changes nothing else", "[render]")
   }
 }
 
+TEST_CASE("render: outputs no loss reads get no gradient, and the others' gradients are unchanged", "[render]") {
+  // The autograd function leaves unread outputs' gradients undefined. A loss on alpha alone or on depth alone (the
+  // colour gradient then absent) must give what the same loss with zero-weighted other terms gives, at every level.
+  const Camera cam = make_camera(64, 48, 60.0, 60.0, 0.2, true, torch::kFloat32);
+  const Gaussians scene = random_scene(400, cam, 25).to(torch::kFloat32);
+  const Weights w = random_weights(48, 64, 26, torch::kFloat32);
+  for (splat::Simd level : simd_levels()) {
+    for (const char* only : {"alpha", "depth"}) {
+      CAPTURE(splat::simd_name(level), only);
+      const splat::Simd before = splat::set_simd_level(level);
+      const bool alpha = std::string(only) == "alpha";
+      const Gaussians a = with_grad(scene), b = with_grad(scene);
+      const RenderOutput oa = render(a, cam), ob = render(b, cam);
+      (alpha ? (oa.alpha * w.alpha).sum() : (oa.depth * w.depth).sum()).backward();
+      const Tensor read = alpha ? (ob.alpha * w.alpha).sum() : (ob.depth * w.depth).sum();
+      (read + 0.0 * ob.rgb.sum() + 0.0 * (alpha ? ob.depth : ob.alpha).sum()).backward();
+      splat::set_simd_level(before);
+      const auto ga = grads_of(a), gb = grads_of(b);
+      for (size_t k = 0; k < ga.size(); ++k) {
+        if (k == 3) continue;  // colours: no gradient from alpha or depth
+        CAPTURE(kNames[k]);
+        REQUIRE(ga[k].defined());
+        CHECK(max_abs(ga[k]) > 0);
+        CHECK(torch::equal(ga[k], gb[k]));
+      }
+    }
+  }
+}
+
 TEST_CASE("render: a colour-only loss without the depth map gets the same images and gradients", "[render]") {
   // The recipe trains on colour alone: the forward leaves the depth out (depth_map = false) and, with no gradient
   // on depth or alpha, the backward's pixel loops leave their terms out. Against the full pass, whose loss adds
