@@ -364,51 +364,44 @@ void rasterize_fwd_impl(const T* packed, const int64_t* offs, const int32_t* ids
   });
 }
 
+// One tile of a probe of fwd_tile_generic (kProbe, into `probe` as it says): the AVX-512 loops where the CPU has them
+// (float), else the portable ones, which give the same values bit for bit.
+template <class T, bool kPlane, Probe kProbe>
+void probe_tile(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch,
+                const CameraParams& cam, T* probe) {
+  T* st = scratch.pixel_planes(kFwdPlanes);
+#ifdef ISPLAT_HAVE_AVX2_LANES
+  if constexpr (std::is_same_v<T, float>) {
+    if (simd_level() == Simd::avx512) {
+      fwd_tile_avx512_impl<0, kPlane, kProbe>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam, nullptr,
+                                              probe);
+      return;
+    }
+  }
+#endif
+  fwd_tile_generic<T, 0, kPlane, kProbe>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam, probe);
+}
+
 // The largest weight w = α·T each tile-list entry reaches in its tile, written at the entry's position in the
-// intersection list (so no two threads ever write the same place). Same rule as fwd_tile_generic, whose loop it runs
-// except on AVX-512 (float), which gives the same weights bit for bit.
+// intersection list (so no two threads ever write the same place). Same rule as fwd_tile_generic.
 template <class T>
 void max_weight_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* per_entry) {
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
-    const T* local = scratch.gather(packed, ids + begin, count);
-    T* st = scratch.pixel_planes(kFwdPlanes);
-#ifdef ISPLAT_HAVE_AVX2_LANES
-    if constexpr (std::is_same_v<T, float>) {
-      if (simd_level() == Simd::avx512) {
-        fwd_tile_avx512_impl<0, false, Probe::max_weight>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
-                                                          nullptr, per_entry + begin);
-        return;
-      }
-    }
-#endif
-    fwd_tile_generic<T, 0, false, Probe::max_weight>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
-                                                     per_entry + begin);
+    probe_tile<T, false, Probe::max_weight>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1, scratch,
+                                            cam, per_entry + begin);
   });
 }
 
-// Each pixel's median depth (rasterize_median_depth), tile by tile with the forward's rules: the AVX-512 loops where
-// the CPU has them (float), else the portable ones (the same depths bit for bit).
+// Each pixel's median depth (rasterize_median_depth), tile by tile with the forward's rules.
 template <class T, bool kPlane>
 void median_depth_impl(const T* packed, const int64_t* offs, const int32_t* ids, const CameraParams& cam, T* out) {
   const int64_t W = cam.width;
   for_each_tile<T>(cam, [&](int64_t tile, int64_t x0, int64_t y0, int64_t x1, int64_t y1, TileScratch<T>& scratch) {
     const int64_t begin = offs[tile], count = offs[tile + 1] - begin;
     alignas(64) T median[kPix] = {};
-    const T* local = scratch.gather(packed, ids + begin, count);
-    T* st = scratch.pixel_planes(kFwdPlanes);
-    bool vector = false;
-#ifdef ISPLAT_HAVE_AVX2_LANES
-    if constexpr (std::is_same_v<T, float>) {
-      vector = simd_level() == Simd::avx512;
-      if (vector)
-        fwd_tile_avx512_impl<0, kPlane, Probe::median_depth>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
-                                                             nullptr, median);
-    }
-#endif
-    if (!vector)
-      fwd_tile_generic<T, 0, kPlane, Probe::median_depth>(local, count, x0, y0, x1, y1, st, scratch.last.data(), cam,
-                                                          median);
+    probe_tile<T, kPlane, Probe::median_depth>(scratch.gather(packed, ids + begin, count), count, x0, y0, x1, y1,
+                                               scratch, cam, median);
     for (int64_t py = y0; py < y1; ++py) std::copy_n(median + (py - y0) * kTile, x1 - x0, out + py * W + x0);
   });
 }
