@@ -28,20 +28,25 @@ def median(xs):
     return xs[k] if len(xs) % 2 else (xs[k - 1] + xs[k]) / 2
 
 
-args = sys.argv[1:]
-names = ("old", "new")
-if args[:1] == ["--names"]:
-    names, args = (args[1], args[2]), args[3:]
-for path in args:
-    rows = parse(path)
-    for case in dict.fromkeys(r[0] for (_, _), v in sorted(rows.items()) for r in v):
-        for col in PHASES:
-            i = COLS.index(col)
-            pick = lambda b: [float(r[i]) for (k, bb), v in sorted(rows.items()) if bb == b for r in v
-                              if r[0] == case and len(r) > i]
-            old, new = pick(names[0]), pick(names[1])
-            if not old or not new:
-                continue
-            d = [n - o for o, n in zip(old, new)]
-            print(f"{Path(path).stem:22s} {case:18s} {col:5s} old {min(old):6.1f}-{max(old):6.1f}  "
-                  f"new {min(new):6.1f}-{max(new):6.1f}  new-old median {median(d):+6.2f} ({min(d):+.1f} to {max(d):+.1f})")
+def main(args):
+    names = ("old", "new")
+    if args[:1] == ["--names"]:
+        names, args = (args[1], args[2]), args[3:]
+    for path in args:
+        rows = parse(path)
+        for case in dict.fromkeys(r[0] for (_, _), v in sorted(rows.items()) for r in v):
+            for col in PHASES:
+                i = COLS.index(col)
+                pick = lambda b: [float(r[i]) for (k, bb), v in sorted(rows.items()) if bb == b for r in v
+                                  if r[0] == case and len(r) > i]
+                old, new = pick(names[0]), pick(names[1])
+                if not old or not new:
+                    continue
+                d = [n - o for o, n in zip(old, new)]
+                print(f"{Path(path).stem:22s} {case:18s} {col:5s} old {min(old):6.1f}-{max(old):6.1f}  "
+                      f"new {min(new):6.1f}-{max(new):6.1f}  new-old median {median(d):+6.2f} "
+                      f"({min(d):+.1f} to {max(d):+.1f})")
+
+
+if __name__ == "__main__":  # importable: other scripts reuse parse, median and COLS
+    main(sys.argv[1:])

@@ -3,28 +3,17 @@
 binary has the last column (f+b rgb). Prints ranges and the median of the paired differences per round:
 new f+b rgb - old f+b (the binaries compared) and new f+b rgb - new f+b (the same process).
 Usage: rgb_pairs.py FILE..."""
-import re
 import sys
 from pathlib import Path
 
-FB, FBRGB = 7, 22  # column indices in bench_render's table rows
+# The round-file parser, median and column names of the phase summary.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "2026-11-27-renderer-live-groups"))
+from summary import COLS, median, parse  # noqa: E402
 
-
-def median(xs):
-    xs = sorted(xs)
-    k = len(xs) // 2
-    return xs[k] if len(xs) % 2 else (xs[k - 1] + xs[k]) / 2
-
+FB, FBRGB = COLS.index("fb"), COLS.index("fbrgb")
 
 for path in sys.argv[1:]:
-    rows, current = {}, None
-    for line in Path(path).read_text().splitlines():
-        m = re.match(r"## round (\d+) (\w+)", line)
-        if m:
-            current = (int(m.group(1)), m.group(2))
-        elif line.startswith("|"):
-            r = [x.strip() for x in line.strip().strip("|").split("|")]
-            rows[(current[0], current[1], r[0])] = r
+    rows = {(n, binary, r[0]): r for (n, binary), v in parse(path).items() for r in v}
     cases = dict.fromkeys(k[2] for k in rows)
     rounds = sorted({k[0] for k in rows})
     for case in cases:
