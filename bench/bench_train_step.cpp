@@ -1,6 +1,6 @@
 // Benchmark: one training step at the quickstart settings (configs/quickstart.json: ViT-S, 100k
 // supports, 256x192, 1 context + 3 targets), and where its time goes.
-// usage: bench_train_step [hypersim_root] [threads] [config]; without a root (or with "") a small scene is
+// usage: bench_train_step [hypersim_root] [threads] [config] (--help); without a root (or with "") a small scene is
 // generated first; config defaults to configs/quickstart.json (e.g. configs/experiments/recipe.json).
 #include <chrono>
 #include <cstdio>
@@ -8,8 +8,12 @@
 
 #include <torch/torch.h>
 
+#include "core/app.h"
+#include "core/args.h"
 #include "core/config.h"
+#include "core/error.h"
 #include "core/log.h"
+#include "core/parse.h"
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "data/synth/generate.h"
@@ -18,10 +22,9 @@
 using namespace isplat;
 namespace fs = std::filesystem;
 
-int main(int argc, char** argv) {
-  keep_freed_memory();  // as every executable does (run_main)
-  configure_threads(argc > 2 ? std::atoll(argv[2]) : 0);
-  std::string root = argc > 1 ? argv[1] : "";
+namespace {
+
+int bench(std::string root, const std::string& config_path) {
   const fs::path tmp = fs::temp_directory_path() / "isplat_bench_train";
   if (root.empty()) {
     set_log_level(LogLevel::Warn);
@@ -33,8 +36,6 @@ int main(int argc, char** argv) {
   }
   set_log_level(LogLevel::Warn);
   const std::string weights = std::string(ISPLAT_SOURCE_DIR) + "/weights/squeezenet1_1_features.safetensors";
-  const std::string config_path =
-      argc > 3 ? std::string(argv[3]) : std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json";
   auto config =
       load_config<TrainConfig>(config_path, {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
                                              "train.out=" + (tmp / "run").string(), "train.val_every=100000",
@@ -59,4 +60,24 @@ int main(int argc, char** argv) {
   for (const auto& [k, v] : t) std::printf("  %-12s %8.1f\n", k.c_str(), median(v));
   std::printf("(backward includes render_bwd; the decoder and encoder backward make up the rest)\n");
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return run_main("bench_train_step", [&] {
+    std::string root, threads_text = "0", config_path = std::string(ISPLAT_SOURCE_DIR) + "/configs/quickstart.json";
+    ArgParser parser("bench_train_step",
+                     "Times training steps (one warm-up, then 5) and where their time goes, on a generated scene "
+                     "unless a Hypersim root is given.");
+    parser.positional("hypersim_root", root, "Hypersim-format root; empty (\"\") generates a small scene", false);
+    parser.positional("threads", threads_text, "threads (0 = all cores)", false);
+    parser.positional("config", config_path, "training config (default configs/quickstart.json)", false);
+    if (!parser.parse(argc, argv)) return 0;
+    const auto threads = parse_int(threads_text);
+    ISPLAT_CHECK(threads && *threads >= 0, "bench_train_step: threads must be a whole number >= 0, got '", threads_text,
+                 "'");
+    configure_threads(*threads);
+    return bench(root, config_path);
+  });
 }

@@ -3,11 +3,15 @@
 
 #include <ATen/Parallel.h>
 
+#include <cstdlib>
+#include <filesystem>
+
 #include "core/args.h"
 #include "core/build_info.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/runtime.h"
+#include "support/test_util.h"
 
 using namespace isplat;
 
@@ -72,4 +76,20 @@ TEST_CASE("runtime: threads default to all cores, report names LibTorch and BLAS
   const bool hex12 = commit.size() >= 12 && commit.find_first_not_of("0123456789abcdef") >= 12;
   CHECK((commit == "unknown" || (hex12 && (commit.size() == 12 || commit.substr(12) == "-dirty"))));
   CHECK_THAT(loaded_blas(), Catch::Contains("blas"));
+}
+
+TEST_CASE("start-up: executables make idle OpenMP workers sleep, unless the user chose a wait policy", "[core]") {
+  // core/startup.cpp re-executes the program with OMP_WAIT_POLICY=passive before libgomp reads its environment.
+  const std::string tool = (std::filesystem::path(ISPLAT_BINARY_DIR) / "infinisplat").string();
+  const std::string out = test::temp_dir("startup_wait") + "/version.txt";
+  auto report = [&](const std::string& env) {
+    const std::string cmd = "env -u OMP_WAIT_POLICY " + env + " " + tool + " version --no-bench > " + out + " 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    return test::read_bytes(out);
+  };
+  CHECK_THAT(report(""), Catch::Contains("OpenMP wait     passive (OMP_WAIT_POLICY;"));
+  CHECK_THAT(report("OMP_WAIT_POLICY=active"), Catch::Contains("OpenMP wait     active (OMP_WAIT_POLICY;"));
+  CHECK_THAT(report("OMP_WAIT_POLICY=PASSIVE"), Catch::Contains("OpenMP wait     PASSIVE (OMP_WAIT_POLICY;"));
+  // This test program links the same start-up, so it runs with a policy too.
+  CHECK(std::getenv("OMP_WAIT_POLICY") != nullptr);
 }

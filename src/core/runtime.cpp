@@ -131,6 +131,9 @@ std::string runtime_report(bool measure) {
      << " hardware threads\n";
   os << "OpenMP          " << (at::get_parallel_info().find("OpenMP") != std::string::npos ? "yes" : "no") << "\n";
   os << "BLAS            " << loaded_blas() << "\n";
+  const char* wait = std::getenv("OMP_WAIT_POLICY");
+  os << "OpenMP wait     " << (wait ? wait : "unset (workers spin between regions)")
+     << " (OMP_WAIT_POLICY; the executables set passive when it is unset, core/startup.cpp)\n";
   if (measure) {
     const double g = matmul_gflops(512);
     os << "matmul 512^2    " << std::fixed << std::setprecision(1) << g << " GFLOP/s";
