@@ -37,5 +37,5 @@ void sleep_idle_openmp_workers(int /*argc*/, char** argv, char** envp) {
 }  // namespace
 
 // Functions in .preinit_array run before the constructors of every shared library, libgomp's included.
-__attribute__((section(".preinit_array"), used)) static void (*const isplat_preinit)(int, char**, char**) =
-    &sleep_idle_openmp_workers;
+__attribute__((section(".preinit_array"),
+               used)) static void (*const isplat_preinit)(int, char**, char**) = &sleep_idle_openmp_workers;
