@@ -103,6 +103,9 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
     auto wg = gate->weight;  // [Cd, 2Cd] acting on [f_dino, c']
     g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
     g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
+    // Channel-last once, so no chunk copies the maps again (gated_sample reads texels' channels contiguously).
+    auto last = [](const torch::Tensor& m) { return m.contiguous(torch::MemoryFormat::ChannelsLast); };
+    dino = last(dino), g_dino = last(g_dino), cproj = last(cproj), g_cnn = last(g_cnn);
     fused = [&](const torch::Tensor& part) { return gated_sample(dino, g_dino, cproj, g_cnn, part, width, height); };
   } else {  // one branch: its features are h
     const torch::Tensor map = (dino_dim > 0 ? f.dino : f.cnn).narrow(0, 0, 1);
