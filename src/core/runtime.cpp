@@ -131,9 +131,12 @@ std::string runtime_report(bool measure) {
      << " hardware threads\n";
   os << "OpenMP          " << (at::get_parallel_info().find("OpenMP") != std::string::npos ? "yes" : "no") << "\n";
   os << "BLAS            " << loaded_blas() << "\n";
-  const char* wait = std::getenv("OMP_WAIT_POLICY");
-  os << "OpenMP wait     " << (wait ? wait : "unset (workers spin between regions)")
-     << " (OMP_WAIT_POLICY; the executables set passive when it is unset, core/startup.cpp)\n";
+  auto env_or_unset = [](const char* key) {
+    const char* value = std::getenv(key);
+    return std::string(key) + "=" + (value ? value : "(unset)");
+  };
+  os << "OpenMP wait     " << env_or_unset("OMP_WAIT_POLICY") << " " << env_or_unset("GOMP_SPINCOUNT")
+     << " (the executables set GOMP_SPINCOUNT=3000 when both are unset, core/startup.cpp)\n";
   if (measure) {
     const double g = matmul_gflops(512);
     os << "matmul 512^2    " << std::fixed << std::setprecision(1) << g << " GFLOP/s";
