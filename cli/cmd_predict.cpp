@@ -206,11 +206,15 @@ int run_predict(int argc, char** argv) {
               << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals; "
               << pruned.merge.alone << " Gaussians alone in their cell\n";
   std::cout << "time (ms)   ";
+  double stages = prune_ms;
   for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
-    if (pred.timings_ms.count(k))
+    if (pred.timings_ms.count(k)) {
       std::cout << " " << k << " " << std::fixed << std::setprecision(0) << pred.timings_ms.at(k);
+      stages += pred.timings_ms.at(k);
+    }
   std::cout << " prune " << std::fixed << std::setprecision(0) << prune_ms;
-  std::cout << " | total " << std::fixed << std::setprecision(0) << ms_since(t_start) << "\n";
+  // The stages are the prediction itself; the total adds loading the checkpoint and photo and writing the files.
+  std::cout << " | stages " << stages << " | total with loading and writing " << ms_since(t_start) << "\n";
   std::cout << "wrote        " << fs::absolute(out).string() << "\n             "
             << fs::absolute(camera_sidecar_path(out)).string() << "\n";
   return 0;

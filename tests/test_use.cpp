@@ -6,6 +6,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <filesystem>
+#include <sstream>
 
 #include "core/log.h"
 #include "geometry/trajectory.h"
@@ -116,6 +117,21 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const std::string report = test::read_bytes(out + "/predict.txt");
   CHECK_THAT(report, Catch::Contains("supports     2000"));
   CHECK_THAT(report, Catch::Contains("time (ms)"));
+  {  // the time line: each stage, their sum, and the total with loading and writing, which is no smaller
+    const std::string line =
+        report.substr(report.find("time (ms)"), report.find('\n', report.find("time (ms)")) - report.find("time (ms)"));
+    std::istringstream words(line.substr(line.find("prior")));
+    std::string key;
+    double value = 0, sum = 0;
+    while (words >> key && key != "|" && words >> value) sum += value;
+    REQUIRE(line.find("| stages ") != std::string::npos);
+    REQUIRE(line.find("| total with loading and writing ") != std::string::npos);
+    const double stages = std::stod(line.substr(line.find("| stages ") + 9));
+    const double total = std::stod(line.substr(line.find("loading and writing ") + 20));
+    CHECK(stages > 0);
+    CHECK(std::abs(stages - sum) <= 3.5);  // six values, each rounded to whole ms
+    CHECK(total >= stages - 1);
+  }
   const Gaussians g = read_ply(out + "/scene.ply");
   CHECK(g.count() > 1000);
   CHECK(fs::exists(out + "/scene.camera.json"));
