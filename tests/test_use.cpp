@@ -118,8 +118,9 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK_THAT(report, Catch::Contains("supports     2000"));
   CHECK_THAT(report, Catch::Contains("time (ms)"));
   {  // the time line: each stage, their sum, and the total with loading and writing, which is no smaller
-    const std::string line =
-        report.substr(report.find("time (ms)"), report.find('\n', report.find("time (ms)")) - report.find("time (ms)"));
+    const size_t at = report.find("time (ms)");
+    REQUIRE(at != std::string::npos);
+    const std::string line = report.substr(at, report.find('\n', at) - at);
     std::istringstream words(line.substr(line.find("prior")));
     std::string key;
     double value = 0, sum = 0;
