@@ -548,16 +548,23 @@ TEST_CASE("render: every SIMD level's pixel loops agree bit for bit", "[render]"
   }
 }
 
+namespace {
+// For a test of a SIMD level this CPU lacks: what can still be checked is that those loops never run here, because
+// asking for the level gives the CPU's best. `what` says what goes unchecked.
+void check_level_falls_back(splat::Simd missing, const char* what) {
+  const splat::Simd before = splat::set_simd_level(missing);
+  CHECK(splat::simd_level() == splat::simd_supported());
+  splat::set_simd_level(before);
+  WARN("this CPU has no " << splat::simd_name(missing) << ": " << what);
+}
+}  // namespace
+
 TEST_CASE(
     "render: the forward's group hits are the groups it composited, and the backward gives the same "
     "gradients with or without them",
     "[render]") {
   if (splat::simd_supported() < splat::Simd::avx2) {
-    // What can be checked here: the AVX2 loops never run on this CPU, because asking for them gives its best.
-    const splat::Simd before = splat::set_simd_level(splat::Simd::avx2);
-    CHECK(splat::simd_level() == splat::simd_supported());
-    splat::set_simd_level(before);
-    WARN("this CPU has no avx2: the group hits are not recorded, so not checked here");
+    check_level_falls_back(splat::Simd::avx2, "the group hits are not recorded, so not checked here");
     return;
   }
   const Camera cam = make_camera(100, 84, 80.0, 80.0, 0.3, true, torch::kFloat32);
@@ -711,11 +718,7 @@ ISPLAT_AVX512_FN void vector_boxes(const float* rec, int64_t n, int64_t x0, int6
 TEST_CASE("render: the AVX-512 forward's pixel boxes are pixel_box's", "[render]") {
 #ifdef ISPLAT_HAVE_AVX2_LANES
   if (splat::simd_supported() < splat::Simd::avx512) {
-    // What can be checked here: the AVX-512 loops never run on this CPU, because asking for them gives its best.
-    const splat::Simd before = splat::set_simd_level(splat::Simd::avx512);
-    CHECK(splat::simd_level() == splat::simd_supported());
-    splat::set_simd_level(before);
-    WARN("this CPU has no avx512: its pixel boxes are not checked here");
+    check_level_falls_back(splat::Simd::avx512, "its pixel boxes are not checked here");
     return;
   }
   // Records in and around a 100x70 image (partial tiles at its right and bottom); a third sit exactly on a
