@@ -17,16 +17,16 @@ using namespace isplat;
 
 namespace {
 // 48 x 64 quads, so 8x8 blocks and 4 column strips align with whole quads.
-constexpr int64_t H = 49, W = 65;
+constexpr int64_t kH = 49, kW = 65;
 const double fx = 60.0, fy = 60.0, cx = 32.0, cy = 24.0;
 torch::Tensor K() {
   return make_K(fx, fy, cx, cy);
 }
 torch::Tensor image() {
-  return torch::rand({3, H, W});
+  return torch::rand({3, kH, kW});
 }
 torch::Tensor ones() {
-  return torch::ones({H, W});
+  return torch::ones({kH, kW});
 }
 SamplerOptions fixed(int64_t n) {
   SamplerOptions o;
@@ -42,7 +42,7 @@ std::vector<double> column_histogram(const Supports& s, int bins) {
   std::vector<double> h(bins, 0.0);
   auto u = s.uv.select(1, 0);
   for (int64_t k = 0; k < s.count(); ++k) {
-    const double x = (u[k].item<double>() - 0.5) / (W - 1);
+    const double x = (u[k].item<double>() - 0.5) / (kW - 1);
     h[std::min(bins - 1, static_cast<int>(x * bins))] += 1;
   }
   return h;
@@ -50,45 +50,45 @@ std::vector<double> column_histogram(const Supports& s, int bins) {
 }  // namespace
 
 TEST_CASE("sampler: a fronto-parallel plane gets a uniform density and the exact count", "[sampler]") {
-  auto depth = torch::full({H, W}, 2.0f);
+  auto depth = torch::full({kH, kW}, 2.0f);
   const Supports s = sample_supports(depth, ones(), K(), image(), fixed(6000), 1);
   REQUIRE(s.count() == 6000);
   // Stratified allocation runs over quads in row-major order: each quad row (a contiguous stretch)
   // gets its share N/48 +- 1, and each 8x6-quad block, made of 6 row stretches, N/64 +- 6.
-  std::vector<int> rows(H - 1, 0), blocks(8 * 8, 0);
+  std::vector<int> rows(kH - 1, 0), blocks(8 * 8, 0);
   auto uv = s.uv.contiguous();
   const float* p = uv.data_ptr<float>();
   for (int64_t k = 0; k < s.count(); ++k) {
-    const int row = std::min<int>(H - 2, static_cast<int>(p[2 * k + 1] - 0.5));
+    const int row = std::min<int>(kH - 2, static_cast<int>(p[2 * k + 1] - 0.5));
     rows[row]++;
     blocks[(row / 6) * 8 + std::min(7, static_cast<int>((p[2 * k] - 0.5) / 8))]++;
   }
   for (int c : rows) CHECK(std::abs(c - 6000.0 / 48) <= 1.0);
   for (int c : blocks) CHECK(std::abs(c - 6000.0 / 64) <= 6.0);
   // Represented areas add up to the plane's area between pixel centres.
-  const double area = ((W - 1) * 2.0 / fx) * ((H - 1) * 2.0 / fy);
+  const double area = ((kW - 1) * 2.0 / fx) * ((kH - 1) * 2.0 / fy);
   CHECK(s.area.sum().item<double>() == Approx(area).epsilon(1e-4));
   CHECK(torch::allclose(s.depth, torch::full({6000}, 2.0f)));
 }
 
 TEST_CASE("sampler: a slanted plane gets density proportional to its 3D area", "[sampler]") {
   // Plane z = 1 + 0.9 * X, i.e. depth rising to the right: columns far away cover more surface.
-  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto u = torch::arange(kW, torch::kFloat32) + 0.5;
   auto x = (u - cx) / fx;
   auto z_row = 1.0 / (1.0 - 0.9 * x);  // z = 1 + 0.9 * x * z
-  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  auto depth = z_row.unsqueeze(0).expand({kH, kW}).contiguous();
   const Supports s = sample_supports(depth, ones(), K(), image(), fixed(20000), 3);
   // Expected share of each strip from the areas of its triangles, computed independently.
   auto P = backproject_depth(depth, K());
   std::vector<double> area(4, 0.0);
-  for (int64_t j = 0; j + 1 < W; ++j) {
+  for (int64_t j = 0; j + 1 < kW; ++j) {
     double col = 0;
-    for (int64_t i = 0; i + 1 < H; ++i) {
+    for (int64_t i = 0; i + 1 < kH; ++i) {
       auto a = P[i][j], b = P[i][j + 1], c = P[i + 1][j], d = P[i + 1][j + 1];
       col += 0.5 * torch::cross(b - a, c - a).norm().item<double>() +
              0.5 * torch::cross(d - b, c - b).norm().item<double>();
     }
-    area[std::min<int64_t>(3, j * 4 / (W - 1))] += col;
+    area[std::min<int64_t>(3, j * 4 / (kW - 1))] += col;
   }
   const double total = area[0] + area[1] + area[2] + area[3];
   const auto h = column_histogram(s, 4);
@@ -98,9 +98,9 @@ TEST_CASE("sampler: a slanted plane gets density proportional to its 3D area", "
 
 TEST_CASE("sampler: image_share moves supports toward an even spread per pixel and keeps the total area", "[sampler]") {
   // The slanted plane of the test above: far columns cover more area.
-  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto u = torch::arange(kW, torch::kFloat32) + 0.5;
   auto z_row = 1.0 / (1.0 - 0.9 * (u - cx) / fx);
-  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  auto depth = z_row.unsqueeze(0).expand({kH, kW}).contiguous();
   SamplerOptions area_only = fixed(20000), half = fixed(20000), even = fixed(20000);
   half.image_share = 0.5;
   even.image_share = 1.0;
@@ -125,9 +125,9 @@ TEST_CASE("sampler: image_share moves supports toward an even spread per pixel a
 
 TEST_CASE("sampler: pixel_floor lifts the sparse (near) strips to an even share and leaves denser ones by area",
           "[sampler]") {
-  auto u = torch::arange(W, torch::kFloat32) + 0.5;
+  auto u = torch::arange(kW, torch::kFloat32) + 0.5;
   auto z_row = 1.0 / (1.0 - 0.9 * (u - cx) / fx);  // the slanted plane above: far columns cover more area
-  auto depth = z_row.unsqueeze(0).expand({H, W}).contiguous();
+  auto depth = z_row.unsqueeze(0).expand({kH, kW}).contiguous();
   SamplerOptions area_only = fixed(20000), floored = fixed(20000);
   floored.pixel_floor = 1.0;
   const Supports a = sample_supports(depth, ones(), K(), image(), area_only, 3);
@@ -152,12 +152,12 @@ TEST_CASE("sampler: pixel_floor lifts the sparse (near) strips to an even share 
 
 TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear blends", "[sampler]") {
   // A checkerboard of 0 and 1: bilinear reads between centres give values strictly inside (0, 1).
-  auto img = ((torch::arange(H).view({H, 1}) + torch::arange(W).view({1, W})) % 2).to(torch::kFloat32);
-  auto rgb = img.unsqueeze(0).expand({3, H, W}).contiguous();
+  auto img = ((torch::arange(kH).view({kH, 1}) + torch::arange(kW).view({1, kW})) % 2).to(torch::kFloat32);
+  auto rgb = img.unsqueeze(0).expand({3, kH, kW}).contiguous();
   SamplerOptions o = fixed(3000);
-  const Supports blend = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), rgb, o, 5);
+  const Supports blend = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), rgb, o, 5);
   o.color = "nearest";
-  const Supports sharp = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), rgb, o, 5);
+  const Supports sharp = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), rgb, o, 5);
   REQUIRE(torch::equal(blend.uv, sharp.uv));
   auto uv = sharp.uv.floor().to(torch::kLong);
   auto expect = img.index({uv.select(1, 1), uv.select(1, 0)});
@@ -169,23 +169,23 @@ TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear
 TEST_CASE("sampler: placement = centroid puts a triangle's single support at its centroid", "[sampler]") {
   // One support per triangle on a fronto-parallel plane: triangle 0 of a quad has its centroid at (1/3, 1/3)
   // of the quad from its top-left pixel centre, triangle 1 at (2/3, 2/3).
-  SamplerOptions o = fixed(2 * (H - 1) * (W - 1));
+  SamplerOptions o = fixed(2 * (kH - 1) * (kW - 1));
   o.placement = "centroid";
-  const Supports s = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), image(), o, 9);
-  REQUIRE(s.count() == 2 * (H - 1) * (W - 1));
+  const Supports s = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), image(), o, 9);
+  REQUIRE(s.count() == 2 * (kH - 1) * (kW - 1));
   auto f = s.uv - 0.5 - (s.uv - 0.5).floor();  // position inside the quad
   auto third = (f - 1.0 / 3).abs().lt(1e-3).all(1), two_thirds = (f - 2.0 / 3).abs().lt(1e-3).all(1);
   CHECK((third | two_thirds).all().item<bool>());
-  CHECK(third.sum().item<int64_t>() == (H - 1) * (W - 1));
+  CHECK(third.sum().item<int64_t>() == (kH - 1) * (kW - 1));
   // The default placement starts each triangle's sequence at random, so it is not on that lattice.
-  const Supports r = sample_supports(torch::full({H, W}, 2.0f), ones(), K(), image(), fixed(s.count()), 9);
+  const Supports r = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), image(), fixed(s.count()), 9);
   auto fr = r.uv - 0.5 - (r.uv - 0.5).floor();
   CHECK(((fr - 1.0 / 3).abs().lt(1e-3).all(1)).sum().item<int64_t>() < s.count() / 10);
 }
 
 TEST_CASE("sampler: placement = vertex keeps area-proportional counts on pixel centres", "[sampler]") {
   // A slanted plane: depth grows with the column, so the right half has more 3D area per pixel.
-  auto depth = (torch::arange(W, torch::kFloat32) * 0.05f + 1.0f).view({1, W}).expand({H, W}).contiguous();
+  auto depth = (torch::arange(kW, torch::kFloat32) * 0.05f + 1.0f).view({1, kW}).expand({kH, kW}).contiguous();
   SamplerOptions o = fixed(3000);
   o.placement = "vertex";
   const Supports s = sample_supports(depth, ones(), K(), image(), o, 4);
@@ -203,7 +203,7 @@ TEST_CASE("sampler: placement = vertex keeps area-proportional counts on pixel c
 
 TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth step and the border", "[sampler]") {
   // Columns 0..31 at 2 m, 32..64 at 6 m: the quads between columns 31 and 32 are rejected.
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);
   SamplerOptions o = fixed(4000);
   const Supports faces = sample_supports(depth, ones(), K(), image(), o, 2);
@@ -215,11 +215,11 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
     return ((s.uv.select(1, 0) - u).abs().lt(1e-4) & (s.uv.select(1, 1) - v).abs().lt(1e-4)).any().item<bool>();
   };
   int64_t missing = 0;
-  for (int64_t i = 0; i < H; ++i)
-    for (double u : {0.5, 31.5, 32.5, W - 0.5}) missing += !centre(u, i + 0.5);
+  for (int64_t i = 0; i < kH; ++i)
+    for (double u : {0.5, 31.5, 32.5, kW - 0.5}) missing += !centre(u, i + 0.5);
   CHECK(missing == 0);
   // Edge pixels: 4 per row, plus the rest of the top and bottom rows.
-  const int64_t edges = 4 * H + 2 * (W - 4);
+  const int64_t edges = 4 * kH + 2 * (kW - 4);
   CHECK(on_pixel_centre(s.uv).sum().item<int64_t>() >= edges);
   // Faces alone never reach the step's columns; the represented area is the surface's, once.
   CHECK(((faces.uv.select(1, 0) - 32).abs() < 0.5).sum().item<int64_t>() == 0);
@@ -243,7 +243,7 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   const double face_near = near_ratio[s.count() - 1].item<double>();
   const auto u_edge = s.uv.select(1, 0).narrow(0, 0, edges), v_edge = s.uv.select(1, 1).narrow(0, 0, edges);
   const auto col31 = (u_edge - 31.5).abs().lt(1e-4), rest = ~col31;
-  REQUIRE(col31.sum().item<int64_t>() == H);
+  REQUIRE(col31.sum().item<int64_t>() == kH);
   const auto edge_near = near_ratio.narrow(0, 0, edges) / face_near;
   CHECK((edge_near.masked_select(col31) - 0.25).abs().max().item<double>() < 1e-4);
   CHECK((edge_near.masked_select(rest) - 1.0).abs().max().item<double>() < 1e-4);
@@ -262,7 +262,7 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   const auto hu = hw.uv.select(1, 0), on_centre = on_pixel_centre(hw.uv);
   const auto hole_edge = on_centre & ((hu - 47.5).abs().lt(1e-4) | (hu - 50.5).abs().lt(1e-4));
   const auto near_edge = on_centre & (hu - 31.5).abs().lt(1e-4);
-  REQUIRE(hole_edge.sum().item<int64_t>() == 2 * H);
+  REQUIRE(hole_edge.sum().item<int64_t>() == 2 * kH);
   const double face_hole = hole_ratio[hw.count() - 1].item<double>();
   CHECK((hole_ratio.masked_select(hole_edge) / face_hole - 1.0).abs().max().item<double>() < 1e-4);
   CHECK((hole_ratio.masked_select(near_edge) / face_hole - 0.25).abs().max().item<double>() < 1e-4);
@@ -280,7 +280,7 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
 
 TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette, into their own surface", "[sampler]") {
   // Columns 0..31 at 2 m, 32..64 at 6 m.
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);
   const torch::Tensor img = image();
   SamplerOptions o = fixed(4000);
@@ -295,10 +295,10 @@ TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette,
   // depth, colour and footprint; the far side (column 32), the border and the faces stay where they were. Inside
   // the image that is straight left; in the top and bottom rows the far side also lies diagonally, below or above.
   const auto col31 = (centred.uv.select(1, 0) - 31.5).abs().lt(1e-4) & on_pixel_centre(centred.uv);
-  REQUIRE(col31.sum().item<int64_t>() == H);
+  REQUIRE(col31.sum().item<int64_t>() == kH);
   CHECK(torch::equal(moved, col31));
-  const auto v = centred.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(H - 1.0);
-  REQUIRE(inside.sum().item<int64_t>() == H - 2);
+  const auto v = centred.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(kH - 1.0);
+  REQUIRE(inside.sum().item<int64_t>() == kH - 2);
   CHECK((du.select(1, 0).masked_select(inside) + 0.25).abs().max().item<double>() < 1e-5);
   CHECK(du.select(1, 1).masked_select(inside).abs().max().item<double>() < 1e-6);
   CHECK((du.norm(2, 1).masked_select(col31) - 0.25).abs().max().item<double>() < 1e-5);
@@ -330,15 +330,15 @@ TEST_CASE("sampler: edge_shift_from = coverage places each silhouette by its pix
   // Columns 0..31 at 2 m (dark red), 32..64 at 6 m (light grey). Column 31 is the near side; in row i its colour is
   // the linear-light mix of the two with the near surface covering alpha(i) of the pixel, gamma-encoded as the data
   // is (1/2.2). Rows 0..15 cover 0.75, rows 16..31 a quarter, rows 32..48 the whole pixel.
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);
   const double near_lin[3] = {0.6, 0.05, 0.02}, far_lin[3] = {0.7, 0.7, 0.7};
   auto alpha = [](int64_t i) { return i < 16 ? 0.75 : i < 32 ? 0.25 : 1.0; };
-  auto img = torch::empty({3, H, W});
+  auto img = torch::empty({3, kH, kW});
   auto a = img.accessor<float, 3>();
   for (int c = 0; c < 3; ++c)
-    for (int64_t i = 0; i < H; ++i)
-      for (int64_t j = 0; j < W; ++j) {
+    for (int64_t i = 0; i < kH; ++i)
+      for (int64_t j = 0; j < kW; ++j) {
         const double mix = j < 31 ? 1.0 : j == 31 ? alpha(i) : 0.0;
         a[c][i][j] = static_cast<float>(std::pow(mix * near_lin[c] + (1 - mix) * far_lin[c], 1 / 2.2));
       }
@@ -355,7 +355,7 @@ TEST_CASE("sampler: edge_shift_from = coverage places each silhouette by its pix
   const auto col31 = (u - 31.5).abs().lt(1e-4) & on_pixel_centre(centred.uv);
   const auto du = placed.uv - centred.uv;
   for (auto [first, last, move] :
-       {std::tuple<int64_t, int64_t, double>{1, 15, 0.25}, {16, 31, 0.75}, {32, H - 2, 0.0}}) {
+       {std::tuple<int64_t, int64_t, double>{1, 15, 0.25}, {16, 31, 0.75}, {32, kH - 2, 0.0}}) {
     const auto rows = col31 & v.gt(first) & v.lt(last + 1);
     REQUIRE(rows.sum().item<int64_t>() == last - first + 1);
     CHECK((du.select(1, 0).masked_select(rows) + move).abs().max().item<double>() < 1e-4);
@@ -367,10 +367,10 @@ TEST_CASE("sampler: edge_shift_from = coverage places each silhouette by its pix
   CHECK(torch::equal(placed.area, centred.area));
   // Where the two surfaces share a colour, or the near surface is a line two pixels wide (its inward pixel is on a
   // silhouette too), the colour does not tell and the move is edge_shift.
-  const Supports plain = sample_supports(depth, ones(), K(), torch::full({3, H, W}, 0.5f), o, 2);
-  const auto plain_rows = col31 & v.gt(1) & v.lt(H - 1);
+  const Supports plain = sample_supports(depth, ones(), K(), torch::full({3, kH, kW}, 0.5f), o, 2);
+  const auto plain_rows = col31 & v.gt(1) & v.lt(kH - 1);
   CHECK(((plain.uv - centred.uv).select(1, 0).masked_select(plain_rows) + 0.5).abs().max().item<double>() < 1e-4);
-  auto line = torch::full({H, W}, 6.0f);
+  auto line = torch::full({kH, kW}, 6.0f);
   line.narrow(1, 30, 2).fill_(2.0f);
   o.edge_shift_from = "fixed";
   const Supports line_fixed = sample_supports(line, ones(), K(), img, o, 2);
@@ -388,9 +388,9 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   // Columns 0..31 a flat 2 m; 32..64 a tilted plane (inverse depth affine in the row and the column), 7.4 m at
   // most, whose normal turns away from the camera's axis.
   auto plane = [](double i, double j) { return 1.0 / (1.0 / 6.0 + 0.002 * i - 0.001 * (j - 32)); };
-  auto depth = torch::full({H, W}, 2.0f);
-  for (int64_t i = 0; i < H; ++i)
-    for (int64_t j = 32; j < W; ++j) depth[i][j] = float(plane(i, j));
+  auto depth = torch::full({kH, kW}, 2.0f);
+  for (int64_t i = 0; i < kH; ++i)
+    for (int64_t j = 32; j < kW; ++j) depth[i][j] = float(plane(i, j));
   const torch::Tensor img = image();
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
@@ -400,40 +400,40 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   REQUIRE(s.count() == 4000);
   CHECK(plain.behind == 0);
-  CHECK(s.behind == H);  // the decoder can tell them apart (decoder.behind)
+  CHECK(s.behind == kH);  // the decoder can tell them apart (decoder.behind)
   // The last H supports continue the plane under column 31, the near side, one per row: at the plane's own depth
   // there (each farther neighbour's surface extrapolated), the farther neighbours' mean colour and a pixel's
   // footprint at that depth.
-  const auto b = torch::arange(4000 - H, 4000);
+  const auto b = torch::arange(4000 - kH, 4000);
   const auto buv = s.uv.index_select(0, b), bz = s.depth.index_select(0, b);
   CHECK((buv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
-  CHECK((buv.select(1, 1) - (torch::arange(H, torch::kFloat) + 0.5)).abs().max().item<double>() < 1e-5);
-  for (int64_t i : {int64_t(1), int64_t(20), H - 2}) {
+  CHECK((buv.select(1, 1) - (torch::arange(kH, torch::kFloat) + 0.5)).abs().max().item<double>() < 1e-5);
+  for (int64_t i : {int64_t(1), int64_t(20), kH - 2}) {
     const double z = plane(i, 31);
     CHECK(bz[i].item<double>() == Approx(z).epsilon(1e-5));
-    CHECK(s.area[4000 - H + i].item<double>() == Approx(z * z / (fx * fy)).epsilon(1e-4));
+    CHECK(s.area[4000 - kH + i].item<double>() == Approx(z * z / (fx * fy)).epsilon(1e-4));
     for (int c = 0; c < 3; ++c) {
       const double mean = img[c].narrow(0, i - 1, 3).select(1, 32).mean().item<double>();
-      CHECK(s.color[4000 - H + i][c].item<double>() == Approx(mean).epsilon(1e-5));
+      CHECK(s.color[4000 - kH + i][c].item<double>() == Approx(mean).epsilon(1e-5));
     }
   }
   // The visible supports still stand for the surface's area once; the hidden ones come on top.
-  CHECK(s.area.narrow(0, 0, 4000 - H).sum().item<double>() == Approx(plain.area.sum().item<double>()).epsilon(1e-4));
+  CHECK(s.area.narrow(0, 0, 4000 - kH).sum().item<double>() == Approx(plain.area.sum().item<double>()).epsilon(1e-4));
   // Their normals are the plane's (as a face support's far from the edge), not the near plane's.
   const auto far_face = (plain.uv.select(1, 0) > 50).nonzero()[0][0].item<int64_t>();
   const auto slope_n = plain.normal[far_face], flat_n = plain.normal[0];
   REQUIRE((slope_n - flat_n).abs().max().item<double>() > 0.01);
-  const auto bn = s.normal.index_select(0, b).narrow(0, 1, H - 2);
+  const auto bn = s.normal.index_select(0, b).narrow(0, 1, kH - 2);
   CHECK((bn - slope_n).abs().max().item<double>() < 1e-4);
   // Two layers: the second one pixel further in, under column 30, where the plane lies deeper in.
   o.edge_behind = 2;
   const Supports two = sample_supports(depth, ones(), K(), img, o, 2);
-  const auto tu = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 0);
-  CHECK(((tu - 31.5).abs() < 1e-5).sum().item<int64_t>() == H);
+  const auto tu = two.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 0);
+  CHECK(((tu - 31.5).abs() < 1e-5).sum().item<int64_t>() == kH);
   const auto second = (tu - 30.5).abs() < 1e-5;
-  CHECK(second.sum().item<int64_t>() == H - 2);  // the corner rows also step up or down
-  const auto tz = two.depth.narrow(0, 4000 - 2 * H, 2 * H).masked_select(second);
-  const auto rows = two.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 1).masked_select(second).floor();
+  CHECK(second.sum().item<int64_t>() == kH - 2);  // the corner rows also step up or down
+  const auto tz = two.depth.narrow(0, 4000 - 2 * kH, 2 * kH).masked_select(second);
+  const auto rows = two.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 1).masked_select(second).floor();
   const auto want = 1.0 / (1.0 / 6.0 + 0.002 * rows.to(torch::kDouble) + 0.002);
   CHECK((tz.to(torch::kDouble) / want - 1).abs().max().item<double>() < 1e-5);
   // At most half the budget goes to edge and hidden supports; a tight budget thins the hidden ones evenly, so every
@@ -444,20 +444,20 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const Supports tight = sample_supports(depth, ones(), K(), img, o, 2);
   const auto tv = tight.uv.narrow(0, 1000 - 182, 182).select(1, 1).floor().to(torch::kLong);
   CHECK((tight.depth.narrow(0, 1000 - 182, 182) > 3.0).all().item<bool>());  // the plane: 3.7 m and more
-  CHECK(std::get<0>(at::_unique(tv)).size(0) == H);
+  CHECK(std::get<0>(at::_unique(tv)).size(0) == kH);
   CHECK(tight.behind == 182);
   // edge_behind_start = 1: the same layers, one pixel further in (under columns 30 and 29), on the plane.
   o.edge_behind = 2;
   o.budget = 4000;
   o.edge_behind_start = 1;
   const Supports deeper = sample_supports(depth, ones(), K(), img, o, 2);
-  const auto du = deeper.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 0);
-  CHECK(((du - 30.5).abs() < 1e-5).sum().item<int64_t>() == H - 2);
-  CHECK(((du - 29.5).abs() < 1e-5).sum().item<int64_t>() == H - 2);
+  const auto du = deeper.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 0);
+  CHECK(((du - 30.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
+  CHECK(((du - 29.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
   CHECK(((du - 31.5).abs() < 1e-5).sum().item<int64_t>() == 0);
   const auto at30 = (du - 30.5).abs() < 1e-5;
-  const auto rows30 = deeper.uv.narrow(0, 4000 - 2 * H, 2 * H).select(1, 1).masked_select(at30).floor();
-  const auto z30 = deeper.depth.narrow(0, 4000 - 2 * H, 2 * H).masked_select(at30).to(torch::kDouble);
+  const auto rows30 = deeper.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 1).masked_select(at30).floor();
+  const auto z30 = deeper.depth.narrow(0, 4000 - 2 * kH, 2 * kH).masked_select(at30).to(torch::kDouble);
   CHECK((z30 * (1.0 / 6.0 + 0.002 * rows30.to(torch::kDouble) + 0.002) - 1).abs().max().item<double>() < 1e-5);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind", 1}}, "test"),
                     Catch::Contains("edge_supports = true"));
@@ -476,74 +476,74 @@ TEST_CASE("sampler: edge_behind stays hidden: thin lines, and planes that come a
     return std::make_pair(s.uv.narrow(0, 4000 - places, places), s.depth.narrow(0, 4000 - places, places));
   };
   // A line one pixel wide (column 20 at 2 m before 6 m): farther on both sides, so one place per pixel, under it.
-  auto line = torch::full({H, W}, 6.0f);
+  auto line = torch::full({kH, kW}, 6.0f);
   line.select(1, 20).fill_(2.0f);
   {
-    const auto [uv, z] = hidden(line, ones(), H + 1);
-    CHECK(((uv.narrow(0, 1, H).select(1, 0) - 20.5).abs() < 1e-5).all().item<bool>());
-    CHECK((z.narrow(0, 1, H) == 6.0f).all().item<bool>());
+    const auto [uv, z] = hidden(line, ones(), kH + 1);
+    CHECK(((uv.narrow(0, 1, kH).select(1, 0) - 20.5).abs() < 1e-5).all().item<bool>());
+    CHECK((z.narrow(0, 1, kH) == 6.0f).all().item<bool>());
     // The support before them is not hidden under the line: H places in all, not more.
     CHECK_FALSE((std::abs(uv[0][0].item<double>() - 20.5) < 1e-5 && z[0].item<double>() == 6.0));
   }
   // Two pixels wide (columns 20 and 21): each side's places stop after two, at the far side of the strip.
-  auto strip = torch::full({H, W}, 6.0f);
+  auto strip = torch::full({kH, kW}, 6.0f);
   strip.narrow(1, 20, 2).fill_(2.0f);
   {
-    const auto [uv, z] = hidden(strip, ones(), 4 * H);
+    const auto [uv, z] = hidden(strip, ones(), 4 * kH);
     CHECK((uv.select(1, 0) >= 20.0).all().item<bool>());
     CHECK((uv.select(1, 0) < 22.0).all().item<bool>());
     CHECK((z == 6.0f).all().item<bool>());
   }
   // A plane that rises towards the silhouette (2.13 m at column 32, extrapolated to 2.07 m under column 31, not
   // apart from its 2 m): each farther neighbour keeps its own depth there. Columns 41.. are invalid.
-  auto rise = torch::full({H, W}, 2.0f);
+  auto rise = torch::full({kH, kW}, 2.0f);
   auto valid = ones();
-  for (int64_t j = 32; j < W; ++j)
+  for (int64_t j = 32; j < kW; ++j)
     if (j <= 40)
       rise.select(1, j).fill_(float(1.0 / (0.47 - 0.012 * (j - 32))));
     else
       valid.select(1, j).zero_();
   o.edge_behind = 1;
   {
-    const auto [uv, z] = hidden(rise, valid, H);
+    const auto [uv, z] = hidden(rise, valid, kH);
     CHECK((uv.select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
     CHECK((z / (1.0 / 0.47) - 1).abs().max().item<double>() < 1e-5);
   }
 }
 
 TEST_CASE("sampler: pixel mode takes edge_shift and edge_behind too", "[sampler]") {
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);  // the step between columns 31 and 32
   const torch::Tensor img = image();
   SamplerOptions o;
   o.mode = "pixel";
   const Supports plain = sample_supports(depth, ones(), K(), img, o, 2);
-  REQUIRE(plain.count() == H * W);
+  REQUIRE(plain.count() == kH * kW);
   o.edge_behind = 1;
   o.edge_shift = 0.5;
   o.normals = true;
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
   // One hidden support per row on top, under column 31 at the far side's 6 m.
-  REQUIRE(s.count() == H * W + H);
-  CHECK(s.behind == H);
+  REQUIRE(s.count() == kH * kW + kH);
+  CHECK(s.behind == kH);
   CHECK(plain.behind == 0);
-  CHECK((s.uv.narrow(0, H * W, H).select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
-  CHECK((s.depth.narrow(0, H * W, H) == 6.0f).all().item<bool>());
+  CHECK((s.uv.narrow(0, kH * kW, kH).select(1, 0) - 31.5).abs().max().item<double>() < 1e-5);
+  CHECK((s.depth.narrow(0, kH * kW, kH) == 6.0f).all().item<bool>());
   // The near side's pixel supports move half a pixel left (inside the image), the others stay at their centres.
-  const auto du = s.uv.narrow(0, 0, H * W) - plain.uv;
+  const auto du = s.uv.narrow(0, 0, kH * kW) - plain.uv;
   const auto moved = du.abs().gt(1e-6).any(1);
   const auto col31 = (plain.uv.select(1, 0) - 31.5).abs().lt(1e-4);
   CHECK(torch::equal(moved, col31));
-  const auto v = plain.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(H - 1.0);
+  const auto v = plain.uv.select(1, 1), inside = col31 & v.gt(1.0) & v.lt(kH - 1.0);
   CHECK((du.select(1, 0).masked_select(inside) + 0.5).abs().max().item<double>() < 1e-5);
-  CHECK(torch::equal(s.depth.narrow(0, 0, H * W), plain.depth));
+  CHECK(torch::equal(s.depth.narrow(0, 0, kH * kW), plain.depth));
   CHECK_NOTHROW(config_from_json<SamplerOptions>(
       nlohmann::json{{"mode", "pixel"}, {"edge_behind", 2}, {"edge_shift", 0.5}}, "test"));
 }
 
 TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges and keeps faces out of it",
           "[sampler]") {
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);  // the step between columns 31 and 32, as above
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
@@ -555,16 +555,16 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   const auto on_centre = on_pixel_centre(s.uv);
   // Columns 29..34 (the step's two edge columns widened by 2) and the 3 outer columns and rows of the border
   // are a band: a pixel-centre support on every one of their pixels ...
-  const int64_t band_pixels = H * (6 + 3 + 3) + 2 * 3 * (W - 12);
+  const int64_t band_pixels = kH * (6 + 3 + 3) + 2 * 3 * (kW - 12);
   CHECK(on_centre.sum().item<int64_t>() >= band_pixels);
   CHECK(on_centre.sum().item<int64_t>() > on_pixel_centre(edge_only.uv).sum().item<int64_t>());
   for (double col : {29.5, 30.5, 31.5, 32.5, 33.5, 34.5})
-    CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == H);
+    CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == kH);
   // ... and no face support inside it: faces stop at the band's pixel centres.
   const auto face = ~on_centre;
   CHECK((face & (u > 29.5 + 1e-4) & (u < 34.5 - 1e-4)).sum().item<int64_t>() == 0);
-  CHECK((face & ((v < 2.5 - 1e-4) | (v > H - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
-  CHECK((face & ((u < 2.5 - 1e-4) | (u > W - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
+  CHECK((face & ((v < 2.5 - 1e-4) | (v > kH - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
+  CHECK((face & ((u < 2.5 - 1e-4) | (u > kW - 2.5 + 1e-4))).sum().item<int64_t>() == 0);
   // The represented area is still the surface's, once.
   CHECK(s.area.sum().item<double>() == Approx(edge_only.area.sum().item<double>()).epsilon(1e-4));
   // A band that half the budget cannot cover would leave pixels with no support at all, so the sampler falls
@@ -577,7 +577,7 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   CHECK(torch::equal(few.uv, sample_supports(depth, ones(), K(), image(), no_band, 2).uv));
   const auto few_centre = on_pixel_centre(few.uv);
   CHECK(few_centre.sum().item<int64_t>() == 300);
-  CHECK((few.uv.select(1, 1).masked_select(few_centre) > H - 3).any().item<bool>());
+  CHECK((few.uv.select(1, 1).masked_select(few_centre) > kH - 3).any().item<bool>());
   // With hidden surface and a shift: the band's near-side pixels (column 31) get the same hidden supports as without
   // a band, last, and move half a pixel left as the edge supports do; the rest of the band stays on its centres.
   o.budget = 4000;
@@ -595,17 +595,17 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
   CHECK(torch::equal(behind.depth.narrow(0, 4000 - nb, nb), behind_no_band.depth.narrow(0, 4000 - nb, nb)));
   CHECK((behind.depth.narrow(0, 4000 - nb, nb) == 6.0f).all().item<bool>());
   const auto bu = behind.uv.narrow(0, 0, 4000 - nb).select(1, 0), bv = behind.uv.narrow(0, 0, 4000 - nb).select(1, 1);
-  const auto inside = (bv > 1.0) & (bv < H - 1.0);
-  CHECK(((bu - 31.0).abs().lt(1e-4) & inside).sum().item<int64_t>() == H - 2);
+  const auto inside = (bv > 1.0) & (bv < kH - 1.0);
+  CHECK(((bu - 31.0).abs().lt(1e-4) & inside).sum().item<int64_t>() == kH - 2);
   CHECK(((bu - 31.5).abs().lt(1e-4) & inside).sum().item<int64_t>() == 0);
   CHECK_NOTHROW(config_from_json<SamplerOptions>(
       nlohmann::json{{"edge_supports", true}, {"edge_band", 2}, {"edge_behind", 2}, {"edge_shift", 0.5}}, "test"));
   for (double col : {29.5, 30.5, 32.5, 33.5, 34.5})
-    CHECK(((bu - col).abs().lt(1e-4) & inside).sum().item<int64_t>() == H - 2);
+    CHECK(((bu - col).abs().lt(1e-4) & inside).sum().item<int64_t>() == kH - 2);
 }
 
 TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges, over its own surface", "[sampler]") {
-  auto depth = torch::full({H, W}, 6.0f);
+  auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);  // the near side is columns 0..31
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
@@ -618,14 +618,14 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   const auto face = ~on_centre;
   // Columns 29..31 (the near edge column and two steps into its surface) get a pixel-centre support on every row,
   // and no face support lies between their centres ...
-  for (double col : {29.5, 30.5, 31.5}) CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == H);
+  for (double col : {29.5, 30.5, 31.5}) CHECK(((u - col).abs().lt(1e-4) & on_centre).sum().item<int64_t>() == kH);
   CHECK((face & (u > 29.5 + 1e-4) & (u < 31.5 - 1e-4)).sum().item<int64_t>() == 0);
   // ... while the far side and the border keep faces up to their edge pixels: faces between columns 32.5 and 34.5,
   // and in the outer rows and columns away from the step.
   CHECK((face & (u > 32.5 + 1e-4) & (u < 34.5 - 1e-4)).sum().item<int64_t>() > 0);
   CHECK((face & (v > 0.5) & (v < 2.5) & (u > 40.0)).sum().item<int64_t>() > 0);
   CHECK((face & (u > 0.5) & (u < 2.5)).sum().item<int64_t>() > 0);
-  CHECK(((u - 33.5).abs().lt(1e-4) & on_centre & (v > 1.0) & (v < H - 1.0)).sum().item<int64_t>() == 0);
+  CHECK(((u - 33.5).abs().lt(1e-4) & on_centre & (v > 1.0) & (v < kH - 1.0)).sum().item<int64_t>() == 0);
   // Fewer band supports than the whole band; the represented area is still the surface's, once.
   o.edge_band_at = "all";
   const Supports all = sample_supports(depth, ones(), K(), image(), o, 2);
@@ -647,9 +647,9 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   CHECK(b.behind == nb.behind);
   CHECK(torch::equal(b.uv.narrow(0, 4000 - b.behind, b.behind), nb.uv.narrow(0, 4000 - nb.behind, nb.behind)));
   const auto bu = b.uv.narrow(0, 0, 4000 - b.behind).select(1, 0), bv = b.uv.narrow(0, 0, 4000 - b.behind).select(1, 1);
-  const auto inner = (bv > 1.0) & (bv < H - 1.0);
-  CHECK(((bu - 31.0).abs().lt(1e-4) & inner).sum().item<int64_t>() == H - 2);
-  CHECK(((bu - 30.5).abs().lt(1e-4) & inner).sum().item<int64_t>() == H - 2);
+  const auto inner = (bv > 1.0) & (bv < kH - 1.0);
+  CHECK(((bu - 31.0).abs().lt(1e-4) & inner).sum().item<int64_t>() == kH - 2);
+  CHECK(((bu - 30.5).abs().lt(1e-4) & inner).sum().item<int64_t>() == kH - 2);
   CHECK_NOTHROW(config_from_json<SamplerOptions>(
       nlohmann::json{
           {"edge_supports", true}, {"edge_band", 2}, {"edge_band_at", "near"}, {"edge_behind", 3}, {"edge_shift", 0.5}},
@@ -657,8 +657,8 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
 }
 
 TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a hole", "[sampler]") {
-  auto depth = torch::full({H, W}, 1.0f);
-  depth.narrow(1, 40, W - 40).fill_(3.0f);  // a step between columns 39 and 40
+  auto depth = torch::full({kH, kW}, 1.0f);
+  depth.narrow(1, 40, kW - 40).fill_(3.0f);  // a step between columns 39 and 40
   auto valid = ones();
   depth.narrow(0, 10, 8).narrow(1, 5, 10).fill_(std::numeric_limits<float>::quiet_NaN());  // a hole
   const Supports s = sample_supports(depth, valid, K(), image(), fixed(8000), 5);
@@ -675,7 +675,7 @@ TEST_CASE("sampler: no support lands on a depth-discontinuity triangle or in a h
 
 TEST_CASE("sampler: fill_px fills holes near valid depth from around them and leaves far pixels empty", "[sampler]") {
   // A smooth surface, a 12x12 hole in it and an invalid strip 15 pixels wide along the right border.
-  const auto u = pixel_centers(H, W).select(-1, 0), v = pixel_centers(H, W).select(-1, 1);
+  const auto u = pixel_centers(kH, kW).select(-1, 0), v = pixel_centers(kH, kW).select(-1, 1);
   const auto truth = 1.0 / (0.5 + 0.003 * u + 0.002 * v);
   auto depth = truth.clone(), valid = ones();
   depth.narrow(0, 10, 12).narrow(1, 20, 12).fill_(std::numeric_limits<float>::quiet_NaN());
@@ -692,7 +692,7 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
   CHECK(f.valid.narrow(1, 50, 8).min().item<float>() == 1.0f);
   CHECK(f.valid.narrow(1, 58, 7).max().item<float>() == 0.0f);
   CHECK(f.depth.narrow(1, 58, 7).abs().max().item<float>() == 0.0f);
-  CHECK(f.filled == 144 + 8 * H);
+  CHECK(f.filled == 144 + 8 * kH);
   CHECK(torch::isfinite(f.depth).all().item<bool>());
   // Filled depth is a blend: never outside the range of the valid depth.
   const auto valid_depth = depth.masked_select(usable > 0);
@@ -704,7 +704,7 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
   const FilledDepth off = fill_depth_holes(depth, valid, 0);
   CHECK(off.filled == 0);
   CHECK(torch::equal(off.valid, usable));
-  const FilledDepth none = fill_depth_holes(depth, torch::zeros({H, W}), 8);
+  const FilledDepth none = fill_depth_holes(depth, torch::zeros({kH, kW}), 8);
   CHECK(none.filled == 0);
   CHECK(none.valid.max().item<float>() == 0.0f);
   CHECK_THROWS_WITH(fill_depth_holes(depth, valid, -1), Catch::Contains("max_px"));
@@ -758,17 +758,17 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
 
 TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side's depth, other holes the blend",
           "[sampler]") {
-  const auto u = pixel_centers(H, W).select(-1, 0);
+  const auto u = pixel_centers(kH, kW).select(-1, 0);
   // An occluder at 1 m on columns 0-27, a slanted background (inverse depth affine in u, so a plane) behind it,
   // and a sensor's shadow: columns 28-33 of the background have no depth.
   const auto background = 1.0 / (0.30 - 0.002 * u);
-  auto depth = torch::where(u < 28, torch::ones({H, W}), background).to(torch::kFloat32);
+  auto depth = torch::where(u < 28, torch::ones({kH, kW}), background).to(torch::kFloat32);
   auto valid = ones();
   valid.narrow(1, 28, 6).zero_();
   const FilledDepth blend = fill_depth_holes(depth, valid, 8);
   const FilledDepth far = fill_depth_holes(depth, valid, 8, 10);
   CHECK(far.filled == blend.filled);
-  CHECK(far.filled == 6 * H);
+  CHECK(far.filled == 6 * kH);
   const auto shadow_truth = background.narrow(1, 28, 6);
   // The blend bridges the two surfaces; the far side continues the background's plane into the shadow (the
   // diagonal rays that reach the top or bottom row there see no slope, and are left out while sloped hits exist).
@@ -776,7 +776,7 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
   const auto far_error = (far.depth.narrow(1, 28, 6) - shadow_truth).abs() / shadow_truth;
   CHECK(far_error.max().item<double>() < 1e-4);
   // Only the shadow changes: valid depth stays as it was.
-  CHECK(torch::equal(far.depth.narrow(1, 34, W - 34), blend.depth.narrow(1, 34, W - 34)));
+  CHECK(torch::equal(far.depth.narrow(1, 34, kW - 34), blend.depth.narrow(1, 34, kW - 34)));
   CHECK(torch::equal(far.depth.narrow(1, 0, 28), blend.depth.narrow(1, 0, 28)));
 
   // A strip wider than far_width (here every shadow pixel lies 7 px from the occluder plus the background) is blended;
@@ -787,7 +787,7 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
 
   // The far side is the next surface beyond the edge, not the farthest: a hole between an occluder (1 m, left) and
   // a wall (3 m, right and below) whose upward rays reach a far surface (9 m) through a gap takes the wall's depth.
-  auto layers = torch::full({H, W}, 3.0f);
+  auto layers = torch::full({kH, kW}, 3.0f);
   layers.narrow(1, 0, 28).fill_(1.0f);
   layers.narrow(0, 0, 20).narrow(1, 28, 3).fill_(9.0f);
   auto gap = ones();
@@ -831,7 +831,7 @@ TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side'
 }
 
 TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {
-  auto depth = 1.0 + torch::rand({H, W});
+  auto depth = 1.0 + torch::rand({kH, kW});
   auto img = image();
   const Supports a = sample_supports(depth, ones(), K(), img, fixed(3000), 11);
   const Supports b = sample_supports(depth, ones(), K(), img, fixed(3000), 11);
@@ -842,19 +842,19 @@ TEST_CASE("sampler: the same seed gives identical supports, another seed differe
 }
 
 TEST_CASE("sampler: pixel and vertex_face modes, and adaptive budgets", "[sampler]") {
-  auto depth = torch::full({H, W}, 2.0f);
+  auto depth = torch::full({kH, kW}, 2.0f);
   auto valid = ones();
   valid.narrow(0, 0, 12).zero_();  // top quarter invalid (sky)
   SamplerOptions px;
   px.mode = "pixel";
   const Supports p = sample_supports(depth, valid, K(), image(), px);
-  CHECK(p.count() == (H - 12) * W);
+  CHECK(p.count() == (kH - 12) * kW);
   CHECK(p.uv[0][0].item<float>() == 0.5f);
   CHECK(p.uv[0][1].item<float>() == 12.5f);
 
   SamplerOptions vf = fixed(2000);
   vf.mode = "vertex_face";
-  auto img = torch::zeros({3, H, W});
+  auto img = torch::zeros({3, kH, kW});
   img.narrow(2, 30, 4).fill_(1.0f);  // strong vertical edges at columns 29/30 and 33/34
   const Supports v = sample_supports(depth, valid, K(), img, vf);
   CHECK(v.count() == 2000);
@@ -868,7 +868,7 @@ TEST_CASE("sampler: pixel and vertex_face modes, and adaptive budgets", "[sample
   pp.budget_mode = "per_pixel";
   pp.density = 0.5;
   pp.min_budget = 1;
-  CHECK(resolve_budget(pp, depth, valid, K()) == (H * W + 1) / 2);
+  CHECK(resolve_budget(pp, depth, valid, K()) == (kH * kW + 1) / 2);
   SamplerOptions sa;
   sa.budget_mode = "solid_angle";
   sa.density = 20000.0;
@@ -886,47 +886,48 @@ TEST_CASE("sampler: the detail budget gives a plain flat wall few supports and a
   o.density = 1.0;
   o.min_budget = 1;
   // A plain fronto-parallel wall: no colour gradient, zero curvature, so every block gets the floor.
-  const auto wall_depth = torch::full({H, W}, 3.0f);
-  const auto plain = torch::full({3, H, W}, 0.5f);
+  const auto wall_depth = torch::full({kH, kW}, 3.0f);
+  const auto plain = torch::full({3, kH, kW}, 0.5f);
   const int64_t wall = resolve_budget(o, wall_depth, ones(), K(), plain);
-  CHECK(wall == static_cast<int64_t>(std::llround(o.detail_floor * H * W)));
+  CHECK(wall == static_cast<int64_t>(std::llround(o.detail_floor * kH * kW)));
   // Clutter of the same size: random colours on a bumpy surface earn the full density.
   torch::manual_seed(3);
-  const auto bumpy = 2.0f + 0.5f * torch::rand({H, W});
-  const int64_t cluttered = resolve_budget(o, bumpy, ones(), K(), torch::rand({3, H, W}));
-  CHECK(cluttered == H * W);
-  CHECK(sample_supports(bumpy, ones(), K(), torch::rand({3, H, W}), o).count() == cluttered);
+  const auto bumpy = 2.0f + 0.5f * torch::rand({kH, kW});
+  const int64_t cluttered = resolve_budget(o, bumpy, ones(), K(), torch::rand({3, kH, kW}));
+  CHECK(cluttered == kH * kW);
+  CHECK(sample_supports(bumpy, ones(), K(), torch::rand({3, kH, kW}), o).count() == cluttered);
   CHECK_THROWS_AS(resolve_budget(o, wall_depth, ones(), K()), Error);  // needs the image
 
   // Half plain, half textured on one plane: supports crowd the textured half, and the represented areas
   // still add up to the surface.
-  auto half = torch::full({3, H, W}, 0.5f);
-  half.narrow(2, 32, W - 32).copy_(torch::rand({3, H, W - 32}));
+  auto half = torch::full({3, kH, kW}, 0.5f);
+  half.narrow(2, 32, kW - 32).copy_(torch::rand({3, kH, kW - 32}));
   const auto weights = detail_weights(wall_depth, ones(), half, o);
   CHECK(weights.narrow(1, 0, 24).max().item<float>() == Approx(o.detail_floor));
-  CHECK(weights.narrow(1, 40, W - 40).min().item<float>() == Approx(1.0));
+  CHECK(weights.narrow(1, 40, kW - 40).min().item<float>() == Approx(1.0));
   const Supports s = sample_supports(wall_depth, ones(), K(), half, o, 5);
   const auto hist = column_histogram(s, 4);
   CHECK(hist[3] > 4 * hist[0]);
-  const double area = ((W - 1) * 3.0 / fx) * ((H - 1) * 3.0 / fy);
+  const double area = ((kW - 1) * 3.0 / fx) * ((kH - 1) * 3.0 / fy);
   CHECK(s.area.sum().item<double>() == Approx(area).epsilon(0.02));
 }
 
 TEST_CASE("sampler: all-invalid depth is a clear error", "[sampler]") {
-  auto depth = torch::full({H, W}, std::numeric_limits<float>::quiet_NaN());
+  auto depth = torch::full({kH, kW}, std::numeric_limits<float>::quiet_NaN());
   CHECK_THROWS_WITH(sample_supports(depth, ones(), K(), image(), fixed(100)), Catch::Contains("no valid triangle"));
   SamplerOptions px;
   px.mode = "pixel";
-  CHECK_THROWS_WITH(sample_supports(torch::zeros({H, W}), ones(), K(), image(), px), Catch::Contains("no valid pixel"));
-  CHECK_THROWS_WITH(sample_supports(torch::ones({H, W}), ones(), K(), torch::rand({3, 8, 8}), fixed(10)),
+  CHECK_THROWS_WITH(sample_supports(torch::zeros({kH, kW}), ones(), K(), image(), px),
+                    Catch::Contains("no valid pixel"));
+  CHECK_THROWS_WITH(sample_supports(torch::ones({kH, kW}), ones(), K(), torch::rand({3, 8, 8}), fixed(10)),
                     Catch::Contains("image must be [3, H, W]"));
 }
 
 TEST_CASE("sampler: every support carries the plane's normal, facing the camera, in every mode", "[sampler]") {
   // The plane n.X = -2 with n facing the camera (n.X < 0): depth z = -2 / (n . ray).
   const double nx = 0.3, ny = -0.2, nz = -1.0, nl = std::sqrt(nx * nx + ny * ny + nz * nz);
-  auto jj = torch::arange(W, torch::kFloat64).add(0.5).sub(cx).div(fx).unsqueeze(0).expand({H, W});
-  auto ii = torch::arange(H, torch::kFloat64).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({H, W});
+  auto jj = torch::arange(kW, torch::kFloat64).add(0.5).sub(cx).div(fx).unsqueeze(0).expand({kH, kW});
+  auto ii = torch::arange(kH, torch::kFloat64).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({kH, kW});
   auto depth = (-2.0 * nl / (nx * jj + ny * ii + nz)).to(torch::kFloat32);
   REQUIRE(depth.min().item<float>() > 0);
   const auto expected = torch::tensor({nx / nl, ny / nl, nz / nl});
@@ -942,9 +943,9 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
     CHECK(torch::allclose(s.normal, expected.expand({s.count(), 3}), 1e-4, 1e-4));
   }
   // A lone valid pixel has no surface around it: its normal points back along its ray.
-  auto valid = torch::zeros({H, W});
+  auto valid = torch::zeros({kH, kW});
   valid[10][20] = 1;
-  const Supports lone = sample_supports(torch::full({H, W}, 3.0f), valid, K(), image(), pixel);
+  const Supports lone = sample_supports(torch::full({kH, kW}, 3.0f), valid, K(), image(), pixel);
   REQUIRE(lone.count() == 1);
   auto ray = torch::tensor({(20.5 - cx) / fx, (10.5 - cy) / fy, 1.0}, torch::kFloat32);
   CHECK(torch::allclose(lone.normal[0], -ray / ray.norm(), 1e-5, 1e-6));
@@ -953,13 +954,13 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
 TEST_CASE("sampler: along a crease the normal is the area-weighted mean of both faces", "[sampler]") {
   // A back wall at z = 5 (normal (0,0,-1)) meets a floor at y = 1.2 below the camera (normal (0,-1,0)); depth is
   // continuous across the crease, so its triangles are accepted on both sides.
-  auto v = torch::arange(H, torch::kFloat32).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({H, W});
-  auto depth = torch::minimum(torch::full({H, W}, 5.0f), 1.2f / v.clamp_min(1e-3f)).contiguous();
+  auto v = torch::arange(kH, torch::kFloat32).add(0.5).sub(cy).div(fy).unsqueeze(1).expand({kH, kW});
+  auto depth = torch::minimum(torch::full({kH, kW}, 5.0f), 1.2f / v.clamp_min(1e-3f)).contiguous();
   SamplerOptions px = fixed(0);
   px.mode = "pixel";
   px.normals = true;
   const Supports s = sample_supports(depth, ones(), K(), image(), px);
-  REQUIRE(s.count() == H * W);
+  REQUIRE(s.count() == kH * kW);
   auto n = s.normal;
   CHECK(torch::allclose(n.norm(2, 1), torch::ones({s.count()}), 1e-5, 1e-5));
   CHECK(n.select(1, 0).abs().max().item<float>() < 1e-4f);  // no sideways tilt anywhere
@@ -967,24 +968,24 @@ TEST_CASE("sampler: along a crease the normal is the area-weighted mean of both 
   const auto blend = ~wall & ~floor;
   // Exactly the crease's pixels blend the two faces, pointing between them toward the camera.
   const int64_t blended = blend.sum().item<int64_t>();
-  CHECK(blended >= W);
-  CHECK(blended <= 3 * W);
+  CHECK(blended >= kW);
+  CHECK(blended <= 3 * kW);
   CHECK((n.select(1, 1).masked_select(blend) < 0).all().item<bool>());
   CHECK((n.select(1, 2).masked_select(blend) < 0).all().item<bool>());
   // Far from the crease, rows are pure wall (top) and pure floor (bottom).
-  CHECK(wall.view({H, W})[2].all().item<bool>());
-  CHECK(floor.view({H, W})[H - 2].all().item<bool>());
+  CHECK(wall.view({kH, kW})[2].all().item<bool>());
+  CHECK(floor.view({kH, kW})[kH - 2].all().item<bool>());
   // Area mode reads the same per-pixel normals: every support's normal is one of the pixel-mode normals.
   SamplerOptions area = fixed(4000);
   area.normals = true;
   const Supports a = sample_supports(depth, ones(), K(), image(), area, 5);
-  auto ia = a.uv.select(1, 1).floor().clamp(0, H - 1).to(torch::kLong),
-       ja = a.uv.select(1, 0).floor().clamp(0, W - 1).to(torch::kLong);
-  CHECK(torch::equal(a.normal, n.index_select(0, ia * W + ja)));
+  auto ia = a.uv.select(1, 1).floor().clamp(0, kH - 1).to(torch::kLong),
+       ja = a.uv.select(1, 0).floor().clamp(0, kW - 1).to(torch::kLong);
+  CHECK(torch::equal(a.normal, n.index_select(0, ia * kW + ja)));
 }
 
 TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]") {
-  auto depth = torch::full({H, W}, 2.0f);
+  auto depth = torch::full({kH, kW}, 2.0f);
   depth.narrow(1, 0, 8).fill_(0.5f);
   SamplerOptions o = fixed(1000);
   o.normals = true;

@@ -17,6 +17,9 @@
 
 namespace isplat {
 
+// True when every element of t is finite (one reduction, one sync).
+bool all_finite(const torch::Tensor& t);
+
 struct StepStats {
   std::map<std::string, double> losses;  // total, l1, perceptual, scale, smooth (or depth terms)
   std::map<std::string, double>

@@ -18,12 +18,13 @@
 #include "train/task.h"
 
 namespace isplat {
-namespace {
-using Clock = std::chrono::steady_clock;
 
-bool finite(const torch::Tensor& t) {
+bool all_finite(const torch::Tensor& t) {
   return torch::isfinite(t).all().item<bool>();
 }
+
+namespace {
+using Clock = std::chrono::steady_clock;
 
 class GaussianTask final : public TrainTask {
  public:
@@ -59,7 +60,8 @@ class GaussianTask final : public TrainTask {
       // Diverged weights give non-finite Gaussians, which the renderer rejects: report the step as
       // non-finite so the loop skips it (and stops after train.max_bad_steps).
       const auto& gs = p.gaussians;
-      if (!finite(gs.means) || !finite(gs.scales) || !finite(gs.quats) || !finite(gs.colors) || !finite(gs.opacities)) {
+      if (!all_finite(gs.means) || !all_finite(gs.scales) || !all_finite(gs.quats) || !all_finite(gs.colors) ||
+          !all_finite(gs.opacities)) {
         acc["total"] = torch::full({}, std::numeric_limits<float>::quiet_NaN());
         return acc;
       }

@@ -51,9 +51,6 @@ double process_cpu_seconds() {
   return ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-bool finite(const torch::Tensor& t) {
-  return torch::isfinite(t).all().item<bool>();
-}
 }  // namespace
 
 void Trainer::request_stop() {
@@ -179,7 +176,7 @@ StepStats Trainer::train_step() {
   auto losses = task_->losses(batch, first_sample, /*train=*/true, s, nullptr);
   for (const auto& [k, v] : losses) s.losses[k] = v.item<double>();
   auto& total = losses.at("total");
-  bool ok = finite(total);
+  bool ok = all_finite(total);
   stop_ = g_stop;
   if (dp_) {  // one decision for all ranks: skip when any rank's loss is non-finite, stop when any rank was asked to
     const auto agreed = dp_->sum({ok ? 1.0 : 0.0, stop_ ? 1.0 : 0.0, ok ? s.losses["total"] : 0.0});
@@ -193,7 +190,7 @@ StepStats Trainer::train_step() {
     s.timings_ms["backward"] = ms_since(t0);
     synchronize_gradients(s);
     for (const auto& p : trainable().parameters())
-      if (p.grad().defined() && !finite(p.grad())) {
+      if (p.grad().defined() && !all_finite(p.grad())) {
         ok = false;
         break;
       }
