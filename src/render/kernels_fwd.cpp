@@ -277,14 +277,16 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
   fwd_init(x0, y0, x1, y1, st, last);
   if (group_hits) std::fill(group_hits, group_hits + count, 0u);
   Group<float> groups[kMaxGroups];
-  LiveGroups live = unstopped_groups(st);
-  int64_t active = (x1 - x0) * (y1 - y0), ys, ye, g0, g1;
-  for (int64_t i = 0; i < count && active > 0; ++i) {
+  TileRows rows;
+  LiveGroups live = avx2_unstopped_groups(st);
+  int64_t ys, ye, g0, g1;
+  for (int64_t i = 0; i < count && (live.half[0] | live.half[1]) != 0; ++i) {  // until every pixel has stopped
     const float* rec = local + i * kRec;
     if (!pixel_box(rec, x0, y0, x1, y1, ys, ye, g0, g1)) continue;
     Splat<float> s = fwd_splat(rec);
-    const int n = collect_groups(s.prepare(), x0, y0, ys, ye, g0, g1, live, groups);
-    if (n == 0) continue;
+    avx2_tile_rows(s.prepare(), x0, y0, ys, ye, g0, g1, live, rows);
+    if ((rows.groups[0] | rows.groups[1]) == 0) continue;
+    const int n = avx2_groups(rows, x0, groups);
     const Avx2Splat a = avx2_splat(s, kChannels);  // broadcasts only the channels composited
     const Avx2Plane plane = kPlane ? avx2_plane(depth_plane(s, cam)) : Avx2Plane{};
     const int32_t id = int32_t(i + 1);
@@ -294,7 +296,7 @@ ISPLAT_AVX2_FN void fwd_tile_avx2(const float* local, int64_t count, int64_t x0,
     for (; k + 2 <= n; k += 2) stops += fwd_groups_avx2<2, kChannels, kPlane>(a, plane, groups + k, st, last, id, hits);
     if (k < n) stops += fwd_groups_avx2<1, kChannels, kPlane>(a, plane, groups + k, st, last, id, hits);
     if (group_hits) group_hits[i] = hits;
-    if (stops > 0) active -= stops, live = unstopped_groups(st);
+    if (stops > 0) live = avx2_unstopped_groups(st);
   }
 }
 #endif

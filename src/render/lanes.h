@@ -239,6 +239,14 @@ ISPLAT_INLINE int collect_groups(const Splat<T>& s, int64_t x0, int64_t y0, int6
   return n;
 }
 
+// A Gaussian's terms of the tile's 16 rows (make_row's, computed as vectors) and which live groups it may hit
+// (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
+// or not never changes a result; nor does dropping a group that is not live (LiveGroups).
+struct TileRows {
+  alignas(64) float dy[kTile], nb[kTile], nc[kTile];
+  unsigned groups[2];  // bit r: row r's left (0) / right (1) group is to be visited; 0 outside the box
+};
+
 // Lane sums of one Gaussian's backward: 10 quantities × 8 lanes in two sets, one per half of the tile's rows
 // (lane_set; so the AVX-512 loops can run whole rows with the same sums), reduced in one fixed tree order.
 template <class T>
@@ -442,6 +450,65 @@ ISPLAT_AVX2 int fwd_groups_avx2(const Avx2Splat& a, const Avx2Plane& plane, cons
     hits |= unsigned(_mm256_movemask_ps(add) != 0) << group_bit(p0);
   }
   return stops;
+}
+
+// make_row's terms of the tile's 16 rows, 8 rows per vector (the same operations per row); returns dy in `dy`.
+ISPLAT_AVX2 void avx2_row_terms(const Splat<float>& s, int64_t y0, TileRows& t, __m256 dy[2]) {
+  const __m256 v = _mm256_set1_ps(s.v), nbk = _mm256_set1_ps(s.nbk), nck = _mm256_set1_ps(s.nck);
+  for (int h = 0; h < 2; ++h) {
+    const __m256 py =  // y0 + row exactly
+        _mm256_add_ps(_mm256_set1_ps(float(y0 + h * kLanes)), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
+    dy[h] = _mm256_sub_ps(_mm256_add_ps(py, _mm256_set1_ps(0.5f)), v);
+    _mm256_store_ps(t.dy + h * kLanes, dy[h]);
+    _mm256_store_ps(t.nb + h * kLanes, _mm256_mul_ps(nbk, dy[h]));
+    _mm256_store_ps(t.nc + h * kLanes, _mm256_mul_ps(_mm256_mul_ps(nck, dy[h]), dy[h]));
+  }
+}
+// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit and are live (collect_groups' set, with the
+// culling test on every row), as TileRows::groups.
+ISPLAT_AVX2 void avx2_tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
+                                int64_t g1, const LiveGroups& live, TileRows& t) {
+  __m256 dy[2];
+  avx2_row_terms(s, y0, t, dy);
+  const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
+  const __m256 beta = _mm256_set1_ps(s.beta), a2 = _mm256_set1_ps(s.a2), ncut = _mm256_set1_ps(s.ncut_wide);
+  for (int g = 0; g < 2; ++g) {
+    t.groups[g] = 0;
+    if (g < g0 || g >= g1) continue;
+    const float lo = (float(int32_t(x0) + g * kLanes) + 0.5f) - s.u, hi = lo + float(kLanes - 1);
+    unsigned may = 0;
+    for (int h = 0; h < 2; ++h) {
+      const __m256 dx =
+          _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(beta, dy[h]), _mm256_set1_ps(lo)), _mm256_set1_ps(hi));
+      const __m256 q = _mm256_fmadd_ps(_mm256_fmadd_ps(a2, dx, _mm256_load_ps(t.nb + h * kLanes)), dx,
+                                       _mm256_load_ps(t.nc + h * kLanes));
+      may |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(q, ncut, _CMP_GE_OQ))) << (h * kLanes);
+    }
+    t.groups[g] = rows & live.half[g] & may;
+  }
+}
+// The groups TileRows::groups names: the left groups in row order, then the right ones. Each lane-sum set (one per
+// half) thus sees its groups in row order, as collect_groups lists them; the forward's groups touch disjoint pixels,
+// so their order changes nothing there.
+ISPLAT_AVX2 int avx2_groups(const TileRows& t, int64_t x0, Group<float>* out) {
+  int n = 0;
+  for (int h = 0; h < 2; ++h)
+    for (unsigned m = t.groups[h]; m != 0; m &= m - 1) {
+      const int r = __builtin_ctz(m);
+      out[n++] = {{t.dy[r], t.nb[r], t.nc[r]}, int32_t(x0) + h * kLanes, r * kTile + h * kLanes};
+    }
+  return n;
+}
+
+// unstopped_groups on vectors: one tile row's half of the T plane per register.
+ISPLAT_AVX2 LiveGroups avx2_unstopped_groups(const float* st) {
+  LiveGroups live;
+  for (int r = 0; r < kTile; ++r)
+    for (int h = 0; h < 2; ++h) {
+      const __m256 t = _mm256_loadu_ps(st + fwd_at(r * kTile + h * kLanes, kPlT));
+      live.half[h] |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OQ)) != 0) << r;
+    }
+  return live;
 }
 
 // One set of lane sums as registers.

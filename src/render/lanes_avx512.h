@@ -44,14 +44,6 @@ ISPLAT_AVX512 __m512 avx512_exp2(__m512 y) {
   return _mm512_scalef_ps(p, n);
 }
 
-// A Gaussian's terms of the tile's 16 rows (make_row's, computed as one vector) and which live groups it may hit
-// (group_may_hit's test on all rows at once). A group the test drops has no lane within the cut, so dropping it
-// or not never changes a result; nor does dropping a group that is not live (LiveGroups).
-struct TileRows {
-  alignas(64) float dy[kTile], nb[kTile], nc[kTile];
-  unsigned groups[2];  // bit r: row r's left (0) / right (1) group is to be visited; 0 outside the box
-};
-
 // 16 lanes of one Gaussian: two 8-pixel groups, the low half on tile row r[0], the high half on r[1]. Row jobs
 // (kRow) are a whole tile row, r[1] = r[0], one contiguous block per plane; a group the culling dropped is
 // masked off in `lanes`. Pair jobs are two consecutive groups of a narrow Gaussian's list (one group per row, all
