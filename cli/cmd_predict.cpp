@@ -2,6 +2,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include <torch/torch.h>
 
@@ -187,7 +188,14 @@ int run_predict(int argc, char** argv) {
   ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
                " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
                pruned.merge.removed(), " merged); not writing an empty scene to ", out);
-  write_ply(out, g, pipeline->model()->options.composer.linear_rgb);
+  PlyOptions ply;  // what pruning removed travels with the scene
+  std::ostringstream pruning;
+  pruning << "pruning: decoded " << made << ", outside_view " << outside << ", low_opacity " << faint
+          << " (min_opacity " << prune_opacity << "), low_contribution " << pruned.low_contribution
+          << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
+          << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
+  ply.comments.push_back(pruning.str());
+  write_ply(out, g, pipeline->model()->options.composer.linear_rgb, ply);
   const double typical_depth = pred.supports.depth.median().item<double>();
   write_scene_camera(camera_sidecar_path(out), view, typical_depth);
 

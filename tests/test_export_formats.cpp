@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <vector>
 
 #include "core/error.h"
@@ -183,7 +184,12 @@ TEST_CASE("ply-sh3: 45 f_rest properties in the 3DGS order, read back unchanged"
   const auto dir = test::temp_dir("ply_sh3");
   PlyOptions sh3;
   sh3.sh_degree = 3;
+  sh3.comments = {"pruning: decoded 310, kept 300", "second"};
   write_ply(dir + "/s.ply", g, true, sh3);
+  const std::vector<std::string> comments = read_ply_comments(dir + "/s.ply");
+  REQUIRE(comments.size() == 3);  // the writer's own line, then ours in order
+  CHECK(comments[1] == "pruning: decoded 310, kept 300");
+  CHECK(comments[2] == "second");
   const auto names = ply_properties(dir + "/s.ply");
   REQUIRE(names.size() == 62);
   CHECK(names[8] == "f_dc_2");
@@ -204,6 +210,13 @@ TEST_CASE("ply-sh3: 45 f_rest properties in the 3DGS order, read back unchanged"
   sh4.sh_degree = 4;
   CHECK_THAT(test::error_of([&] { write_ply(dir + "/bad.ply", g, true, sh4); }),
              Catch::Contains("bad.ply") && Catch::Contains("sh_degree 4"));
+  PlyOptions broken;
+  broken.comments = {"two\nlines"};
+  CHECK_THAT(test::error_of([&] { write_ply(dir + "/bad.ply", g, true, broken); }),
+             Catch::Contains("bad.ply") && Catch::Contains("line break"));
+  CHECK_FALSE(fs::exists(dir + "/bad.ply"));
+  std::ofstream(dir + "/headless.ply") << "ply\ncomment no end\n";
+  CHECK_THAT(test::error_of([&] { read_ply_comments(dir + "/headless.ply"); }), Catch::Contains("headless.ply"));
 }
 
 TEST_CASE("splat-transform reads our .splat, .spz and ply-sh3 files with the same count and values",
@@ -408,7 +421,9 @@ TEST_CASE("html: the viewer page opens in headless Chromium at the source camera
 TEST_CASE("export: the tool writes each format from a PLY and says what it wrote", "[export][formats][use]") {
   const Gaussians g = random_scene(250);
   const auto dir = test::temp_dir("export_cli");
-  write_ply(dir + "/scene.ply", g);
+  PlyOptions counted;
+  counted.comments = {"pruning: decoded 260, kept 250"};
+  write_ply(dir + "/scene.ply", g, true, counted);
   const std::string tool = (fs::path(ISPLAT_BINARY_DIR) / "infinisplat").string();
   std::vector<std::string> formats = {"splat", "spz", "ply-sh3"};
   if (fs::exists(splat_transform_in(ISPLAT_SOURCE_DIR).cli)) formats.push_back("html");
@@ -424,6 +439,10 @@ TEST_CASE("export: the tool writes each format from a PLY and says what it wrote
   CHECK(fs::file_size(dir + "/out.splat") == 250 * 32);
   CHECK(read_spz(dir + "/out.spz").count() == 250);
   CHECK(ply_properties(dir + "/out.ply").size() == 62);
+  // ply-sh3 keeps the source's comments (what pruning removed) and writes its own line once.
+  const std::vector<std::string> comments = read_ply_comments(dir + "/out.ply");
+  CHECK(std::count(comments.begin(), comments.end(), "pruning: decoded 260, kept 250") == 1);
+  CHECK(comments.size() == 2);
   const std::string bad =
       cat(tool, " export --ply ", dir, "/scene.ply --format ksplat --out ", dir, "/x.ksplat > ", dir, "/bad.txt 2>&1");
   CHECK(std::system(bad.c_str()) != 0);

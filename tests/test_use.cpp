@@ -136,6 +136,25 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const Gaussians g = read_ply(out + "/scene.ply");
   CHECK(g.count() > 1000);
   CHECK(fs::exists(out + "/scene.camera.json"));
+  // The PLY's header says what pruning removed, in the printed line's counts.
+  auto pruning_comment = [](const std::string& ply) {
+    for (const std::string& c : read_ply_comments(ply))
+      if (c.rfind("pruning: ", 0) == 0) return c;
+    return std::string();
+  };
+  CHECK_THAT(pruning_comment(out + "/scene.ply"), Catch::EndsWith(", kept " + std::to_string(g.count())));
+  // Pruning by contribution drops what stays faint over the source and 2 nearby views; the printed count, the PLY's
+  // comment and the Gaussians written agree (the run is the same as above up to that rule).
+  const std::string prune = predict_photo + "--prune-contribution 0.05 --prune-views 2 --out " + out +
+                            "/pruned.ply > " + out + "/pruned.txt 2>&1";
+  REQUIRE(std::system(prune.c_str()) == 0);
+  const int64_t faint = g.count() - read_ply(out + "/pruned.ply").count();
+  CHECK(faint > 0);
+  CHECK_THAT(test::read_bytes(out + "/pruned.txt"),
+             Catch::Contains(std::to_string(faint) + " below contribution 0.05 over the source and 2 nearby views"));
+  CHECK_THAT(pruning_comment(out + "/pruned.ply"),
+             Catch::Contains("low_contribution " + std::to_string(faint) + " (min_contribution 0.05, views 2)") &&
+                 Catch::EndsWith(", kept " + std::to_string(g.count() - faint)));
   // Merging writes fewer Gaussians and says how many it merged (an untrained model's Gaussians have random
   // shapes, hence any shape is allowed).
   const std::string merge = predict_photo + "--merge-cell 4 --merge-color 1 --merge-flatness 1 --merge-normal-cos 0 " +

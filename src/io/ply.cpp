@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <sstream>
 
 #include "core/error.h"
@@ -85,8 +86,12 @@ void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linea
           .contiguous();
   ISPLAT_CHECK(torch::isfinite(cols).all().item<bool>(), path, ": Gaussians have non-finite values; not written");
   std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n"
-         << "element vertex " << N << "\n";
+  header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n";
+  for (const std::string& c : options.comments) {
+    ISPLAT_CHECK(c.find_first_of("\r\n") == std::string::npos, path, ": PLY comment '", c, "' has a line break");
+    header << "comment " << c << "\n";
+  }
+  header << "element vertex " << N << "\n";
   for (int k = 0; k < 17; ++k) {
     header << "property float " << kProps[k] << "\n";
     if (k == 8)  // the higher SH bands follow the DC term in the 3DGS layout
@@ -174,6 +179,19 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   g.scales = torch::exp(out.narrow(1, 10, 3)).contiguous();
   g.quats = out.narrow(1, 13, 4).contiguous();
   return g;
+}
+
+std::vector<std::string> read_ply_comments(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, ": cannot open PLY file");
+  std::string line;
+  if (!std::getline(in, line) || line != "ply") fail(path, ": not a PLY file (no ply/end_header)");
+  std::vector<std::string> comments;
+  while (std::getline(in, line)) {
+    if (line == "end_header") return comments;
+    if (line.rfind("comment ", 0) == 0) comments.push_back(line.substr(8));
+  }
+  fail(path, ": not a PLY file (no ply/end_header)");
 }
 
 }  // namespace isplat
