@@ -41,6 +41,7 @@ struct ReportRow {
   std::map<std::string, double> stage_ms;                // means over pairs
   double peak_mb = 0;                                    // largest over pairs (NaN when not measured)
   double hole_rate = 0, crack_rate = 0, normal_deg = 0;  // means over the pairs where measured (else NaN)
+  std::map<std::string, double> prune_counts;            // means over the pairs that pruned (render/prune_counts)
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".

@@ -19,6 +19,7 @@
 #include "eval/evaluator.h"
 #include "eval/pairs.h"
 #include "eval/results_log.h"
+#include "geometry/color.h"
 #include "io/atomic_file.h"
 #include "io/jsonl.h"
 #include "metrics/metrics.h"
@@ -298,6 +299,19 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   CHECK(blur->slope.n == 30);
   CHECK(blur->slope.lo < 0);  // no trend: the interval holds 0
   CHECK(blur->slope.hi > 0);
+  // The report's sweep table puts the paper's Table 4 slope beside the LiDAR noise sweep only.
+  std::vector<ReportRow> rows;
+  for (const auto& [method, res] : sweeps)
+    for (const ReportRow& r : summarize("set", method, {}, {}, res, {})) rows.push_back(r);
+  const std::string report_dir = test::temp_dir("eval_slopes_report");
+  write_reports(report_dir, rows, {}, {}, {}, {}, slopes);
+  const std::string md = test::read_bytes(report_dir + "/report.md");
+  const size_t lidar = md.find("| lidar noise | "), blur_row = md.find("| full depth_blur_px | ");
+  REQUIRE(lidar != std::string::npos);
+  REQUIRE(blur_row != std::string::npos);
+  CHECK_THAT(md.substr(lidar, md.find('\n', lidar) - lidar),
+             Catch::EndsWith(" | -0.46 dB per % (Table 4, ETH3D, 0-5%) |"));
+  CHECK_THAT(md.substr(blur_row, md.find('\n', blur_row) - blur_row), Catch::EndsWith(" | - |"));
 }
 
 TEST_CASE("eval: perturbations have the requested strength, are deterministic, and sweep by key", "[eval]") {
@@ -351,6 +365,32 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   o.depth_edge_noise = 0.1;
   const auto moved = (perturb_source(v, o, 2).depth != v.depth).to(torch::kFloat32);
   CHECK(moved.sum().item<int64_t>() == edge_pixels);  // only the edge pixels change
+  {  // ... by the requested sigma: on stripes 8 px wide, 39 edges of 2 x 48 pixels, within 10%
+    ViewTensors stripes;
+    const auto column = torch::arange(320).to(torch::kFloat32);
+    stripes.depth = (3.0f + (column / 8).floor().remainder(2)).view({1, 320}).expand({H, 320}).contiguous();
+    stripes.valid = torch::ones({H, 320});
+    stripes.image = torch::rand({3, H, 320});
+    const auto edges = depth_edges(stripes.depth, stripes.valid) > 0;
+    const auto ratio = perturb_source(stripes, o, 2).depth / stripes.depth - 1;
+    CHECK(ratio.masked_select(edges).std().item<double>() == Approx(0.1).epsilon(0.1));
+    CHECK(ratio.masked_select(edges.logical_not()).abs().max().item<double>() == 0.0);
+  }
+  {  // every random perturbation is a function of its seed: the same seed repeats it, another seed changes it
+    std::vector<PerturbOptions> random(4);
+    random[0].depth_noise = 0.02;
+    random[1].depth_edge_noise = 0.1;
+    random[2].depth_holes = 0.2;                                 // blobs
+    random[3].depth_holes = 0.2, random[3].depth_hole_size = 0;  // scattered pixels
+    for (size_t k = 0; k < random.size(); ++k) {
+      INFO("random perturbation " << k);
+      const ViewTensors one = perturb_source(v, random[k], 21), again = perturb_source(v, random[k], 21),
+                        other = perturb_source(v, random[k], 22);
+      CHECK(torch::equal(one.depth, again.depth));
+      CHECK(torch::equal(one.valid, again.valid));
+      CHECK_FALSE((torch::equal(one.depth, other.depth) && torch::equal(one.valid, other.valid)));
+    }
+  }
   o = PerturbOptions{};
   o.depth_edge_holes = 2;
   const ViewTensors dropped = perturb_source(v, o, 0);
@@ -386,6 +426,12 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   o.exposure = 2.0;
   const auto bright = perturb_source(v, o, 0).image;
   CHECK(bright.mean().item<double>() > v.image.mean().item<double>());
+  {  // exactly twice the light where it does not clip
+    const auto lin = srgb_to_linear(v.image), lin_bright = srgb_to_linear(bright), unclipped = lin < 0.45;
+    REQUIRE(unclipped.sum().item<int64_t>() > 1000);
+    CHECK(torch::allclose(lin_bright.masked_select(unclipped), 2 * lin.masked_select(unclipped), 1e-4, 1e-6));
+    CHECK(lin_bright.masked_select(lin > 0.5).min().item<float>() == 1.0f);
+  }
   o.exposure = 1.0;
   o.jpeg_quality = 10;
   ViewTensors smooth = v;  // JPEG keeps smooth content well at high quality (noise it cannot)
@@ -589,6 +635,19 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   const std::string md = test::read_bytes(c.scoring.out + "/report.md");
   CHECK_THAT(md, Catch::Contains("Where the time goes"));
   CHECK_THAT(md, Catch::Contains("| tiny+prune@n900 | 900 -> "));
+  {  // the pruning table: what each rule removed, as the mean per pair, adding up to decoded - rendered
+    REQUIRE(pruned.prune_counts.count("low_contribution") == 1);
+    const double removed = pruned.prune_counts.at("low_opacity") + pruned.prune_counts.at("low_contribution");
+    CHECK(removed == Approx(pruned.decoded - pruned.gaussians));
+    CHECK(n.prune_counts.empty());  // a method that does not prune has no row
+    std::ostringstream row;
+    row << "| tiny+prune@n900 | 900 | " << std::llround(pruned.prune_counts.at("low_opacity")) << " | "
+        << std::llround(pruned.prune_counts.at("low_contribution")) << " | 0 | " << std::llround(pruned.gaussians)
+        << " |";
+    CHECK_THAT(md, Catch::Contains("Pruning (mean Gaussians per pair") && Catch::Contains(row.str()));
+    CHECK_THAT(md, !Catch::Contains("| tiny@n900 | 900 | 0 |"));
+    CHECK_THAT(test::read_bytes(c.scoring.out + "/report.json"), Catch::Contains("\"low_contribution\""));
+  }
   const std::string csv = test::read_bytes(c.scoring.out + "/report.csv");
   CHECK_THAT(csv, Catch::Contains("decoder_ms"));
   CHECK_THAT(csv, Catch::Contains("peak_mb"));

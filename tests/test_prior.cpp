@@ -107,6 +107,23 @@ TEST_CASE("prior: sparse prompts align a wrong-scale monocular depth", "[prior]"
   auto noisy = draw_prompts(truth, torch::ones({H, W}), 300, 0.05, 7);
   CHECK(torch::equal(noisy.narrow(1, 0, 2), prompts.narrow(1, 0, 2)));
   CHECK_FALSE(torch::allclose(noisy.select(1, 2), prompts.select(1, 2)));
+  // The sweep's two knobs have the requested effect: exactly `count` distinct pixels (all of them when fewer are
+  // valid), and multiplicative noise d(1 + eps) with eps of the requested sigma (1500 draws: within 10%).
+  for (int64_t count : {1500, 500, 100, 20}) {
+    const auto drawn = draw_prompts(truth, torch::ones({H, W}), count, 0.0, 3);
+    REQUIRE(drawn.size(0) == count);
+    const auto pixel = (drawn.select(1, 1) - 0.5) * W + (drawn.select(1, 0) - 0.5);
+    CHECK(std::get<0>(at::_unique(pixel)).numel() == count);
+  }
+  CHECK(draw_prompts(truth, torch::ones({H, W}) * (torch::rand({H, W}) < 0.01), 1500, 0.0, 3).size(0) < 100);
+  for (double sigma : {0.01, 0.03, 0.05}) {
+    const auto clean = draw_prompts(truth, torch::ones({H, W}), 1500, 0.0, 11);
+    const auto noised = draw_prompts(truth, torch::ones({H, W}), 1500, sigma, 11);
+    REQUIRE(torch::equal(noised.narrow(1, 0, 2), clean.narrow(1, 0, 2)));  // the same pixels, only z moves
+    const auto eps = noised.select(1, 2) / clean.select(1, 2) - 1;
+    CHECK(eps.std().item<double>() == Approx(sigma).epsilon(0.1));
+    CHECK(std::abs(eps.mean().item<double>()) < 4 * sigma / std::sqrt(1500.0));
+  }
   // The full prior with no monocular net densifies from the prompts alone.
   PriorOptions o;
   o.type = "sparse";
