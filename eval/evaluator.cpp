@@ -10,6 +10,7 @@
 #include "core/log.h"
 #include "core/paths.h"
 #include "core/progress.h"
+#include "core/tensor_memory.h"
 #include "data/colmap.h"
 #include "data/perturb.h"
 #include "eval/results_log.h"
@@ -22,6 +23,7 @@ namespace isplat {
 namespace fs = std::filesystem;
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
+  count_tensor_memory();  // each pair's working memory (PairResult::work_mb)
   check_dataset_names(config_.datasets);
   config_.methods = expand_sweeps(config_.methods);
   for (const auto& net : config_.scoring.lpips) {
@@ -304,6 +306,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   r.stage_ms = o.stage_ms;
   r.prune_counts = o.prune_counts;
   r.peak_mb = o.peak_mb;
+  r.work_mb = o.work_mb;
   if (o.alpha.defined()) {
     r.hole_rate = hole_rate(o.alpha, mask);
     if (const auto ref = reference_depth(tgt); ref.defined()) {

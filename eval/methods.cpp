@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/runtime.h"
+#include "core/tensor_memory.h"
 #include "data/perturb.h"
 #include "decoder/composer.h"
 #include "geometry/color.h"
@@ -29,6 +30,19 @@ torch::Tensor to_srgb(const torch::Tensor& rgb, bool linear) {
   return linear ? torch::clamp(linear_to_srgb(c), 0.0, 1.0) : c;
 }
 
+// The tensor memory a prediction and its render need: the peak of live CPU tensor bytes above those live at the start.
+class WorkMemory {
+ public:
+  WorkMemory() : live0_(live_tensor_bytes()) { reset_tensor_peak(); }
+  double mb() const {
+    return tensor_memory_counted() ? double(peak_tensor_bytes() - live0_) / (1 << 20)
+                                   : std::numeric_limits<double>::quiet_NaN();
+  }
+
+ private:
+  int64_t live0_;
+};
+
 class ModelMethod final : public Method {
  public:
   ModelMethod(const MethodOptions& o, const RenderOptions& r) : options_(o), render_(r) {
@@ -39,6 +53,7 @@ class ModelMethod final : public Method {
                        const torch::Tensor& prompts) override {
     torch::NoGradGuard g;
     const bool peak = reset_peak_memory();
+    const WorkMemory work;
     PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
     auto t0 = Clock::now();
     // Depth perturbations reach a dataset or sparse prior through the source depth (eval/evaluator); an
@@ -65,6 +80,7 @@ class ModelMethod final : public Method {
     out.gaussians = pr.kept.count();
     out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     if (peak) out.peak_mb = peak_memory_mb();
+    out.work_mb = work.mb();
     return out;
   }
   std::string describe() const override { return "checkpoint " + options_.checkpoint; }
@@ -85,6 +101,7 @@ class LiftMethod final : public Method {
   explicit LiftMethod(const RenderOptions& r) : render_(r) {}
   MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
     torch::NoGradGuard g;
+    const WorkMemory work;
     auto t0 = Clock::now();
     SamplerOptions px;
     px.mode = "pixel";
@@ -100,6 +117,7 @@ class LiftMethod final : public Method {
     out.image = to_srgb(r.rgb, true);
     out.gaussians = out.decoded = gs.count();
     out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
+    out.work_mb = work.mb();
     return out;
   }
   std::string describe() const override { return "lift: one base Gaussian per source pixel on the dataset depth"; }

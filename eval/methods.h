@@ -20,6 +20,8 @@ struct MethodOutput {
   std::map<std::string, double> stage_ms;                     // prior, sampler, encoder, decoder, composer, prune
   std::map<std::string, int64_t> prune_counts;                // what pruning did (prune_counts()), when enabled
   double peak_mb = std::numeric_limits<double>::quiet_NaN();  // process peak memory during predict + render
+  // CPU tensor memory predict + render needed beyond what was live before (core/tensor_memory; NaN when not counted)
+  double work_mb = std::numeric_limits<double>::quiet_NaN();
   torch::Tensor alpha, depth, normal;  // the render's other outputs (RenderOutput), where the method renders
   torch::Tensor median_depth;          // RenderOutput::median_depth, when the render options ask for it
 };

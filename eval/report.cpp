@@ -230,7 +230,7 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
     int64_t stab_n[3] = {0, 0, 0};
     std::map<std::string, double> stage, pruned;
     int64_t pruned_n = 0;
-    r.peak_mb = std::numeric_limits<double>::quiet_NaN();
+    r.peak_mb = r.work_mb = std::numeric_limits<double>::quiet_NaN();
     std::map<std::string, double> lp;
     std::map<std::string, int64_t> lp_n;
     int64_t psnr_n = 0;
@@ -246,6 +246,7 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
       for (int k = 0; k < 3; ++k)
         if (std::isfinite(measures[k])) stab[k] += measures[k], ++stab_n[k];
       if (std::isfinite(x.peak_mb)) r.peak_mb = std::isfinite(r.peak_mb) ? std::max(r.peak_mb, x.peak_mb) : x.peak_mb;
+      if (std::isfinite(x.work_mb)) r.work_mb = std::isfinite(r.work_mb) ? std::max(r.work_mb, x.work_mb) : x.work_mb;
       for (const auto& net : lpips_nets) {
         auto it = x.lpips.find(net);
         if (it != x.lpips.end() && std::isfinite(it->second)) lp[net] += it->second, ++lp_n[net];
@@ -566,11 +567,13 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
       md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 0) << " | " << fmt(r.gaussians, 0) << " |\n";
     }
     md << "\nWhere the time goes (ms per pair, all bins; Gaussians decoded -> rendered after pruning; peak = "
-          "the process's resident peak during one prediction and render):\n\n| method | Gaussians |";
+          "the process's resident peak during one prediction and render, which keeps what earlier pairs and methods "
+          "left resident; work = the CPU tensor memory one prediction and render needed beyond what was live before, "
+          "largest over pairs, which is what a budget changes):\n\n| method | Gaussians |";
     for (const char* st : kStages) md << " " << st << " |";
-    md << " infer | render | peak MB |\n|---|---|";
+    md << " infer | render | peak MB | work MB |\n|---|---|";
     for (size_t i = 0; i < std::size(kStages); ++i) md << "---|";
-    md << "---|---|---|\n";
+    md << "---|---|---|---|\n";
     for (const auto& r : rows) {
       if (r.dataset != d || r.bin != "all") continue;
       md << "| " << r.method << " | " << fmt(r.decoded, 0)
@@ -579,7 +582,8 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
                  : "")
          << " |";
       for (const char* st : kStages) md << " " << (r.stage_ms.count(st) ? fmt(r.stage_ms.at(st), 1) : "-") << " |";
-      md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 1) << " | " << fmt(r.peak_mb, 0) << " |\n";
+      md << " " << fmt(r.infer_ms, 0) << " | " << fmt(r.render_ms, 1) << " | " << fmt(r.peak_mb, 0) << " | "
+         << fmt(r.work_mb, 1) << " |\n";
     }
     write_pruning_table(md, rows, d);
     md << "\nStability: holes = masked pixels with rendered alpha < 0.5; cracks = neighbour pairs whose "
@@ -650,7 +654,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
   csv.header = {"dataset", "method", "bin", "pairs", "requested", "psnr", "ssim"};
   for (const auto& n : nets) csv.header.push_back("lpips_" + n);
   for (const char* h :
-       {"infer_ms", "render_ms", "gaussians", "decoded", "peak_mb", "hole_rate", "crack_rate", "normal_deg"})
+       {"infer_ms", "render_ms", "gaussians", "decoded", "peak_mb", "work_mb", "hole_rate", "crack_rate", "normal_deg"})
     csv.header.push_back(h);
   for (const char* st : kStages) csv.header.push_back(std::string(st) + "_ms");
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
@@ -672,6 +676,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     row.push_back(fmt(r.gaussians, 0));
     row.push_back(fmt(r.decoded, 0));
     row.push_back(fmt(r.peak_mb, 1));
+    row.push_back(fmt(r.work_mb, 2));
     row.push_back(fmt(r.hole_rate, 5));
     row.push_back(fmt(r.crack_rate, 5));
     row.push_back(fmt(r.normal_deg, 3));
@@ -682,6 +687,7 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     j["gaussians"] = num(r.gaussians);
     j["decoded"] = num(r.decoded);
     j["peak_mb"] = num(r.peak_mb);
+    j["work_mb"] = num(r.work_mb);
     j["stage_ms"] = r.stage_ms;
     if (!r.prune_counts.empty()) j["prune"] = r.prune_counts;
     j["hole_rate"] = num(r.hole_rate);

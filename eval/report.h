@@ -24,6 +24,7 @@ struct PairResult {
   std::map<std::string, double> stage_ms;       // inference stages: prior, sampler, encoder, decoder, composer, prune
   std::map<std::string, int64_t> prune_counts;  // what pruning did (render/prune prune_counts), when enabled
   double peak_mb = std::numeric_limits<double>::quiet_NaN();
+  double work_mb = std::numeric_limits<double>::quiet_NaN();  // tensor memory predict + render needed (MethodOutput)
   // Stability (metrics/stability): NaN where the method does not render or the target has no depth.
   double hole_rate = std::numeric_limits<double>::quiet_NaN();
   double crack_rate = std::numeric_limits<double>::quiet_NaN();
@@ -40,6 +41,7 @@ struct ReportRow {
   double infer_ms = 0, render_ms = 0, gaussians = 0, decoded = 0;
   std::map<std::string, double> stage_ms;                // means over pairs
   double peak_mb = 0;                                    // largest over pairs (NaN when not measured)
+  double work_mb = 0;                                    // largest over pairs (NaN when not measured)
   double hole_rate = 0, crack_rate = 0, normal_deg = 0;  // means over the pairs where measured (else NaN)
   std::map<std::string, double> prune_counts;            // means over the pairs that pruned (render/prune_counts)
 };

@@ -22,6 +22,7 @@ nlohmann::json result_json(const PairResult& r) {
                       {"decoded", r.decoded},
                       {"mask_fraction", r.mask_fraction},
                       {"peak_mb", num(r.peak_mb)},
+                      {"work_mb", num(r.work_mb)},
                       {"hole_rate", num(r.hole_rate)},
                       {"crack_rate", num(r.crack_rate)},
                       {"normal_deg", num(r.normal_deg)},
@@ -74,6 +75,7 @@ PairResult result_from_json(const nlohmann::json& j) {
     v = j.at(key).get<double>();
     check_range(key, v, 0, hi);
   };
+  optional("work_mb", r.work_mb, 1e8);
   optional("hole_rate", r.hole_rate, 1);
   optional("crack_rate", r.crack_rate, 1);
   optional("normal_deg", r.normal_deg, 180);

@@ -2,6 +2,8 @@
 #include <catch2/catch.hpp>
 
 #include <ATen/Parallel.h>
+#include <c10/core/CPUAllocator.h>
+#include <torch/torch.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/runtime.h"
+#include "core/tensor_memory.h"
 #include "support/test_util.h"
 
 using namespace isplat;
@@ -95,4 +98,38 @@ TEST_CASE("start-up: executables shorten OpenMP's idle spin, unless the user cho
              Catch::Contains("OpenMP wait     OMP_WAIT_POLICY=(unset) GOMP_SPINCOUNT=300000 ("));
   // This test program links the same start-up, so it runs with a choice too.
   CHECK((std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr));
+}
+
+TEST_CASE("tensor memory: live CPU tensor bytes and their peak, exactly", "[core]") {
+  count_tensor_memory();
+  count_tensor_memory();  // idempotent
+  REQUIRE(tensor_memory_counted());
+  const int64_t live0 = live_tensor_bytes();
+  reset_tensor_peak();
+  CHECK(peak_tensor_bytes() == live0);
+  {
+    torch::Tensor a = torch::ones({1000, 250});  // 1,000,000 bytes
+    CHECK(live_tensor_bytes() == live0 + 1000000);
+    torch::Tensor b = a + 1;  // a second block of the same size while the first is live
+    CHECK(live_tensor_bytes() == live0 + 2000000);
+    CHECK(peak_tensor_bytes() >= live0 + 2000000);  // plus the add's few bytes of scalar temporaries
+    CHECK(peak_tensor_bytes() < live0 + 2000000 + 1024);
+    CHECK(reinterpret_cast<uintptr_t>(b.data_ptr()) % 64 == 0);  // as aligned as c10's own blocks
+    CHECK(b.data_ptr<float>()[249999] == 2.0f);
+  }
+  CHECK(live_tensor_bytes() == live0);            // both freed
+  CHECK(peak_tensor_bytes() >= live0 + 2000000);  // the peak stays
+  reset_tensor_peak();
+  CHECK(peak_tensor_bytes() == live0);
+  // Empty tensors, resizing and the raw interface go through the same counter.
+  torch::Tensor e = torch::empty({0});
+  CHECK(live_tensor_bytes() == live0);
+  e.resize_({100});
+  CHECK(live_tensor_bytes() == live0 + 400);
+  e = torch::Tensor();
+  CHECK(live_tensor_bytes() == live0);
+  void* raw = c10::GetCPUAllocator()->raw_allocate(4096);
+  CHECK(live_tensor_bytes() == live0 + 4096);
+  c10::GetCPUAllocator()->raw_deallocate(raw);
+  CHECK(live_tensor_bytes() == live0);
 }

@@ -631,6 +631,16 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   for (const char* stage : {"prior", "sampler", "encoder", "decoder", "composer"}) CHECK(n.stage_ms.count(stage) == 1);
   CHECK(std::isfinite(n.peak_mb));
   CHECK(n.peak_mb > 10);
+  // Working memory: what a prediction and its render needed, more for more supports, and 0 < work < the peak.
+  const ReportRow& detail = all.at("tiny@detail1");
+  INFO("work MB: px0.25 " << px.work_mb << " (" << px.decoded << "), n900 " << n.work_mb << ", detail1 "
+                          << detail.work_mb << " (" << detail.decoded << ")");
+  CHECK(n.work_mb > 0);
+  CHECK(n.work_mb < n.peak_mb);
+  CHECK(all.at("lift~depth_scale1").work_mb > 0);
+  REQUIRE(detail.decoded > 2 * n.decoded);
+  CHECK(detail.work_mb > n.work_mb);
+  CHECK_THAT(test::read_bytes(c.scoring.out + "/report.csv"), Catch::Contains("work_mb"));
   CHECK(fs::exists(fs::path(c.scoring.out) / "speed_quality.png"));
   const std::string md = test::read_bytes(c.scoring.out + "/report.md");
   CHECK_THAT(md, Catch::Contains("Where the time goes"));
