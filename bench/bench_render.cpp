@@ -127,10 +127,32 @@ void run(const Case& cs) {
   const double build_ms = now_ms() - t_build;
   const double rss0 = resident_mb();  // also resets the peak, so each case reports its own
 
-  // The first render of this case: in a fresh process (--only NAME), every buffer is new memory.
+  // Forward + backward as the trainer renders (no loss reads the normal map): an L1 loss on rgb plus light depth and
+  // alpha terms, or (rgb_only) the L1 loss alone without the depth map, as the recipe trains.
+  Gaussians p = g;
+  for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
+    *t = t->clone().requires_grad_(true);
+  const auto target = torch::full({3, cs.H, cs.W}, 0.5f);
+  auto forward_backward = [&](bool rgb_only) {
+    RenderOptions training;
+    training.normals = false;
+    training.depth_map = !rgb_only;
+    for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
+      t->mutable_grad() = torch::Tensor();
+    const double t0 = now_ms();
+    const RenderOutput out = render(p, cam, training);
+    auto loss = (out.rgb - target).abs().mean();
+    if (!rgb_only) loss = loss + 0.01 * out.depth.mean() + 0.1 * out.alpha.mean();
+    loss.backward();
+    return now_ms() - t0;
+  };
+
+  // The first render and the first forward + backward of this case: in a fresh process (--only NAME), every buffer
+  // is new memory.
   double first = now_ms();
   render(g, cam);
   first = now_ms() - first;
+  const double first_fb = cs.bwd_runs > 0 ? forward_backward(false) : NAN;
 
   // Per-phase times through the kernels (the same calls render() makes), and the buffer sizes.
   const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, cs.W, cs.H);
@@ -179,26 +201,9 @@ void run(const Case& cs) {
   // Forward + backward as the trainer renders (no loss reads the normal map), in alternate runs: an L1 loss on rgb
   // plus light depth and alpha terms (fb), and the L1 loss alone without the depth map (fb_rgb, the recipe's losses).
   std::vector<double> fb, fb_rgb;
-  if (cs.bwd_runs > 0) {
-    Gaussians p = g;
-    for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
-      *t = t->clone().requires_grad_(true);
-    const auto target = torch::full({3, cs.H, cs.W}, 0.5f);
-    RenderOptions training;
-    training.normals = false;
-    RenderOptions training_rgb = training;
-    training_rgb.depth_map = false;
-    for (int r = 0; r < 2 * cs.bwd_runs; ++r) {
-      const bool rgb_only = r % 2 == 1;
-      for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
-        t->mutable_grad() = torch::Tensor();
-      const double t0 = now_ms();
-      const RenderOutput out = render(p, cam, rgb_only ? training_rgb : training);
-      auto loss = (out.rgb - target).abs().mean();
-      if (!rgb_only) loss = loss + 0.01 * out.depth.mean() + 0.1 * out.alpha.mean();
-      loss.backward();
-      (rgb_only ? fb_rgb : fb).push_back(now_ms() - t0);
-    }
+  for (int r = 0; r < 2 * cs.bwd_runs; ++r) {
+    const bool rgb_only = r % 2 == 1;
+    (rgb_only ? fb_rgb : fb).push_back(forward_backward(rgb_only));
   }
   const double peak_all = peak_memory_mb();
 
@@ -214,7 +219,8 @@ void run(const Case& cs) {
             << (cs.bwd_runs ? peak_all : NAN) << " | " << std::setw(6) << rss0 << " | " << std::setw(6) << buffers_fwd
             << " | " << std::setw(6) << buffers_bwd << " | " << std::setw(6) << build_ms / 1000 << " | " << std::setw(6)
             << stat(c_fwd) << " | " << std::setw(6) << stat(c_bwd) << " | " << std::setw(8)
-            << (cs.bwd_runs ? b_rgb : NAN) << " | " << std::setw(8) << f_median << " |" << std::endl;
+            << (cs.bwd_runs ? b_rgb : NAN) << " | " << std::setw(8) << f_median << " | " << std::setw(9) << first_fb
+            << " |" << std::endl;
 }
 
 }  // namespace
@@ -255,7 +261,8 @@ int main(int argc, char** argv) {
         << statistic << " of timed runs (ms); float32; times exclude scene building\n"
         << "freed memory is kept for reuse (as in every executable); MALLOC_MMAP_MAX_=65536 in the environment "
            "gives glibc's default instead\n"
-        << "cols: first = the case's first render() (cold in a fresh process: --only NAME); fwd = render(); fwd+bwd = "
+        << "cols: first / first f+b = the case's first render() and first forward+backward (cold in a fresh "
+           "process: --only NAME); fwd = render(); fwd+bwd = "
            "render without the normal map (as in training) + L1 loss with light depth and alpha terms + backward "
            "(f+b rgb: the L1 loss alone and no depth map, as the recipe trains);\n      fwd med = fwd with the median "
            "depth too (the evaluator's render under scoring.crack_depth = median); Misect/s = "
@@ -270,7 +277,7 @@ int main(int argc, char** argv) {
         << "| case                 |        N |     image |  visible |    isects | first ms |   fwd ms | f+b ms   | "
            "Misect/s "
            "|  proj |   bin |    rast |    rbwd |  pbwd |   peakF |  peakFB |   rss0 |   bufF |   bufB | build s | "
-           "cpuF   | cpuB   | f+b rgb  | fwd med  |\n";
+           "cpuF   | cpuB   | f+b rgb  | fwd med  | first f+b |\n";
     const int k = int(std::max<int64_t>(1, runs_scale));
     std::vector<Case> cases = {{"20k", 20000, 256, 192, 1.0, 11 * k, 11 * k},
                                {"20k large splats", 20000, 256, 192, 3.0, 11 * k, 11 * k},
