@@ -148,11 +148,13 @@ void run(const Case& cs) {
   };
 
   // The first render and the first forward + backward of this case: in a fresh process (--only NAME), every buffer
-  // is new memory.
+  // is new memory (for the forward + backward, the backward's: its forward follows the first render).
   double first = now_ms();
   render(g, cam);
   first = now_ms() - first;
-  const double first_fb = cs.bwd_runs > 0 ? forward_backward(false) : NAN;
+  const double first_fb = cs.bwd_runs > 0 ? forward_backward(false) : NAN;  // its backward is the process's first
+  for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities}) t->mutable_grad() = torch::Tensor();
+  reset_peak_memory();  // so peakF stays the forward runs' peak, as before this column
 
   // Per-phase times through the kernels (the same calls render() makes), and the buffer sizes.
   const splat::CameraParams cp = splat::camera_params(cam.K, cam.T_cw, cs.W, cs.H);

@@ -62,7 +62,7 @@ int run_export(int argc, char** argv) {
     PlyOptions options;
     options.sh_degree = 3;
     for (const std::string& c : read_ply_comments(ply))  // e.g. what pruning removed; the writer adds its own line
-      if (c.rfind("written by InfiniSplat-C++", 0) != 0) options.comments.push_back(c);
+      if (c != kPlyWriterComment) options.comments.push_back(c);
     write_ply(out, g, false, options);
   } else if (format == "html") {
     ViewerCamera camera = source_viewer_camera(g, fov);

@@ -10,7 +10,6 @@
 #include "core/log.h"
 #include "core/paths.h"
 #include "core/progress.h"
-#include "core/tensor_memory.h"
 #include "data/colmap.h"
 #include "data/perturb.h"
 #include "eval/results_log.h"
@@ -23,7 +22,6 @@ namespace isplat {
 namespace fs = std::filesystem;
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
-  count_tensor_memory();  // each pair's working memory (PairResult::work_mb)
   check_dataset_names(config_.datasets);
   config_.methods = expand_sweeps(config_.methods);
   for (const auto& net : config_.scoring.lpips) {

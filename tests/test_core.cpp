@@ -100,6 +100,15 @@ TEST_CASE("start-up: executables shorten OpenMP's idle spin, unless the user cho
   CHECK((std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr));
 }
 
+TEST_CASE("start-up: CPU tensor memory is counted from the first tensor on", "[core]") {
+  // core/startup.cpp installs the counting allocator before main (ctest runs each case in a fresh process).
+  CHECK(tensor_memory_counted());
+  CHECK(c10::GetCPUAllocator() != c10::GetDefaultCPUAllocator());
+  const int64_t before = live_tensor_bytes();
+  const torch::Tensor t = torch::empty({256});
+  CHECK(live_tensor_bytes() == before + 1024);
+}
+
 TEST_CASE("tensor memory: live CPU tensor bytes and their peak, exactly", "[core]") {
   count_tensor_memory();
   count_tensor_memory();  // idempotent

@@ -5,6 +5,8 @@
 #include <c10/core/CPUAllocator.h>
 #include <c10/core/impl/alloc_cpu.h>
 
+#include <c10/core/alignment.h>
+
 #include <atomic>
 #include <mutex>
 
@@ -16,7 +18,8 @@ std::atomic<bool> g_tensor_counting{false};
 
 // Each block carries its size in a header of one alignment unit, so the data stays as aligned as c10's own blocks
 // and the pointer is its own context (raw_allocate works).
-constexpr size_t kCountedHeader = 64;
+constexpr size_t kCountedHeader = c10::gAlignment;
+static_assert(kCountedHeader >= sizeof(int64_t) && kCountedHeader % alignof(int64_t) == 0);
 
 void raise_tensor_peak(int64_t live) {
   int64_t peak = g_tensor_peak.load(std::memory_order_relaxed);
@@ -49,8 +52,8 @@ struct CountingCpuAllocator final : c10::Allocator {
 void count_tensor_memory() {
   static std::once_flag once;
   std::call_once(once, [] {
-    static CountingCpuAllocator allocator;
-    c10::SetCPUAllocator(&allocator, /*priority=*/1);
+    // Never destroyed: c10 keeps the pointer, and frees during exit still reach it.
+    c10::SetCPUAllocator(new CountingCpuAllocator, /*priority=*/1);
     g_tensor_counting = true;
   });
 }

@@ -5,8 +5,10 @@
 
 namespace isplat {
 
-// Makes every CPU tensor allocated from now on counted (idempotent; thread-safe). Tensors allocated before are never
-// counted, nor are their frees. It stays installed for the life of the process.
+// Makes every CPU tensor allocated from now on counted (idempotent). Tensors allocated before are never counted, nor
+// are their frees. It stays installed for the life of the process. Every executable installs it at start-up
+// (core/startup.cpp), before any tensor exists: oneDNN frees its buffers through whichever CPU allocator is current,
+// so swapping allocators while such a buffer lives would hand it to the wrong one.
 void count_tensor_memory();
 bool tensor_memory_counted();
 

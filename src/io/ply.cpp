@@ -86,7 +86,7 @@ void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linea
           .contiguous();
   ISPLAT_CHECK(torch::isfinite(cols).all().item<bool>(), path, ": Gaussians have non-finite values; not written");
   std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment written by InfiniSplat-C++ (colours: SH DC of sRGB)\n";
+  header << "ply\nformat binary_little_endian 1.0\ncomment " << kPlyWriterComment << "\n";
   for (const std::string& c : options.comments) {
     ISPLAT_CHECK(c.find_first_of("\r\n") == std::string::npos, path, ": PLY comment '", c, "' has a line break");
     header << "comment " << c << "\n";

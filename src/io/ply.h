@@ -11,6 +11,8 @@
 namespace isplat {
 
 constexpr double kShC0 = 0.28209479177387814;
+// The comment line write_ply always writes first (without the leading "comment ").
+constexpr char kPlyWriterComment[] = "written by InfiniSplat-C++ (colours: SH DC of sRGB)";
 
 // What the writer adds beyond the DC layout. Some viewers only open files whose SH degree is 3, so
 // sh_degree > 0 writes the f_rest_* properties (3 * ((d + 1)^2 - 1) of them, 45 for degree 3) as zeros

@@ -178,12 +178,12 @@ ISPLAT_INLINE void fwd_init(int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* s
 
 // Composites one tile's depth-sorted records front to back. Gaussian-major: each Gaussian visits only the
 // 8-pixel groups of its box that it may hit; per pixel the order, skip rules and stop rule are those of the
-// forward model. The AVX2 twin below has the same loops. kChannels: 7 composites colour, depth and normal, 4
-// leaves the normal out, 3 the depth too, 0 composites nothing (a probe needs only T); kPlane: plane depth
-// (depth_plane). kProbe max_weight: probe[i] receives the largest weight α·T entry i reaches in this tile (the
-// contribution measure); entries never reached keep their value. kProbe median_depth: probe[p] (tile-local pixel, 0
-// beforehand) receives the depth of the first Gaussian after which the pixel's transmittance is 0.5 or less, and the
-// pixel stops there (its sums are then not the forward's).
+// forward model. The AVX2 and AVX-512 loops below visit the same pixels; they find a Gaussian's groups for all 16 rows
+// at once (tile_rows). kChannels: 7 composites colour, depth and normal, 4 leaves the normal out, 3 the depth too, 0
+// composites nothing (a probe needs only T); kPlane: plane depth (depth_plane). kProbe max_weight: probe[i] receives
+// the largest weight α·T entry i reaches in this tile (the contribution measure); entries never reached keep their
+// value. kProbe median_depth: probe[p] (tile-local pixel, 0 beforehand) receives the depth of the first Gaussian after
+// which the pixel's transmittance is 0.5 or less, and the pixel stops there (its sums are then not the forward's).
 template <class T, int kChannels, bool kPlane, Probe kProbe = Probe::none>
 void fwd_tile_generic(const T* local, int64_t count, int64_t x0, int64_t y0, int64_t x1, int64_t y1, T* st,
                       int32_t* last, const CameraParams& cam, T* probe = nullptr) {

@@ -213,7 +213,8 @@ struct GroupLast {
   }
 };
 
-// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit and are live, in row-major order.
+// The groups of rows [ys, ye) × lane groups [g0, g1) that may be hit and are live, in row-major order (the portable
+// loops'; the vector loops use avx2_tile_rows / tile_rows, which cull narrow rows too).
 // Branch-free compaction (each candidate is written, the count advances only if it passes), so no
 // mispredictions. `y0` is the tile's first row, so row py is bit py − y0 of `live`.
 template <class T>
