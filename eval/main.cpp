@@ -5,9 +5,11 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parse.h"
+#include "core/tensor_memory.h"
 #include "eval/evaluator.h"
 
 int main(int argc, char** argv) {
+  isplat::count_tensor_memory();  // first, before any tensor (core/tensor_memory.h): each pair's work MB
   using namespace isplat;
   return run_main("infinisplat-eval", [&] {
     EvalConfig config;

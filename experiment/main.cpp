@@ -5,9 +5,11 @@
 #include "core/app.h"
 #include "core/error.h"
 #include "core/parse.h"
+#include "core/tensor_memory.h"
 #include "experiment/experiment.h"
 
 int main(int argc, char** argv) {
+  isplat::count_tensor_memory();  // first, before any tensor (core/tensor_memory.h): each pair's work MB
   using namespace isplat;
   return run_main("infinisplat-experiment", [&] {
     ExperimentConfig config;

@@ -3,7 +3,10 @@
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
 
+#include "core/tensor_memory.h"
+
 int main(int argc, char* argv[]) {
+  isplat::count_tensor_memory();  // first, before any tensor, as infinisplat-eval does (core/tensor_memory.h)
   Catch::Session session;
   if (int rc = session.applyCommandLine(argc, argv)) return rc;
   auto& config = session.configData();

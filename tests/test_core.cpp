@@ -100,8 +100,8 @@ TEST_CASE("start-up: executables shorten OpenMP's idle spin, unless the user cho
   CHECK((std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr));
 }
 
-TEST_CASE("start-up: CPU tensor memory is counted from the first tensor on", "[core]") {
-  // core/startup.cpp installs the counting allocator before main (ctest runs each case in a fresh process).
+TEST_CASE("tensor memory: the test binary counts from its first tensor on, as infinisplat-eval does", "[core]") {
+  // catch_main.cpp installs the counting allocator first thing (ctest runs each case in a fresh process).
   CHECK(tensor_memory_counted());
   CHECK(c10::GetCPUAllocator() != c10::GetDefaultCPUAllocator());
   const int64_t before = live_tensor_bytes();

@@ -1,5 +1,4 @@
-// Start-up, before any library initializes: OpenMP's idle workers spin briefly, then sleep (GOMP_SPINCOUNT); and CPU
-// tensor memory is counted from the first tensor on (core/tensor_memory.h).
+// Start-up, before any library initializes: OpenMP's idle workers spin briefly, then sleep (GOMP_SPINCOUNT).
 //
 // Why: libgomp's workers spin for about 3 ms (300,000 spins) after every parallel region by default. On a 2-core
 // machine that spinning takes the core OpenBLAS's worker needs for the matmul that follows, so every GEMM after an
@@ -17,8 +16,6 @@
 #include <alloca.h>
 #include <string.h>
 #include <unistd.h>
-
-#include "core/tensor_memory.h"
 
 namespace {
 
@@ -51,7 +48,3 @@ void shorten_openmp_spin(int /*argc*/, char** argv, char** envp) {
 // Functions in .preinit_array run before the constructors of every shared library, libgomp's included.
 __attribute__((section(".preinit_array"), used)) static void (*const isplat_preinit)(int, char**,
                                                                                      char**) = &shorten_openmp_spin;
-
-// Count CPU tensor memory from the first tensor on (core/tensor_memory.h says why it must be this early); LibTorch's
-// shared libraries have initialized by the time this executable's static objects are.
-[[maybe_unused]] const bool kTensorMemoryCounted = (isplat::count_tensor_memory(), true);

@@ -6,9 +6,10 @@
 namespace isplat {
 
 // Makes every CPU tensor allocated from now on counted (idempotent). Tensors allocated before are never counted, nor
-// are their frees. It stays installed for the life of the process. Every executable installs it at start-up
-// (core/startup.cpp), before any tensor exists: oneDNN frees its buffers through whichever CPU allocator is current,
-// so swapping allocators while such a buffer lives would hand it to the wrong one.
+// are their frees. It stays installed for the life of the process. Call it first thing in main(), before any tensor
+// exists: oneDNN frees its buffers through whichever CPU allocator is current, so swapping allocators while such a
+// buffer lives would hand it to the wrong one. The executables that report working memory call it (infinisplat-eval,
+// infinisplat-experiment, the tests); the others keep LibTorch's allocator untouched.
 void count_tensor_memory();
 bool tensor_memory_counted();
 
