@@ -113,12 +113,23 @@ ISPLAT_INLINE T neg_power(const Splat<T>& s, const Row<T>& r, T dx) {
   return madd(madd(s.a2, dx, r.nb), dx, r.nc);
 }
 
+// The dx of the first pixel of the 8-pixel group from column xb; its last is this + kLanes − 1.
+template <class T>
+ISPLAT_INLINE T group_dx0(const Splat<T>& s, int64_t xb) {
+  return (T(xb) + T(0.5)) - s.u;
+}
+
+// Bit r − y0 set for each tile row r in [ys, ye): the rows of a Gaussian's pixel box (tile rows y0 .. y0 + 15).
+ISPLAT_INLINE unsigned box_rows(int64_t y0, int64_t ys, int64_t ye) {
+  return ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
+}
+
 // Whether the 8 pixels from column xb can pass the cut: the row's power is a convex quadratic in dx, so its
 // minimum over the group's span is at beta·dy clamped to the span. Conservative by kSpanMargin; the pixel
 // loops make the exact decision.
 template <class T>
 ISPLAT_INLINE bool group_may_hit(const Splat<T>& s, const Row<T>& r, int64_t xb) {
-  const T lo = (T(xb) + T(0.5)) - s.u, hi = lo + T(kLanes - 1);
+  const T lo = group_dx0(s, xb), hi = lo + T(kLanes - 1);
   const T dx = std::min(std::max(s.beta * r.dy, lo), hi);
   return neg_power(s, r, dx) >= s.ncut_wide;
 }
@@ -471,12 +482,12 @@ ISPLAT_AVX2 void avx2_tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, i
                                 int64_t g1, const LiveGroups& live, TileRows& t) {
   __m256 dy[2];
   avx2_row_terms(s, y0, t, dy);
-  const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
+  const unsigned rows = box_rows(y0, ys, ye);
   const __m256 beta = _mm256_set1_ps(s.beta), a2 = _mm256_set1_ps(s.a2), ncut = _mm256_set1_ps(s.ncut_wide);
   for (int g = 0; g < 2; ++g) {
     t.groups[g] = 0;
     if (g < g0 || g >= g1) continue;
-    const float lo = (float(int32_t(x0) + g * kLanes) + 0.5f) - s.u, hi = lo + float(kLanes - 1);
+    const float lo = group_dx0(s, x0 + g * kLanes), hi = lo + float(kLanes - 1);
     unsigned may = 0;
     for (int h = 0; h < 2; ++h) {
       const __m256 dx =

@@ -73,12 +73,12 @@ ISPLAT_AVX512 __m512 row_terms(const Splat<float>& s, int64_t y0, TileRows& t) {
 ISPLAT_AVX512 void tile_rows(const Splat<float>& s, int64_t x0, int64_t y0, int64_t ys, int64_t ye, int64_t g0,
                              int64_t g1, const LiveGroups& live, TileRows& t) {
   const __m512 dy = row_terms(s, y0, t), nb = _mm512_load_ps(t.nb), nc = _mm512_load_ps(t.nc);
-  const unsigned rows = ((1u << (ye - y0)) - 1) & ~((1u << (ys - y0)) - 1);
+  const unsigned rows = box_rows(y0, ys, ye);
   const __m512 at_min = _mm512_mul_ps(_mm512_set1_ps(s.beta), dy), a2 = _mm512_set1_ps(s.a2);
   for (int g = 0; g < 2; ++g) {
     t.groups[g] = 0;
     if (g < g0 || g >= g1) continue;
-    const float lo = (float(int32_t(x0) + g * kLanes) + 0.5f) - s.u, hi = lo + float(kLanes - 1);
+    const float lo = group_dx0(s, x0 + g * kLanes), hi = lo + float(kLanes - 1);
     const __m512 dx = _mm512_min_ps(_mm512_max_ps(at_min, _mm512_set1_ps(lo)), _mm512_set1_ps(hi));
     const __m512 q = _mm512_fmadd_ps(_mm512_fmadd_ps(a2, dx, nb), dx, nc);
     t.groups[g] = rows & live.half[g] & unsigned(_mm512_cmp_ps_mask(q, _mm512_set1_ps(s.ncut_wide), _CMP_GE_OQ));
