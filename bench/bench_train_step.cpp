@@ -16,6 +16,7 @@
 #include "core/parse.h"
 #include "core/progress.h"
 #include "core/runtime.h"
+#include "core/weights.h"
 #include "data/synth/generate.h"
 #include "train/trainer.h"
 
@@ -35,11 +36,12 @@ int bench(std::string root, const std::string& config_path) {
     root = generated_hypersim_root(g.out);
   }
   set_log_level(LogLevel::Warn);
-  const std::string weights = std::string(ISPLAT_SOURCE_DIR) + "/weights/squeezenet1_1_features.safetensors";
   auto config =
       load_config<TrainConfig>(config_path, {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
-                                             "train.out=" + (tmp / "run").string(), "train.val_every=100000",
-                                             "loss.perceptual_weights=" + weights});
+                                             "train.out=" + (tmp / "run").string(), "train.val_every=100000"});
+  if (find_weights_file(config.loss.perceptual_weights).empty())
+    std::fprintf(stderr, "bench_train_step: no perceptual weights, the step is timed without that term (%s)\n",
+                 missing_weights_hint().c_str());
   Trainer trainer(config);
   std::map<std::string, std::vector<double>> t;
   const int steps = 6;

@@ -13,6 +13,7 @@ std::map<std::string, Command> all_commands() {
       {"render", {"novel views of a PLY: orbit, dolly or a camera path, as PNG frames and MP4", run_render}},
       {"eval-depth",
        {"AbsRel and delta<1.25 of depth priors against datasets' depth, per depth range", run_eval_depth}},
+      {"weights", {"where the pretrained weights are looked for, and which were found", run_weights}},
   };
 }
 

@@ -20,5 +20,6 @@ int run_render(int argc, char** argv);
 int run_export_onnx(int argc, char** argv);
 int run_export(int argc, char** argv);
 int run_eval_depth(int argc, char** argv);
+int run_weights(int argc, char** argv);
 
 }  // namespace isplat::cli

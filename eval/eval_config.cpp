@@ -141,7 +141,8 @@ void ScoringOptions::visit(ConfigVisitor& v) {
   v.field("lpips", lpips, "LPIPS variants to report (squeeze | alex | vgg); unavailable ones are reported as n/a");
   v.field("weights_dir", weights_dir,
           "folder with LPIPS backbones (<net>_features.safetensors) and heads "
-          "(lpips_v0.1_<net>_lin.safetensors)");
+          "(lpips_v0.1_<net>_lin.safetensors); empty = looked up ($INFINISPLAT_WEIGHTS, the checkout's weights/, "
+          "~/.cache/infinisplat/weights)");
   v.field("mask_radius", mask_radius, "radius of the morphological closing of the projected mask, pixels",
           Range::at_least(0));
   v.field("examples", examples, "example panels (source, target, prediction, mask) per dataset and method",

@@ -48,7 +48,7 @@ void check_dataset_names(const std::vector<EvalDatasetOptions>& datasets);
 struct ScoringOptions {
   std::string out = "out/eval";
   std::vector<std::string> lpips = {"squeeze", "alex", "vgg"};
-  std::string weights_dir = "weights";  // LPIPS backbones + heads (shipped in weights/)
+  std::string weights_dir;  // LPIPS backbones + heads; "" = the weights lookup (core/weights.h)
   int64_t mask_radius = 2;
   int64_t examples = 4;            // example panels saved per dataset and method
   int64_t gallery = 0;             // failure gallery: the worst pairs by PSNR and by hole rate, per dataset and method

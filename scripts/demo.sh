@@ -16,6 +16,11 @@ scripts/setup.sh
 scripts/build.sh
 mkdir -p "$out"
 "$bin/infinisplat" version | tee "$out/version.txt"
+if ! "$bin/infinisplat" weights >"$out/weights.txt"; then
+  echo
+  echo "NOTE: no pretrained weights found, so training runs without the perceptual term and the report gives LPIPS"
+  echo "      as n/a. Everything else runs. To get them: scripts/get_weights.sh (see weights/README.md)."
+fi
 
 stamp "2. synthetic datasets (Hypersim layout for training; COLMAP and nerfstudio layouts for evaluation)"
 if [ ! -f "$out/data/hypersim/metadata_images_split_scene_v1.csv" ]; then

@@ -10,6 +10,8 @@ PACKAGES=(
   libbenchmark-dev libopenblas0-pthread clang-format
   libgloo-dev  # Gloo headers for c10d ProcessGroupGloo (data-parallel training)
   chromium  # opens the exported HTML viewer headless in the tests
+  python3-torch  # scripts/get_weights.sh converts the published torch.save weights with torch.load
+  curl  # scripts/get_weights.sh downloads them
 )
 
 need_root() {

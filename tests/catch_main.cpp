@@ -12,5 +12,6 @@ int main(int argc, char* argv[]) {
   auto& config = session.configData();
   config.warnings =
       static_cast<Catch::WarnAbout::What>(config.warnings | Catch::WarnAbout::NoAssertions | Catch::WarnAbout::NoTests);
-  return session.run();
+  const int rc = session.run();
+  return rc == 77 ? 1 : rc;  // 77 is ctest's "skipped" (tests/support/test_util.h): a failure must not read as it
 }

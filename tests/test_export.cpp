@@ -32,26 +32,17 @@ torch::Tensor reference(InfiniSplat& m, const torch::Tensor& image, const torch:
   const auto f = m->encoder->forward(image);
   return m->decode(f, uv, W, H);
 }
-}  // namespace
 
-TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Runtime", "[export][onnx]") {
+struct Variant {
+  const char* name;
+  std::function<void(ModelOptions&)> set;
+};
+
+// Each variant exported, checked, and run in ONNX Runtime against LibTorch.
+void check_onnx_variants(const std::vector<Variant>& variants) {
   torch::manual_seed(0);
   const int64_t W = 64, H = 48;
   const auto dir = test::temp_dir("onnx");
-  struct Variant {
-    const char* name;
-    std::function<void(ModelOptions&)> set;
-  };
-  const std::vector<Variant> variants = {
-      {"implicit", [](ModelOptions&) {}},
-      {"dense", [](ModelOptions& o) { o.decoder.mode = "dense"; }},
-      {"cnn_only", [](ModelOptions& o) { o.encoder.dino = false; }},
-      {"squeeze_semantic",
-       [](ModelOptions& o) {
-         o.encoder.semantic = "squeeze";
-         o.encoder.semantic_backbone = test::squeezenet_weights();
-       }},
-  };
   for (const auto& v : variants) {
     INFO(v.name);
     ModelOptions o = test::tiny_model_options(600, 2);
@@ -81,6 +72,21 @@ TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Run
     INFO("max abs error " << err);
     CHECK(err <= 1e-4);
   }
+}
+}  // namespace
+
+TEST_CASE("onnx: exported graphs pass the checker and match LibTorch in ONNX Runtime", "[export][onnx]") {
+  check_onnx_variants({{"implicit", [](ModelOptions&) {}},
+                       {"dense", [](ModelOptions& o) { o.decoder.mode = "dense"; }},
+                       {"cnn_only", [](ModelOptions& o) { o.encoder.dino = false; }}});
+}
+
+TEST_CASE("onnx: the frozen SqueezeNet semantic branch exports and matches LibTorch", "[export][onnx][weights]") {
+  ISPLAT_REQUIRE_WEIGHTS();
+  check_onnx_variants({{"squeeze_semantic", [](ModelOptions& o) {
+                          o.encoder.semantic = "squeeze";
+                          o.encoder.semantic_backbone = test::squeezenet_weights();
+                        }}});
 }
 
 TEST_CASE("onnx: unsupported layers and sizes are named", "[export][onnx]") {

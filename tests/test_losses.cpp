@@ -95,6 +95,7 @@ TEST_CASE("losses: the perceptual term is off, loudly, without weights", "[loss]
 }
 
 TEST_CASE("losses: perceptual + Gram on the real SqueezeNet weights", "[loss]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   LossOptions o;
   o.perceptual_weights = test::squeezenet_weights();
   PerceptualLoss p(o);

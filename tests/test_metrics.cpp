@@ -96,6 +96,7 @@ TEST_CASE("metrics: SSIM matches a reference implementation to 1e-4", "[metrics]
 }
 
 TEST_CASE("metrics: LPIPS-squeeze is zero on identical images, symmetric and monotone", "[metrics][lpips]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   std::string why;
   auto lp = Lpips::from_folder("squeeze", test::project_weights_dir(), why);
   REQUIRE(lp != nullptr);  // the heads and backbone ship in weights/

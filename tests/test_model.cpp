@@ -100,11 +100,6 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
        }},
       {"w/o DINO", [](ModelOptions& o) { o.encoder.dino = false; }},
       {"w/o CNN", [](ModelOptions& o) { o.encoder.cnn = false; }},
-      {"frozen SqueezeNet semantic branch",
-       [](ModelOptions& o) {
-         o.encoder.semantic = "squeeze";
-         o.encoder.semantic_backbone = test::squeezenet_weights();
-       }},
       {"pixel-aligned supports", [](ModelOptions& o) { o.sampler.mode = "pixel"; }},
       {"vertex + face supports", [](ModelOptions& o) { o.sampler.mode = "vertex_face"; }},
   };
@@ -117,6 +112,19 @@ TEST_CASE("model: every ablation switch builds and runs", "[model]") {
     CHECK(p.gaussians.count() > 0);
     CHECK(torch::isfinite(render(p.gaussians, camera(0.1)).rgb).all().item<bool>());
   }
+}
+
+TEST_CASE("model: the frozen SqueezeNet semantic branch builds and runs", "[model][weights]") {
+  ISPLAT_REQUIRE_WEIGHTS();
+  auto image = torch::rand({3, H, W});
+  const Camera cam = camera(0.0);
+  ModelOptions o = test::tiny_model_options();
+  o.encoder.semantic = "squeeze";
+  o.encoder.semantic_backbone = test::squeezenet_weights();
+  InfiniSplat m(o);
+  const Prediction p = m->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}));
+  CHECK(p.gaussians.count() > 0);
+  CHECK(torch::isfinite(render(p.gaussians, camera(0.1)).rgb).all().item<bool>());
 }
 
 TEST_CASE("model: decoder.behind = keep_base leaves the hidden supports at their base Gaussians", "[model]") {

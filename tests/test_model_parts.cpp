@@ -50,6 +50,7 @@ TEST_CASE("encoder: ViT and CNN give feature maps at 1/16 and 1/4", "[encoder]")
 }
 
 TEST_CASE("encoder: the frozen SqueezeNet semantic branch gives maps at 1/16 of the ViT's width", "[encoder]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   EncoderOptions o;
   o.vit = tiny_vit();
   o.semantic = "squeeze";

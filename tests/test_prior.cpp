@@ -262,30 +262,41 @@ TEST_CASE("prior: the learned net predicts positive metric depth at the input si
   CHECK(d.mean().item<float>() == Approx(3.0f).epsilon(0.3));  // starts at room scale
 }
 
-TEST_CASE("prior: every learned-net option keeps the contract (shape, metric depth, invalid masked)", "[prior]") {
+namespace {
+// The learned prior's contract for one architecture, plain and focal-normalized.
+void check_learned_prior_contract(const std::string& arch) {
   test::QuietLogs quiet;
   const int64_t H = 48, W = 64;
-  for (const std::string arch : {"unet", "squeeze"})
-    for (const bool focal : {false, true}) {
-      INFO(arch << (focal ? " focal-normalized" : ""));
-      PriorOptions o;
-      o.type = "learned";
-      o.learned_arch = arch;
-      o.learned_focal = focal;
-      o.learned_width = 8;
-      o.learned_backbone = test::squeezenet_weights();
-      auto prior = make_depth_prior(o);
-      PriorInput in;
-      in.image = torch::rand({3, H, W});
-      in.K = make_K(50.0, 50.0, W / 2.0, H / 2.0, torch::kFloat32);
-      const PriorOutput out = prior->predict(in);
-      CHECK(out.depth.sizes() == torch::IntArrayRef({H, W}));
-      CHECK(out.valid.sizes() == torch::IntArrayRef({H, W}));
-      CHECK(torch::isfinite(out.depth).all().item<bool>());
-      CHECK(((out.depth > 0) == (out.valid > 0)).all().item<bool>());  // invalid pixels are 0, never NaN
-      CHECK(out.depth.max().item<double>() < 1e3);
-      CHECK_THAT(prior->describe(), Catch::Contains(arch));
-    }
+  for (const bool focal : {false, true}) {
+    INFO(arch << (focal ? " focal-normalized" : ""));
+    PriorOptions o;
+    o.type = "learned";
+    o.learned_arch = arch;
+    o.learned_focal = focal;
+    o.learned_width = 8;
+    o.learned_backbone = test::squeezenet_weights();
+    auto prior = make_depth_prior(o);
+    PriorInput in;
+    in.image = torch::rand({3, H, W});
+    in.K = make_K(50.0, 50.0, W / 2.0, H / 2.0, torch::kFloat32);
+    const PriorOutput out = prior->predict(in);
+    CHECK(out.depth.sizes() == torch::IntArrayRef({H, W}));
+    CHECK(out.valid.sizes() == torch::IntArrayRef({H, W}));
+    CHECK(torch::isfinite(out.depth).all().item<bool>());
+    CHECK(((out.depth > 0) == (out.valid > 0)).all().item<bool>());  // invalid pixels are 0, never NaN
+    CHECK(out.depth.max().item<double>() < 1e3);
+    CHECK_THAT(prior->describe(), Catch::Contains(arch));
+  }
+}
+}  // namespace
+
+TEST_CASE("prior: the U-Net learned prior keeps the contract (shape, metric depth, invalid masked)", "[prior]") {
+  check_learned_prior_contract("unet");
+}
+
+TEST_CASE("prior: the SqueezeNet learned prior keeps the contract", "[prior][weights]") {
+  ISPLAT_REQUIRE_WEIGHTS();
+  check_learned_prior_contract("squeeze");
 }
 
 TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)", "[prior]") {
@@ -375,6 +386,7 @@ TEST_CASE("prior: focal normalization scales depth with the focal length, exactl
 }
 
 TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained encoder stays frozen", "[prior]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, test::squeezenet_weights()});
   int64_t count = 0;
   for (const auto& p : net->parameters()) count += p.numel();
@@ -386,6 +398,7 @@ TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained enc
 }
 
 TEST_CASE("prior: a fine-tuned encoder trains, ships in the net's weights file, and loading detects it", "[prior]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   const std::string backbone = test::squeezenet_weights();
   LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, backbone});
   const int64_t frozen_count = net->parameters().size();

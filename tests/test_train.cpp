@@ -111,6 +111,7 @@ TEST_CASE("train: the depth task trains the learned prior", "[train]") {
 
 TEST_CASE("train: prior.learned_backbone_lr fine-tunes the pretrained encoder at that share of the learning rate",
           "[train][prior]") {
+  ISPLAT_REQUIRE_WEIGHTS();
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("train_depth_tune", 8);
   auto cfg = tiny_depth_config(data, test::temp_dir("train_depth_tune_run"), 10);

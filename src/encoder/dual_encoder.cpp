@@ -6,7 +6,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
-#include "core/paths.h"
+#include "core/weights.h"
 #include "geometry/camera_torch.h"
 #include "nets/feature_net.h"
 #include "nets/imagenet.h"
@@ -34,9 +34,10 @@ void EncoderOptions::visit(ConfigVisitor& v) {
 DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
   ISPLAT_CHECK(o.dino || o.cnn, "encoder: encoder.dino and encoder.cnn cannot both be false");
   if (o.dino && o.semantic == "squeeze") {
-    ISPLAT_CHECK(!o.semantic_backbone.empty(), "encoder: encoder.semantic = squeeze needs encoder.semantic_backbone");
-    squeeze = std::make_shared<const FeatureNet>("squeezenet1_1", std::vector<int>{kSqueezeTap},
-                                                 resolve_shipped_path(o.semantic_backbone));
+    const std::string backbone = find_weights_file(o.semantic_backbone);
+    ISPLAT_CHECK(!backbone.empty(), "encoder: encoder.semantic = squeeze needs encoder.semantic_backbone '",
+                 o.semantic_backbone, "': not found; ", missing_weights_hint());
+    squeeze = std::make_shared<const FeatureNet>("squeezenet1_1", std::vector<int>{kSqueezeTap}, backbone);
     squeeze_proj = register_module(
         "squeeze_proj", torch::nn::Conv2d(torch::nn::Conv2dOptions(squeeze->tap_channels()[0], o.vit.dim(), 1)));
     log_info("encoder: semantic branch = frozen pretrained SqueezeNet-1.1 features from ", o.semantic_backbone,
@@ -50,8 +51,11 @@ DualEncoderImpl::DualEncoderImpl(const EncoderOptions& o) {
                " starts from random weights (no DINOv3 checkpoint given in "
                "encoder.vit.weights; none ships with this project)");
     } else {
-      load_dinov3_safetensors(vit, o.vit.weights);
-      log_info("encoder: loaded DINOv3 weights from ", o.vit.weights);
+      const std::string path = find_weights_file(o.vit.weights);
+      ISPLAT_CHECK(!path.empty(), "encoder: encoder.vit.weights '", o.vit.weights, "': not found; ",
+                   missing_weights_hint(), " (DINOv3 comes from its publisher, not from that command)");
+      load_dinov3_safetensors(vit, path);
+      log_info("encoder: loaded DINOv3 weights from ", path);
     }
   }
   if (o.cnn) cnn = register_module("cnn", CNNEncoder(o.cnn_options));

@@ -23,7 +23,7 @@ struct EncoderOptions {
   // SqueezeNet-1.1 ImageNet features and a trained 1x1 projection to the ViT's width, for when no DINO
   // checkpoint exists).
   std::string semantic = "vit";
-  std::string semantic_backbone = "weights/squeezenet1_1_features.safetensors";
+  std::string semantic_backbone = "squeezenet1_1_features.safetensors";  // a file name: the weights lookup
   ViTOptions vit;
   CNNOptions cnn_options;
   // Not a config key: false when the weights come from a trained checkpoint right after construction,

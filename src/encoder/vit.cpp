@@ -25,8 +25,9 @@ void ViTOptions::visit(ConfigVisitor& v) {
   v.field("layerscale_init", layerscale_init, "LayerScale initial gamma", Range::above(0));
   v.field("rope_base", rope_base, "RoPE period base", Range::above(1));
   v.field("weights", weights,
-          "DINOv3 safetensors checkpoint (official names); empty = train from scratch "
-          "(no pretrained DINO weights ship with this project)");
+          "DINOv3 safetensors checkpoint (official names), from its publisher: a file name is looked up like the "
+          "other weights ($INFINISPLAT_WEIGHTS, the checkout's weights/, ~/.cache/infinisplat/weights), a path is "
+          "taken as given; empty = train from scratch");
   v.field("attention_chunk_mb", attention_chunk_mb,
           "inference only: attention scores are computed in blocks of query rows of at most this many MB "
           "(bounds memory at large images; same result)",

@@ -8,7 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
-#include "core/paths.h"
+#include "core/weights.h"
 #include "nets/imagenet.h"
 
 namespace isplat {
@@ -44,8 +44,9 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("knn", knn, "neighbours per support for smoothness (paper: 8)", Range::at_least(1));
   v.field("perceptual_net", perceptual_net, "frozen perceptual network", {"squeezenet1_1", "vgg16", "vgg19"});
   v.field("perceptual_weights", perceptual_weights,
-          "safetensors of the perceptual network under torchvision names (e.g. weights/"
-          "squeezenet1_1_features.safetensors); missing = the term is off");
+          "safetensors of the perceptual network under torchvision names: a file name is looked up ($"
+          "INFINISPLAT_WEIGHTS, the checkout's weights/, ~/.cache/infinisplat/weights), a path is taken as given; "
+          "missing = the term is off");
   v.field("depth_l1", depth_l1, "depth task: weight of the mean |log error| (metric, per pixel)", Range::at_least(0));
   v.field("depth_lambda", depth_lambda,
           "depth task: scale-invariant log loss lambda; 1 = pure shape (scale-free), 0 = plain log RMSE",
@@ -64,14 +65,14 @@ void LossOptions::visit(ConfigVisitor& v) {
 
 PerceptualLoss::PerceptualLoss(const LossOptions& options) : gamma_(options.gram_gamma) {
   LossOptions o = options;
-  o.perceptual_weights = resolve_shipped_path(o.perceptual_weights);
+  const std::string configured = o.perceptual_weights;
+  o.perceptual_weights = find_weights_file(configured);
   if (o.perceptual <= 0) return;
   const bool have = !o.perceptual_weights.empty() && std::filesystem::exists(o.perceptual_weights);
   if (!have && !o.allow_random_perceptual) {
     log_warn("**********************************************************************");
     log_warn("PERCEPTUAL LOSS IS OFF: no weights for ", o.perceptual_net, " (config key loss.perceptual_weights = '",
-             o.perceptual_weights, "'", o.perceptual_weights.empty() ? "" : ", file not found",
-             "). Pass a torchvision safetensors file, or set loss.allow_random_perceptual = true.");
+             configured, "': not found; ", missing_weights_hint(), ")");
     log_warn("**********************************************************************");
     return;
   }

@@ -28,9 +28,9 @@ struct LossOptions {
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;
-  std::string perceptual_net = "squeezenet1_1";                                   // squeezenet1_1 | vgg16 | vgg19
-  std::string perceptual_weights = "weights/squeezenet1_1_features.safetensors";  // shipped; torchvision names
-  bool allow_random_perceptual = false;                                           // explicit opt-in to a random network
+  std::string perceptual_net = "squeezenet1_1";                           // squeezenet1_1 | vgg16 | vgg19
+  std::string perceptual_weights = "squeezenet1_1_features.safetensors";  // a file name: the weights lookup
+  bool allow_random_perceptual = false;                                   // explicit opt-in to a random network
   // Depth task: l1_log weight, silog variance weight lambda (1 = scale-invariant shape term), and the
   // weight of |mean log error| (the global metric-scale term).
   double depth_l1 = 1.0, depth_lambda = 0.85, depth_scale = 0.0;

@@ -9,7 +9,7 @@
 #include <limits>
 
 #include "core/error.h"
-#include "core/paths.h"
+#include "core/weights.h"
 #include "io/safetensors.h"
 
 namespace isplat {
@@ -145,16 +145,21 @@ double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const t
 
 std::unique_ptr<Lpips> Lpips::from_folder(const std::string& net, const std::string& requested, std::string& why) {
   namespace fs = std::filesystem;
-  const std::string folder = resolve_shipped_path(requested);
   const std::string arch = lpips_arch(net);
   if (arch.empty()) {
     why = cat("LPIPS: unknown network '", net, "' ", kLpipsNets);
     return nullptr;
   }
-  const fs::path backbone = fs::path(folder) / (arch + "_features.safetensors"),
-                 heads = fs::path(folder) / ("lpips_v0.1_" + net + "_lin.safetensors");
+  const std::string backbone_file = arch + "_features.safetensors",
+                    heads_file = "lpips_v0.1_" + net + "_lin.safetensors";
+  std::error_code ec;
+  const bool lookup = requested.empty() || (requested == "weights" && !fs::is_directory(requested, ec));
+  const std::string folder = lookup ? find_weights_folder({backbone_file, heads_file}) : requested;
+  const fs::path backbone = fs::path(folder) / backbone_file, heads = fs::path(folder) / heads_file;
   if (folder.empty() || !fs::exists(backbone) || !fs::exists(heads)) {
-    why = cat("LPIPS-", net, " needs ", backbone.string(), " and ", heads.string());
+    why = lookup ? cat("LPIPS-", net, " needs ", backbone_file, " and ", heads_file, "; ", missing_weights_hint())
+                 : cat("LPIPS-", net, " needs ", backbone.string(), " and ", heads.string(), " (", kGetWeightsCommand,
+                       " gets the published ones)");
     return nullptr;
   }
   return std::make_unique<Lpips>(net, backbone.string(), heads.string());

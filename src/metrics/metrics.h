@@ -26,7 +26,7 @@ torch::Tensor ssim_map(const torch::Tensor& a, const torch::Tensor& b);
 class Lpips {
  public:
   // net: squeeze | alex | vgg. `backbone`: torchvision `features` safetensors; `heads`:
-  // lpips_v0.1_<net>_lin.safetensors.
+  // lpips_v0.1_<net>_lin.safetensors; "" = the weights lookup (core/weights.h).
   Lpips(const std::string& net, const std::string& backbone, const std::string& heads);
   double operator()(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor& mask = torch::Tensor()) const;
   const std::string& net() const { return net_; }

@@ -40,7 +40,7 @@ struct PriorOptions {
   double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
   std::string floor_rule = "best";    // camera_height_m: best-supported plane | nearest the net's own scale
   bool reference_scale = false;       // diagnostic: monocular depth scaled to the frame's own depth (median)
-  std::string learned_backbone = "weights/squeezenet1_1_features.safetensors";
+  std::string learned_backbone = "squeezenet1_1_features.safetensors";  // a file name: the weights lookup
   double learned_backbone_lr = 0.0;  // task: depth, squeeze: fine-tune the encoder at this x optim.lr (0 = frozen)
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "core/paths.h"
+#include "core/weights.h"
 #include "geometry/camera_torch.h"
 #include "nets/cnn.h"
 #include "nets/feature_net.h"
@@ -56,8 +56,9 @@ LearnedDepthNetImpl::LearnedDepthNetImpl(const LearnedDepthOptions& o) : options
     for (int s = 0; s < 4; ++s) down->push_back(nn::Conv2d(nn::Conv2dOptions(c[s], c[s + 1], 3).stride(2).padding(1)));
     for (int s = 3; s >= 0; --s) up->push_back(nn::Conv2d(nn::Conv2dOptions(c[s + 1] + c[s], c[s], 3).padding(1)));
   } else if (o.arch == "squeeze") {
-    const std::string path = resolve_shipped_path(o.backbone);
-    ISPLAT_CHECK(!o.backbone.empty(), "learned depth net: arch squeeze needs prior.learned_backbone");
+    const std::string path = find_weights_file(o.backbone);
+    ISPLAT_CHECK(!path.empty(), "learned depth net: arch squeeze needs prior.learned_backbone '", o.backbone,
+                 "': not found; ", missing_weights_hint());
     backbone = std::make_shared<const FeatureNet>("squeezenet1_1", kSqueezeTaps, path);
     // Coarse to fine: 1x1 laterals bring each tap to the decoder width, 3x3 convs fuse after upsampling.
     lateral = register_module("lateral", nn::ModuleList());

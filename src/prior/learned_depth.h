@@ -20,7 +20,7 @@ struct LearnedDepthOptions {
   std::string arch = "unet";      // unet (from scratch) | squeeze (frozen pretrained SqueezeNet-1.1 encoder)
   int64_t width = 32;             // decoder channel width
   bool focal_normalized = false;  // depth = canonical depth x (fx / W) / kCanonicalFocal
-  std::string backbone = "weights/squeezenet1_1_features.safetensors";  // squeeze: the pretrained features
+  std::string backbone = "squeezenet1_1_features.safetensors";  // squeeze: the pretrained features (weights lookup)
 };
 
 // fx / W of the canonical camera (a 60 degree horizontal field of view, as Hypersim's).

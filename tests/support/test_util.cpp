@@ -1,7 +1,10 @@
 // Shared test helpers.
 #include "support/test_util.h"
 
+#include <catch2/catch.hpp>
+
 #include "core/error.h"
+#include "core/weights.h"
 
 #include <unistd.h>
 
@@ -9,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <vector>
 
@@ -26,12 +30,24 @@ std::string temp_dir(const std::string& tag) {
 }
 
 std::string project_weights_dir() {
-  // The weights that ship in the repository (weights/README.md); their sha256 is its own test.
-  return (fs::path(ISPLAT_SOURCE_DIR) / "weights").string();
+  return find_weights_folder({kSqueezeNetFeatures, kLpipsSqueezeHeads});
 }
 
 std::string squeezenet_weights() {
-  return project_weights_dir() + "/squeezenet1_1_features.safetensors";
+  const std::string dir = project_weights_dir();
+  return dir.empty() ? "" : (fs::path(dir) / kSqueezeNetFeatures).string();
+}
+
+bool weights_or_skip() {
+  if (!project_weights_dir().empty()) return true;
+  const std::string why = "skipped: no pretrained weights (" + missing_weights_hint() + ")";
+  if (std::getenv("ISPLAT_TEST_TMP")) {  // set by ctest only (CMakeLists.txt)
+    std::cout << why << std::endl;
+    std::_Exit(kSkipReturnCode);
+  }
+  WARN(why);
+  SUCCEED(why);
+  return false;
 }
 
 void write_bytes(const std::string& path, const std::string& bytes) {

@@ -18,10 +18,16 @@ struct QuietLogs {
 
 // A new empty folder under $ISPLAT_TEST_TMP (or /tmp), unique per call.
 std::string temp_dir(const std::string& tag);
-// The weights shipped in the repository (<source>/weights).
+// The folder the weights lookup finds (core/weights.h: $INFINISPLAT_WEIGHTS, the checkout's weights/, the user
+// cache) holding the SqueezeNet features and the LPIPS-squeeze heads, or "" when there is none.
 std::string project_weights_dir();
-// The shipped SqueezeNet-1.1 ImageNet features (the perceptual loss's, the encoder's and the prior's backbone).
+// The SqueezeNet-1.1 ImageNet features there (the perceptual loss's, the encoder's and the prior's backbone).
 std::string squeezenet_weights();
+// The exit code ctest reads as "skipped" (SKIP_RETURN_CODE in CMakeLists.txt); catch_main never returns it.
+constexpr int kSkipReturnCode = 77;
+// True when the weights are found. Otherwise, under ctest ($ISPLAT_TEST_TMP set), prints why and ends the process
+// with kSkipReturnCode, so ctest reports the test as skipped, never as passed; run by hand, warns and returns false.
+bool weights_or_skip();
 // Writes raw bytes to a file (for crafting corrupt inputs).
 void write_bytes(const std::string& path, const std::string& bytes);
 std::string read_bytes(const std::string& path);
@@ -29,3 +35,9 @@ std::string read_bytes(const std::string& path);
 std::string error_of(const std::function<void()>& f);
 
 }  // namespace isplat::test
+
+// First statement of a test that needs the pretrained weights.
+#define ISPLAT_REQUIRE_WEIGHTS()                    \
+  do {                                              \
+    if (!::isplat::test::weights_or_skip()) return; \
+  } while (0)
