@@ -2,7 +2,7 @@
 # Alternating benchmark rounds: two bench_render binaries, each in a fresh process, so that a busy machine slows
 # both alike. Usage: bench/rounds.sh ROUNDS FILE NAME_A BIN_A NAME_B BIN_B [BENCH ARGS...]
 # Writes to FILE the table rows of each run under "## round N NAME ARGS" headers, which
-# docs/results/2026-11-27-renderer-live-groups/summary.py --names NAME_A NAME_B reads.
+# bench/rounds_summary.py --names NAME_A NAME_B reads.
 set -euo pipefail
 [ $# -ge 6 ] || { echo "usage: $0 ROUNDS FILE NAME_A BIN_A NAME_B BIN_B [BENCH ARGS...]" >&2; exit 2; }
 rounds=$1 file=$2 name_a=$3 bin_a=$4 name_b=$5 bin_b=$6

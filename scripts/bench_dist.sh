@@ -2,11 +2,11 @@
 # Data-parallel throughput on this machine: the same global batch trained as 1 rank x all cores and as
 # N ranks x (cores / N) threads, on the experiment recipe; prints tuples per second, the all-reduce time per
 # step and the gradient bytes each rank exchanges per step (what a second machine's link must carry).
-#   scripts/bench_dist.sh [steps=20] [ranks=2] [config=configs/experiments/recipe.json]
+#   scripts/bench_dist.sh [steps=20] [ranks=2] [config=configs/recipe/recipe.json]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
-steps="${1:-20}"; ranks="${2:-2}"; config="${3:-configs/experiments/recipe.json}"
+steps="${1:-20}"; ranks="${2:-2}"; config="${3:-configs/recipe/recipe.json}"
 bin="${BUILD_DIR:-$root/build}"
 out="$(mktemp -d /tmp/bench_dist.XXXXXX)"
 common=(--set "train.steps=$steps" --set train.val_every=100000 --set train.checkpoint_every=100000 --set data.workers=1)

@@ -2,13 +2,13 @@
 # The ablation table (issue "Evidence") in one resumable command: set up and build, generate the experiment
 # data, train the learned depth priors (rooms-only, and the mixed-style ones of the RGB variants), then
 # train, score and report every row of
-# configs/experiments/ablation.json. Re-running skips what is finished; Ctrl-C is safe at any point.
+# configs/recipe/ablation.json. Re-running skips what is finished; Ctrl-C is safe at any point.
 # Usage: scripts/experiments.sh [infinisplat-experiment options, e.g. --rows full,pixel_supports --seeds 0]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 bin="${BUILD_DIR:-$root/build}"
-config="${EXPERIMENT_CONFIG:-configs/experiments/ablation.json}"
+config="${EXPERIMENT_CONFIG:-configs/recipe/ablation.json}"
 start=$(date +%s)
 stamp() { echo; echo "== $1  ($(( $(date +%s) - start )) s elapsed)"; }
 
@@ -16,15 +16,15 @@ stamp "1. set-up and build"
 scripts/setup.sh
 scripts/build.sh
 
-stamp "2. experiment data (configs/experiments/data.json)"
+stamp "2. experiment data (configs/recipe/data.json)"
 if [ ! -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ]; then
-  "$bin/infinisplat" generate --config configs/experiments/data.json
+  "$bin/infinisplat" generate --config configs/recipe/data.json
 else
   echo "reusing out/experiments/data"
 fi
 
-stamp "3. the learned depth prior for the RGB variant (configs/experiments/depth.json)"
-"$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
+stamp "3. the learned depth prior for the RGB variant (configs/recipe/depth.json)"
+"$bin/infinisplat-train" --config configs/recipe/depth.json --resume auto
 
 # Variants whose prior is not trained here (wide2, wide_w64, ...) are skipped with a warning until
 # scripts/train_depth_prior.sh trains it.

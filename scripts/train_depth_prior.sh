@@ -19,7 +19,7 @@
 # by loso_eval_clutter_near); priors trained without the streets (loso_street_aug, loso_street_aug_clutter) and the
 # check of decoders trained on held-out priors' depth (loso_trained_eval); the augmented prior with its pretrained
 # encoder fine-tuned at a tenth of the learning rate (wide_aug_tuned; loso_hall_aug_tuned, scored by loso_eval_tuned,
-# which rejected it: docs/results/2026-11-26-prior-tuned.md); the augmented prior run at the tuples' width on
+# which rejected it: lab/2026-11-26-prior-tuned/README.md); the augmented prior run at the tuples' width on
 # 384x256 photos of the held-out style, scored in the evaluation sets' format (format_eval_width; also rejected).
 # Usage: scripts/train_depth_prior.sh [STAGE ...]   (the stages are listed in `known` below;
 #        default: unet squeeze squeeze_hall squeeze_sky wide eval)
@@ -40,76 +40,91 @@ for stage in "${stages[@]}"; do  # a typo fails before the set-up and the build
        exit 2 ;;
   esac
 done
+# The depth-prior configs live with the study that ran them last (lab/<date-topic>/configs/NAME.json); the recipe's
+# own (data, depth, ablation) are in configs/recipe.
+cfg() {  # $1: config name without .json -> its one path under lab/*/configs
+  local found=(lab/*/configs/"$1".json)
+  local hits=()
+  for f in "${found[@]}"; do [ -f "$f" ] && hits+=("$f"); done
+  [ ${#hits[@]} -eq 1 ] || { echo "train_depth_prior.sh: config $1.json found ${#hits[@]} times under lab/*/configs (want 1)" >&2; exit 2; }
+  echo "${hits[0]}"
+}
+for stage in "${stages[@]}"; do  # a missing config fails before the set-up and the build too
+  case "$stage" in
+    unet|squeeze|squeeze_hall|squeeze_sky) cfg "$stage" >/dev/null ;;
+    wide*|loso_hall*|loso_street*) cfg "squeeze_$stage" >/dev/null ;;
+  esac
+done
 scripts/setup.sh
 scripts/build.sh
-data() {  # $1: data config name under configs/depth_prior, $2: its output folder
+data() {  # $1: data config name, $2: its output folder
   [ -f "$2/hypersim/metadata_images_split_scene_v1.csv" ] ||
-    "$bin/infinisplat" generate --config "configs/depth_prior/$1.json"
+    "$bin/infinisplat" generate --config "$(cfg "$1")"
 }
 for stage in "${stages[@]}"; do
   case "$stage" in
     unet|squeeze)
       data data out/depth_prior/data
-      "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
+      "$bin/infinisplat-train" --config "$(cfg $stage)" --resume auto ;;
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
-      "$bin/infinisplat-train" --config "configs/depth_prior/$stage.json" --resume auto ;;
+      "$bin/infinisplat-train" --config "$(cfg $stage)" --resume auto ;;
     wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug|wide_aug_tuned|loso_hall_aug_tuned)
       data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+      "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
     wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long|loso_street_aug_clutter)
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
-      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+      "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
     wide_aug_clutter_near|loso_hall_aug_clutter_near)
       data data_wide out/depth_prior/data_wide
       data data_clutter_near out/depth_prior/data_clutter_near
-      "$bin/infinisplat-train" --config "configs/depth_prior/squeeze_${stage}.json" --resume auto ;;
+      "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
     loso_trained_eval)
       # decoders trained on the held-out priors' depth (needs loso_hall_aug, loso_hall_aug_clutter, loso_street_aug
       # and loso_street_aug_clutter), scored on the held-out halls and streets and in the evaluation sets' format
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data.json
+        "$bin/infinisplat" generate --config configs/recipe/data.json
       [ -d out/experiments/data_heldout_format/eval/hall_colmap ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format.json
+        "$bin/infinisplat" generate --config "$(cfg data_heldout_format)"
       for row in prior_trained_loso_aug_height prior_trained_loso_aug_clutter_height \
                  prior_trained_loso_street_aug_height prior_trained_loso_street_aug_clutter_height; do
-        "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train --rows "$row" --seeds 0
+        "$bin/infinisplat-experiment" --config configs/recipe/ablation.json --stage train --rows "$row" --seeds 0
       done
       # the clutter-trained halls decoder also with seed 1 (eval_prior_loso_hall_trained_s1)
-      "$bin/infinisplat-experiment" --config configs/experiments/ablation.json --stage train \
+      "$bin/infinisplat-experiment" --config configs/recipe/ablation.json --stage train \
         --rows prior_trained_loso_aug_clutter_height --seeds 1
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_loso_street.json
+      "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_loso_street)"
       for c in eval_prior_loso_hall_trained eval_prior_loso_hall_trained_s1 eval_heldout_format \
                eval_prior_loso_street_trained; do
-        "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
+        "$bin/infinisplat-eval" --config "$(cfg $c)"
       done ;;
     loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near|loso_eval_tuned)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_loso_hall${stage#loso_eval}.json"
-      "$bin/infinisplat-eval" --config "configs/experiments/eval_prior_loso_hall${stage#loso_eval}.json" ;;
+      "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_loso_hall${stage#loso_eval})"
+      "$bin/infinisplat-eval" --config "$(cfg eval_prior_loso_hall${stage#loso_eval})" ;;
     format_eval_width)
       # needs loso_hall_aug and the decoders full (seed 0) and prior_trained_loso_aug_height (loso_trained_eval)
       [ -d out/experiments/data_heldout_format/eval/hall_colmap ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format.json
+        "$bin/infinisplat" generate --config "$(cfg data_heldout_format)"
       [ -d out/experiments/data_heldout_format_halls/eval/hall_colmap ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data_heldout_format_halls.json
+        "$bin/infinisplat" generate --config "$(cfg data_heldout_format_halls)"
       for c in heldout_format_width heldout_format_halls_width; do
-        "$bin/infinisplat" eval-depth --config "configs/depth_prior/depth_eval_$c.json"
+        "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_$c)"
       done
       for c in eval_heldout_format_width eval_heldout_format_halls; do
-        "$bin/infinisplat-eval" --config "configs/experiments/$c.json"
+        "$bin/infinisplat-eval" --config "$(cfg $c)"
       done ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
-        "$bin/infinisplat" generate --config configs/experiments/data.json
+        "$bin/infinisplat" generate --config configs/recipe/data.json
       # the "before" prior: the rooms-only net of the experiments (scripts/experiments.sh trains it too)
-      "$bin/infinisplat-train" --config configs/experiments/depth.json --resume auto
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval.json
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_height.json
+      "$bin/infinisplat-train" --config configs/recipe/depth.json --resume auto
+      "$bin/infinisplat" eval-depth --config "$(cfg depth_eval)"
+      "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_height)"
       data data_wide out/depth_prior/data_wide
-      "$bin/infinisplat" eval-depth --config configs/depth_prior/depth_eval_dev.json ;;
+      "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_dev)" ;;
     *) echo "train_depth_prior.sh: stage '$stage' is listed but has no recipe" >&2
        exit 2 ;;
   esac
