@@ -1,4 +1,4 @@
-// `infinisplat-experiment --config configs/experiments/ablation.json [--stage all|train|eval|report] [--rows a,b]
+// `infinisplat-experiment --config configs/recipe/ablation.json [--stage all|train|eval|report] [--rows a,b]
 // [--variants a,b]`.
 #include <sstream>
 
@@ -25,8 +25,8 @@ int main(int argc, char** argv) {
     args.option("--variants", variants, "comma-separated variants to score now (default: all)", "A,B");
     args.option("--seeds", seeds, "comma-separated seeds to train now (default: every seed of a row)", "0,1");
     args.epilog(
-        "examples:\n  infinisplat-experiment --config configs/experiments/ablation.json\n"
-        "  infinisplat-experiment --config configs/experiments/ablation.json --rows full,pixel_supports --stage train");
+        "examples:\n  infinisplat-experiment --config configs/recipe/ablation.json\n"
+        "  infinisplat-experiment --config configs/recipe/ablation.json --rows full,pixel_supports --stage train");
     if (!start_app(args, common, config, argc, argv)) return 0;
     ISPLAT_CHECK(stage == "all" || stage == "train" || stage == "eval" || stage == "report", "--stage '", stage,
                  "' is not one of all, train, eval, report");

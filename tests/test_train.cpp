@@ -80,6 +80,11 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
   depth_cfg.task = "depth";
   Trainer depth(depth_cfg);
   CHECK_THROWS_WITH(depth.resume(ck), Catch::Contains("checkpoint is for task 'gaussians'"));
+  // Nor does a run resume into another model: a changed sampler key is named.
+  auto other = test::tiny_train_config(data, test::temp_dir("resume_other"), 4);
+  other.model.sampler.image_share = 0.25;
+  Trainer changed(other);
+  CHECK_THROWS_WITH(changed.resume(ck), Catch::Contains("model/sampler/image_share differ"));
 }
 
 TEST_CASE("train: repeated non-finite losses stop training with a clear message", "[train]") {

@@ -23,6 +23,7 @@
 #include "io/panel.h"
 #include "io/safetensors.h"
 #include "metrics/metrics.h"
+#include "model/model_io.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -276,6 +277,7 @@ Checkpoint Trainer::make_checkpoint(bool with_optimizer) const {
   ck.metadata["best_val"] = cat(best_val_);
   ck.metadata["cpu_s"] = cat(std::setprecision(17), cpu_seconds());
   ck.metadata["config"] = config_to_json(config_).dump();
+  ck.metadata["config_version"] = std::to_string(kModelConfigVersion);  // the defaults it was trained under
   task_->add_to_checkpoint(ck);
   return ck;
 }
@@ -301,6 +303,18 @@ void Trainer::resume(const std::string& requested) {
   auto it = ck.metadata.find("task");
   if (it != ck.metadata.end() && it->second != config_.task)
     fail(path, ": checkpoint is for task '", it->second, "', the config says '", config_.task, "'");
+  // A run resumes the model it started: a changed model key, or a default that changed since the run began
+  // (config_version), would otherwise go on training another model in silence.
+  const auto started = config_to_json(model_options_from_checkpoint(ck, path)), now = config_to_json(config_.model);
+  if (started != now) {
+    std::string keys;
+    const auto patch = nlohmann::ordered_json::diff(started, now);
+    for (size_t i = 0; i < patch.size() && i < 4; ++i)
+      keys += (i ? ", " : "") + std::string("model") + patch[i]["path"].get<std::string>();
+    fail(path, ": the run was started with another model config (", keys, patch.size() > 4 ? ", ..." : "",
+         " differ; '/' separates keys); resume with the config it started with, or start a new run in another "
+         "train.out");
+  }
   load_module(ck, trainable(), path);
   if (!ck.tensors.count("optim/state"))
     fail(path, ": holds no optimizer state (a weights-only checkpoint such as init); it cannot be resumed");

@@ -5,7 +5,7 @@
 // elementwise op runs at about half speed. Sleeping at once (OMP_WAIT_POLICY=passive) frees the core but makes
 // back-to-back small ops (the optimizer's, the renderer's) wait for a wake-up; 3,000 spins keep those and free the
 // core within tens of microseconds (measured on a Zen 4, with the decoder's vectorized queries beside it: a
-// prediction 0.91-1.32 s -> 0.56-0.71 s, the ViT-S encoder's share halved). docs/results/2026-12-02-openmp-wait.md.
+// prediction 0.91-1.32 s -> 0.56-0.71 s, the ViT-S encoder's share halved). lab/2026-12-02-openmp-wait.
 //
 // How: libgomp reads its environment once, in its own constructor, so a setenv() in main() is too late. A
 // .preinit_array function runs before every library constructor, but also before libc has set up `environ`, so

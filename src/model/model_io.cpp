@@ -8,8 +8,37 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/parse.h"
 
 namespace isplat {
+
+int config_version(const Checkpoint& ck, const std::string& source) {
+  const auto it = ck.metadata.find("config_version");
+  if (it == ck.metadata.end()) return 1;
+  const auto v = parse_int(it->second);
+  if (!v || *v < 1 || *v > kModelConfigVersion)
+    fail(source, ": config_version '", it->second, "' is not one this build knows (1..", kModelConfigVersion,
+         "); a newer build wrote it");
+  return static_cast<int>(*v);
+}
+
+ModelOptions model_defaults(int config_version) {
+  ModelOptions o;
+  if (config_version >= 2) return o;
+  // Version 1: the paper release's fixed budget, no edge supports, rotations in the camera frame.
+  o.sampler.budget_mode = "fixed";
+  o.sampler.budget = 100000;
+  o.sampler.density = 1.0;
+  o.sampler.edge_supports = false;
+  o.sampler.image_share = 0.0;
+  o.sampler.pixel_floor = 0.0;
+  o.sampler.edge_behind = 0;
+  o.sampler.edge_shift = 0.0;
+  o.sampler.edge_band = 0;
+  o.sampler.edge_band_at = "all";
+  o.composer.orientation = "camera";
+  return o;
+}
 
 ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::string& source,
                                            const std::vector<std::string>& overrides) {
@@ -19,7 +48,7 @@ ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::stri
   doc.json = config["model"];
   doc.origin[""] = source + " (stored config)";
   apply_overrides(doc, overrides);  // the --set machinery, on the model section
-  ModelOptions options;
+  ModelOptions options = model_defaults(config_version(ck, source));
   apply_config(doc, options);
   return options;
 }

@@ -9,8 +9,15 @@
 
 namespace isplat {
 
-// The "model" section of the training config stored in a checkpoint, with optional overrides
-// ("prior.type=sparse"); unknown keys and bad values fail as for any config.
+// The model defaults a checkpoint was trained under, from its metadata's "config_version": 1 (no key, every
+// checkpoint written before 2026-12-06) is the paper release's sampler and composer; 2 is the recipe the lab's
+// studies adopted (lab/README.md). A key that a stored config lacks takes its version's default.
+constexpr int kModelConfigVersion = 2;
+int config_version(const Checkpoint& ck, const std::string& source);
+ModelOptions model_defaults(int config_version);
+
+// The "model" section of the training config stored in a checkpoint, over its version's defaults, with optional
+// overrides ("prior.type=sparse"); unknown keys and bad values fail as for any config.
 ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::string& source,
                                            const std::vector<std::string>& overrides = {});
 

@@ -17,7 +17,7 @@ namespace {
 
 // L Gaussians per block, one per lane: 256-bit vectors on AVX2 and AVX-512 (8 floats; one register on AVX2, half
 // of one on AVX-512), 128-bit in the portable build (4 floats, 2 doubles). 16 float lanes took about 1.3-1.8x as
-// long on AVX-512 and 2-2.8x on AVX2 (measured, docs/results/2026-11-27-projection-simd.md).
+// long on AVX-512 and 2-2.8x on AVX2 (measured, lab/2026-11-27-projection-simd).
 template <class T, int L>
 struct VecOf {
   typedef T type __attribute__((vector_size(L * sizeof(T))));
