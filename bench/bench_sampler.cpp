@@ -36,8 +36,6 @@ void run(int64_t W, int64_t H, int64_t budget, const std::string& mode, bool nor
   o.mode = mode;
   o.budget = budget;
   o.max_budget = budget;
-  SamplerOptions on = o;
-  on.normals = true;
   std::vector<double> ms, ms_normals;
   int64_t count = 0;
   sample_supports(depth, valid, K, image, o, 1);  // warm-up: first-touch page faults, thread pool
@@ -47,7 +45,7 @@ void run(int64_t W, int64_t H, int64_t budget, const std::string& mode, bool nor
     ms.push_back(ms_since(t0));
     if (!normals) continue;
     t0 = std::chrono::steady_clock::now();
-    sample_supports(depth, valid, K, image, on, 1);
+    sample_supports(depth, valid, K, image, o, 1, /*normals=*/true);
     ms_normals.push_back(ms_since(t0));
   }
   std::sort(ms.begin(), ms.end());

@@ -76,8 +76,7 @@ int run_predict(int argc, char** argv) {
   args.option("--hfov", hfov, "horizontal field of view in degrees when neither --fx nor EXIF is available");
   args.option("--fill-holes", fill_px,
               "fill invalid depth within this many pixels of valid depth before sampling, so small holes in --depth "
-              "get Gaussians (0 = off; -1, the default: the checkpoint's sampler.fill_px; --set sampler.fill_mode=far "
-              "for a depth sensor's shadows)",
+              "get Gaussians (0 = off; -1, the default: the checkpoint's sampler.fill_px)",
               "N");
   args.option("--width", width, "working width (default: the training resolution's area at the photo's aspect)");
   args.option("--height", height, "working height");

@@ -150,57 +150,6 @@ TEST_CASE("sampler: pixel_floor lifts the sparse (near) strips to an even share 
                      sample_supports(depth, ones(), K(), image(), half_floor, 3).uv));
 }
 
-TEST_CASE("sampler: color = nearest reads the pixel a support falls in, bilinear blends", "[sampler]") {
-  // A checkerboard of 0 and 1: bilinear reads between centres give values strictly inside (0, 1).
-  auto img = ((torch::arange(kH).view({kH, 1}) + torch::arange(kW).view({1, kW})) % 2).to(torch::kFloat32);
-  auto rgb = img.unsqueeze(0).expand({3, kH, kW}).contiguous();
-  SamplerOptions o = fixed(3000);
-  const Supports blend = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), rgb, o, 5);
-  o.color = "nearest";
-  const Supports sharp = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), rgb, o, 5);
-  REQUIRE(torch::equal(blend.uv, sharp.uv));
-  auto uv = sharp.uv.floor().to(torch::kLong);
-  auto expect = img.index({uv.select(1, 1), uv.select(1, 0)});
-  CHECK(torch::equal(sharp.color.select(1, 0), expect));
-  auto mid = (blend.color.select(1, 0) > 0.05) & (blend.color.select(1, 0) < 0.95);
-  CHECK(mid.to(torch::kFloat32).mean().item<float>() > 0.5f);
-}
-
-TEST_CASE("sampler: placement = centroid puts a triangle's single support at its centroid", "[sampler]") {
-  // One support per triangle on a fronto-parallel plane: triangle 0 of a quad has its centroid at (1/3, 1/3)
-  // of the quad from its top-left pixel centre, triangle 1 at (2/3, 2/3).
-  SamplerOptions o = fixed(2 * (kH - 1) * (kW - 1));
-  o.placement = "centroid";
-  const Supports s = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), image(), o, 9);
-  REQUIRE(s.count() == 2 * (kH - 1) * (kW - 1));
-  auto f = s.uv - 0.5 - (s.uv - 0.5).floor();  // position inside the quad
-  auto third = (f - 1.0 / 3).abs().lt(1e-3).all(1), two_thirds = (f - 2.0 / 3).abs().lt(1e-3).all(1);
-  CHECK((third | two_thirds).all().item<bool>());
-  CHECK(third.sum().item<int64_t>() == (kH - 1) * (kW - 1));
-  // The default placement starts each triangle's sequence at random, so it is not on that lattice.
-  const Supports r = sample_supports(torch::full({kH, kW}, 2.0f), ones(), K(), image(), fixed(s.count()), 9);
-  auto fr = r.uv - 0.5 - (r.uv - 0.5).floor();
-  CHECK(((fr - 1.0 / 3).abs().lt(1e-3).all(1)).sum().item<int64_t>() < s.count() / 10);
-}
-
-TEST_CASE("sampler: placement = vertex keeps area-proportional counts on pixel centres", "[sampler]") {
-  // A slanted plane: depth grows with the column, so the right half has more 3D area per pixel.
-  auto depth = (torch::arange(kW, torch::kFloat32) * 0.05f + 1.0f).view({1, kW}).expand({kH, kW}).contiguous();
-  SamplerOptions o = fixed(3000);
-  o.placement = "vertex";
-  const Supports s = sample_supports(depth, ones(), K(), image(), o, 4);
-  REQUIRE(s.count() == 3000);
-  // Every support sits on a pixel centre and reads that pixel's depth exactly.
-  CHECK(((s.uv - 0.5 - (s.uv - 0.5).round()).abs().lt(1e-6)).all().item<bool>());
-  const auto col = (s.uv.select(1, 0) - 0.5).round().to(torch::kLong);
-  CHECK(torch::allclose(s.depth, depth[0].index_select(0, col), 1e-6, 1e-6));
-  // Counts still follow area: the same columns as random placement get them, to within a triangle's reach.
-  const Supports r = sample_supports(depth, ones(), K(), image(), fixed(3000), 4);
-  const auto hv = column_histogram(s, 4), hr = column_histogram(r, 4);
-  CHECK(hv[3] > 1.5 * hv[0]);
-  for (int b = 0; b < 4; ++b) CHECK(std::abs(hv[b] - hr[b]) < 0.05 * 3000);
-}
-
 TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth step and the border", "[sampler]") {
   // Columns 0..31 at 2 m, 32..64 at 6 m: the quads between columns 31 and 32 are rejected.
   auto depth = torch::full({kH, kW}, 6.0f);
@@ -224,58 +173,6 @@ TEST_CASE("sampler: edge_supports covers the pixels on both sides of a depth ste
   // Faces alone never reach the step's columns; the represented area is the surface's, once.
   CHECK(((faces.uv.select(1, 0) - 32).abs() < 0.5).sum().item<int64_t>() == 0);
   CHECK(s.area.sum().item<double>() == Approx(faces.area.sum().item<double>()).epsilon(1e-4));
-  // edge_scale shrinks the edge supports' footprints (area by its square, against the faces'), at the same places,
-  // and the represented area is still the surface's.
-  o.edge_scale = 0.5;
-  const Supports small = sample_supports(depth, ones(), K(), image(), o, 2);
-  REQUIRE(torch::equal(small.uv, s.uv));
-  const auto ratio = (small.area / s.area).to(torch::kDouble);
-  const double edge_ratio = ratio[0].item<double>(), face_ratio = ratio[s.count() - 1].item<double>();
-  CHECK(edge_ratio / face_ratio == Approx(0.25).epsilon(1e-4));
-  CHECK(ratio.narrow(0, 0, edges).sub(edge_ratio).abs().max().item<double>() < 1e-4 * edge_ratio);
-  CHECK(small.area.sum().item<double>() == Approx(s.area.sum().item<double>()).epsilon(1e-4));
-  // edge_scale_at = near shrinks only the near side of the step (column 31, at 2 m beside 6 m, its border pixels
-  // included); the far side (column 32) and the rest of the image border keep a whole pixel's footprint.
-  o.edge_scale_at = "near";
-  const Supports near = sample_supports(depth, ones(), K(), image(), o, 2);
-  REQUIRE(torch::equal(near.uv, s.uv));
-  const auto near_ratio = (near.area / s.area).to(torch::kDouble);
-  const double face_near = near_ratio[s.count() - 1].item<double>();
-  const auto u_edge = s.uv.select(1, 0).narrow(0, 0, edges), v_edge = s.uv.select(1, 1).narrow(0, 0, edges);
-  const auto col31 = (u_edge - 31.5).abs().lt(1e-4), rest = ~col31;
-  REQUIRE(col31.sum().item<int64_t>() == kH);
-  const auto edge_near = near_ratio.narrow(0, 0, edges) / face_near;
-  CHECK((edge_near.masked_select(col31) - 0.25).abs().max().item<double>() < 1e-4);
-  CHECK((edge_near.masked_select(rest) - 1.0).abs().max().item<double>() < 1e-4);
-  // Hole edges keep a whole pixel too, whatever depth the invalid pixels hold (here 60 m, behind the 6 m side).
-  auto valid = ones();
-  valid.narrow(1, 48, 2).zero_();
-  auto behind = depth.clone();
-  behind.narrow(1, 48, 2).fill_(60.0f);
-  SamplerOptions whole = o;
-  whole.edge_scale = 1.0;
-  whole.edge_scale_at = "all";
-  const Supports hw = sample_supports(behind, valid, K(), image(), whole, 2),
-                 hn = sample_supports(behind, valid, K(), image(), o, 2);
-  REQUIRE(torch::equal(hw.uv, hn.uv));
-  const auto hole_ratio = (hn.area / hw.area).to(torch::kDouble);
-  const auto hu = hw.uv.select(1, 0), on_centre = on_pixel_centre(hw.uv);
-  const auto hole_edge = on_centre & ((hu - 47.5).abs().lt(1e-4) | (hu - 50.5).abs().lt(1e-4));
-  const auto near_edge = on_centre & (hu - 31.5).abs().lt(1e-4);
-  REQUIRE(hole_edge.sum().item<int64_t>() == 2 * kH);
-  const double face_hole = hole_ratio[hw.count() - 1].item<double>();
-  CHECK((hole_ratio.masked_select(hole_edge) / face_hole - 1.0).abs().max().item<double>() < 1e-4);
-  CHECK((hole_ratio.masked_select(near_edge) / face_hole - 0.25).abs().max().item<double>() < 1e-4);
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.0}}, "test"),
-                    Catch::Contains("edge_scale"));
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(
-                        nlohmann::json{{"edge_supports", true}, {"edge_band", 2}, {"edge_scale", 0.5}}, "test"),
-                    Catch::Contains("edge_band = 0"));
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_scale", 0.5}}, "test"),
-                    Catch::Contains("edge_supports = true"));
-  CHECK_THROWS_WITH(
-      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_scale_at", "near"}}, "test"),
-      Catch::Contains("edge_scale_at"));
 }
 
 TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette, into their own surface", "[sampler]") {
@@ -326,64 +223,6 @@ TEST_CASE("sampler: edge_shift moves near-side edge supports off the silhouette,
       Catch::Contains("edge_shift"));
 }
 
-TEST_CASE("sampler: edge_shift_from = coverage places each silhouette by its pixel's antialiased colour", "[sampler]") {
-  // Columns 0..31 at 2 m (dark red), 32..64 at 6 m (light grey). Column 31 is the near side; in row i its colour is
-  // the linear-light mix of the two with the near surface covering alpha(i) of the pixel, gamma-encoded as the data
-  // is (1/2.2). Rows 0..15 cover 0.75, rows 16..31 a quarter, rows 32..48 the whole pixel.
-  auto depth = torch::full({kH, kW}, 6.0f);
-  depth.narrow(1, 0, 32).fill_(2.0f);
-  const double near_lin[3] = {0.6, 0.05, 0.02}, far_lin[3] = {0.7, 0.7, 0.7};
-  auto alpha = [](int64_t i) { return i < 16 ? 0.75 : i < 32 ? 0.25 : 1.0; };
-  auto img = torch::empty({3, kH, kW});
-  auto a = img.accessor<float, 3>();
-  for (int c = 0; c < 3; ++c)
-    for (int64_t i = 0; i < kH; ++i)
-      for (int64_t j = 0; j < kW; ++j) {
-        const double mix = j < 31 ? 1.0 : j == 31 ? alpha(i) : 0.0;
-        a[c][i][j] = static_cast<float>(std::pow(mix * near_lin[c] + (1 - mix) * far_lin[c], 1 / 2.2));
-      }
-  SamplerOptions o = fixed(4000);
-  o.edge_supports = true;
-  const Supports centred = sample_supports(depth, ones(), K(), img, o, 2);
-  o.edge_shift = 0.5;
-  o.edge_shift_from = "coverage";
-  const Supports placed = sample_supports(depth, ones(), K(), img, o, 2);
-  REQUIRE(placed.count() == centred.count());
-  // Inside the image (rows 1..H-2, where the far side lies straight right), the near side moves left by
-  // edge_shift + 0.5 - alpha: 0.25, 0.75 and 0 pixels; nothing else moves and depth, colour and footprint stay.
-  const auto u = centred.uv.select(1, 0), v = centred.uv.select(1, 1);
-  const auto col31 = (u - 31.5).abs().lt(1e-4) & on_pixel_centre(centred.uv);
-  const auto du = placed.uv - centred.uv;
-  for (auto [first, last, move] :
-       {std::tuple<int64_t, int64_t, double>{1, 15, 0.25}, {16, 31, 0.75}, {32, kH - 2, 0.0}}) {
-    const auto rows = col31 & v.gt(first) & v.lt(last + 1);
-    REQUIRE(rows.sum().item<int64_t>() == last - first + 1);
-    CHECK((du.select(1, 0).masked_select(rows) + move).abs().max().item<double>() < 1e-4);
-    CHECK(du.select(1, 1).masked_select(rows).abs().max().item<double>() < 1e-6);
-  }
-  CHECK(du.abs().gt(1e-6).any(1).logical_and(col31.logical_not()).sum().item<int64_t>() == 0);
-  CHECK(torch::equal(placed.depth, centred.depth));
-  CHECK(torch::equal(placed.color, centred.color));
-  CHECK(torch::equal(placed.area, centred.area));
-  // Where the two surfaces share a colour, or the near surface is a line two pixels wide (its inward pixel is on a
-  // silhouette too), the colour does not tell and the move is edge_shift.
-  const Supports plain = sample_supports(depth, ones(), K(), torch::full({3, kH, kW}, 0.5f), o, 2);
-  const auto plain_rows = col31 & v.gt(1) & v.lt(kH - 1);
-  CHECK(((plain.uv - centred.uv).select(1, 0).masked_select(plain_rows) + 0.5).abs().max().item<double>() < 1e-4);
-  auto line = torch::full({kH, kW}, 6.0f);
-  line.narrow(1, 30, 2).fill_(2.0f);
-  o.edge_shift_from = "fixed";
-  const Supports line_fixed = sample_supports(line, ones(), K(), img, o, 2);
-  o.edge_shift_from = "coverage";
-  const Supports line_placed = sample_supports(line, ones(), K(), img, o, 2);
-  CHECK(torch::equal(line_placed.uv, line_fixed.uv));
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_shift_from", "coverage"}}, "test"),
-                    Catch::Contains("edge_supports = true"));
-  CHECK_THROWS_WITH(
-      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_shift_from", "colour"}}, "test"),
-      Catch::Contains("edge_shift_from"));
-}
-
 TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette", "[sampler]") {
   // Columns 0..31 a flat 2 m; 32..64 a tilted plane (inverse depth affine in the row and the column), 7.4 m at
   // most, whose normal turns away from the camera's axis.
@@ -394,10 +233,9 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const torch::Tensor img = image();
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
-  o.normals = true;
-  const Supports plain = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports plain = sample_supports(depth, ones(), K(), img, o, 2, true);
   o.edge_behind = 1;
-  const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports s = sample_supports(depth, ones(), K(), img, o, 2, true);
   REQUIRE(s.count() == 4000);
   CHECK(plain.behind == 0);
   CHECK(s.behind == kH);  // the decoder can tell them apart (decoder.behind)
@@ -427,7 +265,7 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   CHECK((bn - slope_n).abs().max().item<double>() < 1e-4);
   // Two layers: the second one pixel further in, under column 30, where the plane lies deeper in.
   o.edge_behind = 2;
-  const Supports two = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports two = sample_supports(depth, ones(), K(), img, o, 2, true);
   const auto tu = two.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 0);
   CHECK(((tu - 31.5).abs() < 1e-5).sum().item<int64_t>() == kH);
   const auto second = (tu - 30.5).abs() < 1e-5;
@@ -441,7 +279,7 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   // leave the image after two).
   o.edge_behind = 4;
   o.budget = 1000;
-  const Supports tight = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports tight = sample_supports(depth, ones(), K(), img, o, 2, true);
   const auto tv = tight.uv.narrow(0, 1000 - 182, 182).select(1, 1).floor().to(torch::kLong);
   CHECK((tight.depth.narrow(0, 1000 - 182, 182) > 3.0).all().item<bool>());  // the plane: 3.7 m and more
   CHECK(std::get<0>(at::_unique(tv)).size(0) == kH);
@@ -450,7 +288,7 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   o.edge_behind = 2;
   o.budget = 4000;
   o.edge_behind_start = 1;
-  const Supports deeper = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports deeper = sample_supports(depth, ones(), K(), img, o, 2, true);
   const auto du = deeper.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 0);
   CHECK(((du - 30.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
   CHECK(((du - 29.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
@@ -521,8 +359,7 @@ TEST_CASE("sampler: pixel mode takes edge_shift and edge_behind too", "[sampler]
   REQUIRE(plain.count() == kH * kW);
   o.edge_behind = 1;
   o.edge_shift = 0.5;
-  o.normals = true;
-  const Supports s = sample_supports(depth, ones(), K(), img, o, 2);
+  const Supports s = sample_supports(depth, ones(), K(), img, o, 2, true);
   // One hidden support per row on top, under column 31 at the far side's 6 m.
   REQUIRE(s.count() == kH * kW + kH);
   CHECK(s.behind == kH);
@@ -756,80 +593,6 @@ TEST_CASE("sampler: fill_px fills holes near valid depth from around them and le
   CHECK(resolve_budget(sa, depth, valid, K()) > plain_budget);
 }
 
-TEST_CASE("sampler: fill_mode far gives a hole across a depth edge the far side's depth, other holes the blend",
-          "[sampler]") {
-  const auto u = pixel_centers(kH, kW).select(-1, 0);
-  // An occluder at 1 m on columns 0-27, a slanted background (inverse depth affine in u, so a plane) behind it,
-  // and a sensor's shadow: columns 28-33 of the background have no depth.
-  const auto background = 1.0 / (0.30 - 0.002 * u);
-  auto depth = torch::where(u < 28, torch::ones({kH, kW}), background).to(torch::kFloat32);
-  auto valid = ones();
-  valid.narrow(1, 28, 6).zero_();
-  const FilledDepth blend = fill_depth_holes(depth, valid, 8);
-  const FilledDepth far = fill_depth_holes(depth, valid, 8, 10);
-  CHECK(far.filled == blend.filled);
-  CHECK(far.filled == 6 * kH);
-  const auto shadow_truth = background.narrow(1, 28, 6);
-  // The blend bridges the two surfaces; the far side continues the background's plane into the shadow (the
-  // diagonal rays that reach the top or bottom row there see no slope, and are left out while sloped hits exist).
-  CHECK(blend.depth.narrow(1, 28, 6).min().item<double>() < 0.7 * shadow_truth.min().item<double>());
-  const auto far_error = (far.depth.narrow(1, 28, 6) - shadow_truth).abs() / shadow_truth;
-  CHECK(far_error.max().item<double>() < 1e-4);
-  // Only the shadow changes: valid depth stays as it was.
-  CHECK(torch::equal(far.depth.narrow(1, 34, kW - 34), blend.depth.narrow(1, 34, kW - 34)));
-  CHECK(torch::equal(far.depth.narrow(1, 0, 28), blend.depth.narrow(1, 0, 28)));
-
-  // A strip wider than far_width (here every shadow pixel lies 7 px from the occluder plus the background) is blended;
-  // one exactly as wide is filled from the far side.
-  CHECK(torch::equal(fill_depth_holes(depth, valid, 8, 6).depth, blend.depth));
-  CHECK(torch::equal(fill_depth_holes(depth, valid, 8, 7).depth, far.depth));
-  CHECK_THROWS_WITH(fill_depth_holes(depth, valid, 8, -1), Catch::Contains("far_width"));
-
-  // The far side is the next surface beyond the edge, not the farthest: a hole between an occluder (1 m, left) and
-  // a wall (3 m, right and below) whose upward rays reach a far surface (9 m) through a gap takes the wall's depth.
-  auto layers = torch::full({kH, kW}, 3.0f);
-  layers.narrow(1, 0, 28).fill_(1.0f);
-  layers.narrow(0, 0, 20).narrow(1, 28, 3).fill_(9.0f);
-  auto gap = ones();
-  gap.narrow(0, 20, 8).narrow(1, 28, 3).zero_();
-  const auto gap_fill = fill_depth_holes(layers, gap, 8, 10).depth.narrow(0, 20, 8).narrow(1, 28, 3);
-  CHECK((gap_fill - 3.0f).abs().max().item<float>() < 1e-4f);
-  // The width counts the near layer and the far layer only: at (20, 29) the 9 m surface lies 1 step up, the
-  // occluder 2 steps left and the wall 2 steps right, so with far_width = 3 the strip (2 + 2) is blended.
-  const auto narrow_gap = fill_depth_holes(layers, gap, 8, 3).depth, gap_blend = fill_depth_holes(layers, gap, 8).depth;
-  CHECK(narrow_gap[20][29].item<float>() == gap_blend[20][29].item<float>());
-  CHECK(narrow_gap[20][29].item<float>() != Approx(3.0f).epsilon(0.01));
-
-  // A hole with no edge across it, even on a steep plane (7x the depth across the image), is filled as blend fills it.
-  const auto plane = 1.0 / (0.9 - 0.012 * u);
-  auto holed = ones();
-  holed.narrow(0, 10, 12).narrow(1, 20, 12).zero_();
-  CHECK(torch::equal(fill_depth_holes(plane, holed, 8, 10).depth, fill_depth_holes(plane, holed, 8).depth));
-
-  // Through the sampler (with edge supports, which the blend's steep ramp leaves the only ones in the shadow): with
-  // far, the shadow's supports lie on the background's plane; with the blend, some hang between the surfaces.
-  SamplerOptions o = fixed(6000);
-  o.fill_px = 8;
-  o.edge_supports = true;
-  auto in_shadow = [](const Supports& s) {
-    const auto su = s.uv.select(1, 0);
-    return (su > 28.5) & (su < 33.5);
-  };
-  const Supports b = sample_supports(depth, valid, K(), image(), o, 5);
-  o.fill_mode = "far";
-  const Supports f = sample_supports(depth, valid, K(), image(), o, 5);
-  const auto f_truth = 1.0 / (0.30 - 0.002 * f.uv.select(1, 0)), b_truth = 1.0 / (0.30 - 0.002 * b.uv.select(1, 0));
-  REQUIRE(in_shadow(f).sum().item<int64_t>() > 20);
-  CHECK(((f.depth - f_truth).abs() / f_truth).masked_select(in_shadow(f)).max().item<double>() < 0.01);
-  REQUIRE(in_shadow(b).sum().item<int64_t>() > 20);
-  CHECK((b.depth / b_truth).masked_select(in_shadow(b)).min().item<double>() < 0.7);
-  // The schema: far without fill_px is refused, naming the key.
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"fill_mode", "far"}}, "test"),
-                    Catch::Contains("fill_mode"));
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"fill_px", 8}, {"fill_mode", "near"}}, "test"),
-                    Catch::Contains("fill_mode"));
-}
-
 TEST_CASE("sampler: the same seed gives identical supports, another seed different ones", "[sampler]") {
   auto depth = 1.0 + torch::rand({kH, kW});
   auto img = image();
@@ -936,16 +699,15 @@ TEST_CASE("sampler: every support carries the plane's normal, facing the camera,
   SamplerOptions area = fixed(1500), pixel = fixed(0), vf = fixed(1500);
   pixel.mode = "pixel";
   vf.mode = "vertex_face";
-  for (SamplerOptions* o : {&area, &pixel, &vf}) o->normals = true;
   for (const SamplerOptions& o : {area, pixel, vf}) {
-    const Supports s = sample_supports(depth, ones(), K(), image(), o, 3);
+    const Supports s = sample_supports(depth, ones(), K(), image(), o, 3, true);
     REQUIRE(s.normal.sizes() == torch::IntArrayRef({s.count(), 3}));
     CHECK(torch::allclose(s.normal, expected.expand({s.count(), 3}), 1e-4, 1e-4));
   }
   // A lone valid pixel has no surface around it: its normal points back along its ray.
   auto valid = torch::zeros({kH, kW});
   valid[10][20] = 1;
-  const Supports lone = sample_supports(torch::full({kH, kW}, 3.0f), valid, K(), image(), pixel);
+  const Supports lone = sample_supports(torch::full({kH, kW}, 3.0f), valid, K(), image(), pixel, 0, true);
   REQUIRE(lone.count() == 1);
   auto ray = torch::tensor({(20.5 - cx) / fx, (10.5 - cy) / fy, 1.0}, torch::kFloat32);
   CHECK(torch::allclose(lone.normal[0], -ray / ray.norm(), 1e-5, 1e-6));
@@ -958,8 +720,7 @@ TEST_CASE("sampler: along a crease the normal is the area-weighted mean of both 
   auto depth = torch::minimum(torch::full({kH, kW}, 5.0f), 1.2f / v.clamp_min(1e-3f)).contiguous();
   SamplerOptions px = fixed(0);
   px.mode = "pixel";
-  px.normals = true;
-  const Supports s = sample_supports(depth, ones(), K(), image(), px);
+  const Supports s = sample_supports(depth, ones(), K(), image(), px, 0, true);
   REQUIRE(s.count() == kH * kW);
   auto n = s.normal;
   CHECK(torch::allclose(n.norm(2, 1), torch::ones({s.count()}), 1e-5, 1e-5));
@@ -977,8 +738,7 @@ TEST_CASE("sampler: along a crease the normal is the area-weighted mean of both 
   CHECK(floor.view({kH, kW})[kH - 2].all().item<bool>());
   // Area mode reads the same per-pixel normals: every support's normal is one of the pixel-mode normals.
   SamplerOptions area = fixed(4000);
-  area.normals = true;
-  const Supports a = sample_supports(depth, ones(), K(), image(), area, 5);
+  const Supports a = sample_supports(depth, ones(), K(), image(), area, 5, true);
   auto ia = a.uv.select(1, 1).floor().clamp(0, kH - 1).to(torch::kLong),
        ja = a.uv.select(1, 0).floor().clamp(0, kW - 1).to(torch::kLong);
   CHECK(torch::equal(a.normal, n.index_select(0, ia * kW + ja)));
@@ -988,8 +748,7 @@ TEST_CASE("sampler: base Gaussians follow the scene normalization", "[sampler]")
   auto depth = torch::full({kH, kW}, 2.0f);
   depth.narrow(1, 0, 8).fill_(0.5f);
   SamplerOptions o = fixed(1000);
-  o.normals = true;
-  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
+  const Supports s = sample_supports(depth, ones(), K(), image(), o, 2, true);
   const BaseGaussians b = make_base_gaussians(s);
   CHECK(b.depth_factor == Approx(1.0 / s.depth.min().item<double>()));
   CHECK(b.z_n.min().item<float>() == Approx(1.0f));

@@ -17,11 +17,6 @@ struct FilledDepth {
 // its smallest and largest value), coarse where the hole is wide. Usable pixels keep their depth (as float32);
 // pixels farther than max_px (the inside of large missing regions) stay invalid. depth, valid [H,W] on the CPU;
 // max_px >= 0 (0 = no filling: unusable depth only becomes 0 and invalid). Deterministic, no gradient.
-// far_width > 0: a filled pixel whose hole is a strip at most this many steps across a depth edge (along the 8
-// pixel directions, from the near surface to the far one; w missing pixels count w + 1) takes the far
-// side's depth instead of the blend (see far_side_log_depth in the source): a sensor's shadow behind an occluder
-// is background, and the blend would bridge the two surfaces. Other holes are filled as with 0.
-FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px,
-                             int64_t far_width = 0);
+FilledDepth fill_depth_holes(const torch::Tensor& depth, const torch::Tensor& valid, int64_t max_px);
 
 }  // namespace isplat

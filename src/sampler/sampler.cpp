@@ -53,16 +53,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area mode: no accepted triangle draws supports below this share of an even per-pixel spread (applied "
           "after image_share), so near surfaces keep at least that density; the rest still follows area (0 = off)",
           Range::between(0.0, 4.0));
-  v.field("color", color,
-          "how a support reads its colour: bilinear between the 4 nearest pixels (smooths texture when supports "
-          "fall between pixel centres) or the pixel it falls in",
-          {"bilinear", "nearest"});
-  v.field("placement", placement,
-          "area mode: a triangle's supports follow a low-discrepancy sequence from a random start (random) or from "
-          "its centroid (centroid: one support per triangle sits at the centroid, so placement is regular), or each "
-          "random point moves to the triangle's vertex with the largest barycentric weight (vertex: counts follow "
-          "area, positions are pixel centres as in pixel mode; supports may share a pixel)",
-          {"random", "centroid", "vertex"});
   v.field("edge_supports", edge_supports,
           "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
           "triangle surrounds it and faces leave a half-pixel gap), taken from the budget");
@@ -78,21 +68,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "far sides, holes and the border keep faces up to their edge supports)",
           {"all", "near"});
   v.require("edge_band_at", edge_band_at == "all" || edge_band > 0, "near needs sampler.edge_band > 0");
-  v.field("edge_scale", edge_scale,
-          "area mode with edge_supports: the footprint (base scale) of each edge support as a multiple of a pixel's; "
-          "faces reach the edge pixels' centres, so a smaller one only closes the half-pixel gap beyond them and "
-          "draws silhouettes less wide (1 = a whole pixel, as in pixel mode)",
-          Range::between(0.05, 4.0));
-  v.field("edge_scale_at", edge_scale_at,
-          "with edge_scale: which edge supports it applies to: all, or near (only those on the near side of a depth "
-          "edge, whose footprints can spill onto the background; border and hole edges keep a whole pixel)",
-          {"all", "near"});
-  v.require("edge_scale_at", edge_scale_at == "all" || edge_scale != 1.0,
-            "near needs sampler.edge_scale other than 1 (it chooses where edge_scale applies)");
-  v.require("edge_scale", edge_scale == 1.0 || (mode == "area" && edge_supports),
-            "needs sampler.mode = area and sampler.edge_supports = true (it scales the edge supports)");
-  v.require("edge_scale", edge_scale == 1.0 || edge_band == 0,
-            "needs sampler.edge_band = 0 (faces stay out of a band, so shrunk band supports would leave gaps)");
   v.field("edge_shift", edge_shift,
           "area mode with edge_supports, or pixel mode: move each support at a depth edge's near side (area: the "
           "edge supports) this many pixels away from the farther surface, keeping its depth, colour and footprint, "
@@ -106,13 +81,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
       "needs sampler.mode = pixel, or sampler.mode = area with sampler.edge_supports = true (it acts on the supports "
       "at depth edges)";
   v.require("edge_shift", edge_shift == 0.0 || at_edges, at_edges_needs);
-  v.field("edge_shift_from", edge_shift_from,
-          "how far each near-side edge support moves: fixed (edge_shift), or coverage (edge_shift + 0.5 - the share "
-          "of its pixel its surface covers, within [0, 1]: the share is read from the antialiased colour as a mix of "
-          "the pixel one step inwards and the farther neighbours, in linear light; edge_shift where those colours "
-          "differ too little or the pixel lies on a line one or two pixels wide)",
-          {"fixed", "coverage"});
-  v.require("edge_shift_from", edge_shift_from == "fixed" || at_edges, at_edges_needs);
   v.field("edge_behind", edge_behind,
           "area mode with edge_supports, or pixel mode: continue the farther surface under each near-side "
           "silhouette pixel with up to this many supports, one pixel apart inwards while they stay hidden, on the "
@@ -131,17 +99,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "
           "(most of a sky) stays empty; 0 = off",
           Range::between(0, 256));
-  v.field("fill_mode", fill_mode,
-          "with fill_px: blend fills each hole from all around it (push-pull); far gives a pixel whose hole is a "
-          "narrow strip across a depth edge (see fill_far_width) the depth of the edge's far side (the shadow a "
-          "stereo or time-of-flight sensor leaves behind an occluder is background), other holes as blend",
-          {"blend", "far"});
-  v.field("fill_far_width", fill_far_width,
-          "fill_mode far: the widest strip filled from the far side, in steps from the near surface to the far one "
-          "along the 8 pixel directions (w missing pixels across an axis-aligned edge count w + 1); a wider hole "
-          "between two surfaces, such as a receding street, is blended",
-          Range::between(2, 256));
-  v.require("fill_mode", fill_mode == "blend" || fill_px > 0, "far needs sampler.fill_px > 0");
 }
 
 double discontinuity_threshold(double z_mean) {
@@ -161,7 +118,7 @@ SamplerOptions without_fill(SamplerOptions o) {  // the options once fill_px has
 }
 
 FilledDepth fill_holes(const torch::Tensor& depth, const torch::Tensor& valid, const SamplerOptions& o) {
-  return fill_depth_holes(depth, valid, o.fill_px, o.fill_mode == "far" ? o.fill_far_width : 0);
+  return fill_depth_holes(depth, valid, o.fill_px);
 }
 
 struct Grid {
@@ -170,7 +127,6 @@ struct Grid {
   const float* image;  // [3,H,W]
   int64_t H, W;
   double fx, fy, cx, cy, skew;
-  bool nearest_color = false;
 };
 
 Grid make_grid(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
@@ -263,13 +219,7 @@ void write_support(const Grid& g, const Output& o, int64_t k, double u, double v
   o.uv[2 * k] = static_cast<float>(u);
   o.uv[2 * k + 1] = static_cast<float>(v);
   o.depth[k] = z;
-  if (g.nearest_color) {
-    const int64_t px = std::clamp<int64_t>(static_cast<int64_t>(u), 0, g.W - 1),
-                  py = std::clamp<int64_t>(static_cast<int64_t>(v), 0, g.H - 1);
-    for (int c = 0; c < 3; ++c) o.color[3 * k + c] = g.image[c * g.H * g.W + py * g.W + px];
-  } else {
-    for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear_at(g.image + c * g.H * g.W, g.H, g.W, u, v);
-  }
+  for (int c = 0; c < 3; ++c) o.color[3 * k + c] = bilinear_at(g.image + c * g.H * g.W, g.H, g.W, u, v);
   o.area[k] = area;
 }
 
@@ -307,11 +257,9 @@ std::vector<float> triangle_areas(const Grid& g) {
 // Area-weighted stratified sampling of n supports into o starting at `first`. Returns the total area.
 // `area`: triangle_areas(g). `weight` (per pixel, or null): triangles are drawn in proportion to area × the
 // weight of their quad's first vertex, and each support then stands for a share of area inversely
-// proportional to that weight. `image_share`, `pixel_floor` and `placement` as in SamplerOptions.
+// proportional to that weight. `image_share` and `pixel_floor` as in SamplerOptions.
 double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t seed, const Output& o, int64_t first,
-                    const float* weight = nullptr, double image_share = 0.0, double pixel_floor = 0.0,
-                    const std::string& placement = "random") {
-  const bool centroid = placement == "centroid", vertex = placement == "vertex";
+                    const float* weight = nullptr, double image_share = 0.0, double pixel_floor = 0.0) {
   const int64_t Hq = g.H - 1, Wq = g.W - 1;
   std::vector<double> row_sum(static_cast<size_t>(Hq), 0.0);
   for_each_row(Hq, [&](int64_t i) {
@@ -410,22 +358,13 @@ double sample_faces(const Grid& g, std::vector<float> area, int64_t n, uint64_t 
         // count, where most triangles get 0 or 1 support and A_t / n_t would leave holes.
         // With a measure m other than the area A: each support stands for A_q · total_m / (n · m_q).
         const float rep = static_cast<float>(raw.empty() ? total / n : raw[q] * total_w / (n * double(area[q])));
-        // centroid: the sequence starts so that its first point is (1/3, 1/3), the centroid.
-        const double s1 = centroid ? 1.0 / 3.0 - a1 : unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
-                     s2 = centroid ? 1.0 / 3.0 - a2
-                                   : unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
+        const double s1 = unit(seed ^ (static_cast<uint64_t>(q) * 0x9E3779B97F4A7C15ull)),
+                     s2 = unit(seed ^ (static_cast<uint64_t>(q) * 0xC2B2AE3D27D4EB4Full + 7));
         for (int32_t m = 0; m < cnt; ++m, ++k) {
           double b1 = s1 + (m + 1) * a1, b2 = s2 + (m + 1) * a2;
           b1 -= std::floor(b1);
           b2 -= std::floor(b2);
           if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
-          if (vertex) {  // the vertex with the largest barycentric weight (a third of the triangle each)
-            const double b0 = 1.0 - b1 - b2;
-            const bool at_v0 = b0 >= b1 && b0 >= b2;
-            const double n1 = !at_v0 && b1 >= b2 ? 1.0 : 0.0;
-            b2 = !at_v0 && b1 < b2 ? 1.0 : 0.0;
-            b1 = n1;
-          }
           const double u = c[0] + 0.5 + b1 * (c[1] - c[0]) + b2 * (c[2] - c[0]);
           const double v = r[0] + 0.5 + b1 * (r[1] - r[0]) + b2 * (r[2] - r[0]);
           float z;
@@ -689,64 +628,17 @@ bool near_side(const Grid& g, int64_t p, std::vector<int64_t>& far, double* away
   return !far.empty();
 }
 
-// Edge supports 0..pixels.size()-1 stand for scale² of their area: all of them, or (near_only) those on the near side
-// of a depth edge (near_side).
-void scale_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double scale,
-                         bool near_only) {
-  const float f = static_cast<float>(scale * scale);
-  std::vector<int64_t> far;
-  for (size_t k = 0; k < pixels.size(); ++k) {
-    if (near_only) farther_neighbours(g, pixels[k], far);
-    if (!near_only || !far.empty()) o.area[k] *= f;
-  }
-}
-
-// The share of near-side edge pixel p that its own surface covers, read from its colour as a mix (in linear light:
-// the images are antialiased and then gamma-encoded with 1/2.2) of the same-surface pixel one step inwards and the
-// farther neighbours `far`: the projection of p's colour onto the line between the two, clamped to [0, 1]. -1 where
-// the colours do not tell: no inward pixel on p's surface, one that is itself on a silhouette (a line one or two
-// pixels wide), or colours that differ by less than kCoverageContrast.
-double near_coverage(const Grid& g, int64_t p, const std::vector<int64_t>& far, const double* away,
-                     std::vector<int64_t>& scratch) {
-  constexpr double kCoverageContrast = 0.05;  // linear RGB distance; below it the colours barely differ
-  const int64_t HW = g.H * g.W;
-  const int64_t y = p / g.W - std::lround(away[1]), x = p % g.W - std::lround(away[0]), q = y * g.W + x;
-  if (y < 0 || x < 0 || y >= g.H || x >= g.W || g.valid[q] == 0.0f || depths_apart(g.depth[p], g.depth[q])) return -1;
-  farther_neighbours(g, q, scratch);
-  if (!scratch.empty()) return -1;
-  auto linear = [&](int64_t pixel, int c) { return std::pow(std::max(0.0f, g.image[c * HW + pixel]), 2.2); };
-  double num = 0, den = 0;
-  for (int c = 0; c < 3; ++c) {
-    double back = 0;
-    for (int64_t f : far) back += linear(f, c);
-    back /= static_cast<double>(far.size());
-    const double d = linear(q, c) - back;
-    num += (linear(p, c) - back) * d;
-    den += d * d;
-  }
-  if (den < kCoverageContrast * kCoverageContrast) return -1;
-  return std::clamp(num / den, 0.0, 1.0);
-}
-
 // Edge supports on the near side of a depth edge move `shift` pixels away from the farther neighbours, into their
 // own surface, keeping their depth and footprint: the silhouette's outermost Gaussians then reach that much less far
-// onto the background. With from_coverage, the move is shift + 0.5 - (the pixel's near_coverage), within [0, 1]: the
-// silhouette sits (coverage - 0.5) pixels beyond the centre, so `shift` is the move at half coverage; pixels whose
-// colours do not tell keep `shift`. Depth and colour stay the pixel centre's, read before the move.
-void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift,
-                         bool from_coverage) {
-  if (shift == 0.0 && !from_coverage) return;  // nothing moves
-  std::vector<int64_t> far, inner_far;
+// onto the background. Depth and colour stay the pixel centre's, read before the move.
+void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift) {
+  if (shift == 0.0) return;  // nothing moves
+  std::vector<int64_t> far;
   for (size_t k = 0; k < pixels.size(); ++k) {
     double away[2];
     if (!near_side(g, pixels[k], far, away) || (away[0] == 0.0 && away[1] == 0.0)) continue;
-    double s = shift;
-    if (from_coverage) {
-      const double alpha = near_coverage(g, pixels[k], far, away, inner_far);
-      if (alpha >= 0) s = std::clamp(shift + 0.5 - alpha, 0.0, 1.0);
-    }
-    o.uv[2 * k] -= static_cast<float>(s * away[0]);
-    o.uv[2 * k + 1] -= static_cast<float>(s * away[1]);
+    o.uv[2 * k] -= static_cast<float>(shift * away[0]);
+    o.uv[2 * k + 1] -= static_cast<float>(shift * away[1]);
   }
 }
 
@@ -976,16 +868,14 @@ int64_t resolve_budget(const SamplerOptions& o, const torch::Tensor& depth, cons
 }
 
 Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
-                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed) {
+                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed, bool normals) {
   torch::NoGradGuard no_grad;
   if (options.fill_px > 0) {
     const FilledDepth f = fill_holes(depth, valid, options);
-    return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed);
+    return sample_supports(f.depth, f.valid, K, image, without_fill(options), seed, normals);
   }
   torch::Tensor dk, vk, ik;
-  Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
-  g.nearest_color = options.color == "nearest";
-  const bool coverage_shift = options.edge_shift_from == "coverage";
+  const Grid g = make_grid(depth, valid, K, image, dk, vk, ik);
   if (options.mode == "pixel") {
     std::vector<int64_t> idx;
     for (int64_t p = 0; p < g.H * g.W; ++p)
@@ -997,10 +887,10 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);
     write_pixel_supports(g, o, idx, nv);
-    shift_edge_supports(g, o, idx, options.edge_shift, coverage_shift);
+    shift_edge_supports(g, o, idx, options.edge_shift);
     write_behind(g, o, behind, nb, nv);
     s.behind = nb;
-    if (options.normals) {
+    if (normals) {
       write_normals(g, s);
       behind_normals(g, s, behind, nb, nv);
     }
@@ -1023,9 +913,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       const std::vector<int64_t> chosen = spread(edges, ne);
       write_pixel_supports(g, o, chosen, ne);
-      if (options.edge_scale != 1.0)
-        scale_edge_supports(g, o, chosen, options.edge_scale, options.edge_scale_at == "near");
-      shift_edge_supports(g, o, chosen, options.edge_shift, coverage_shift);
+      shift_edge_supports(g, o, chosen, options.edge_shift);
       if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
         behind = behind_places(g, chosen, options.edge_behind, options.edge_behind_start);
         const int64_t places = static_cast<int64_t>(behind.depth.size());
@@ -1039,11 +927,11 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
     }
     const double face_total =
         sample_faces(g, std::move(area), n - ne - nb, seed, o, ne, weight.empty() ? nullptr : weight.data(),
-                     options.image_share, options.pixel_floor, options.placement);
+                     options.image_share, options.pixel_floor);
     if (ne > 0) rescale_areas(s, options.edge_band > 0 ? total : face_total, n - nb);
     write_behind(g, o, behind, nb, n - nb);
     s.behind = nb;
-    if (options.normals) {
+    if (normals) {
       write_normals(g, s);
       behind_normals(g, s, behind, nb, n - nb);
     }
@@ -1081,7 +969,7 @@ Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid,
   const Output o = pointers(s);
   write_pixel_supports(g, o, priority, nv);
   rescale_areas(s, sample_faces(g, triangle_areas(g), n - nv, seed, o, nv));
-  if (options.normals) write_normals(g, s);
+  if (normals) write_normals(g, s);
   return s;
 }
 

@@ -30,8 +30,6 @@ struct SamplerOptions {
   double image_share = 0.0;
   // area mode: a floor under each triangle's measure, as a share of the even per-pixel spread (0 = off).
   double pixel_floor = 0.0;
-  std::string color = "bilinear";    // bilinear | nearest: how a support off a pixel centre reads its colour
-  std::string placement = "random";  // random | centroid | vertex: where a triangle's supports sit in it
   // area mode: one support at the centre of every valid pixel that no accepted triangle surrounds (depth
   // edges, holes, the image border), taken from the budget; faces get the rest.
   bool edge_supports = false;
@@ -43,17 +41,9 @@ struct SamplerOptions {
   // edges, and then only over its own surface (steps that cross no discontinuity), so far sides, holes and the border
   // keep faces up to their edge supports.
   std::string edge_band_at = "all";
-  // With edge_supports: each edge support's footprint (the scale of its base Gaussian) is this times a pixel's,
-  // before the areas are rescaled to the surface's total. Faces reach the edge pixels' centres, so an edge support
-  // only has to close the half-pixel gap beyond them; 1 = a whole pixel, as in pixel mode. Needs edge_band = 0.
-  double edge_scale = 1.0;
-  std::string edge_scale_at = "all";  // all | near: edge_scale on every edge support, or near silhouettes only
   // With edge_supports (or in pixel mode): supports on the near side of a depth edge sit this many pixels from their
   // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre.
   double edge_shift = 0.0;
-  // fixed | coverage: every near-side support moves edge_shift, or edge_shift + 0.5 - its pixel's coverage by its
-  // own surface (read from the antialiased colour), so the silhouette lands where the image puts it within the pixel.
-  std::string edge_shift_from = "fixed";
   // With edge_supports (or in pixel mode, on top of one per pixel): supports that continue the farther surface under
   // each near-side silhouette pixel, up to this many pixels deep while they stay hidden in the source view (on the
   // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off.
@@ -64,15 +54,6 @@ struct SamplerOptions {
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).
   int64_t fill_px = 0;
-  // With fill_px: "blend" fills every hole from all around it; "far" gives a hole that is a strip at most
-  // fill_far_width steps across a depth edge (along the 8 pixel directions, near surface to far; w missing pixels
-  // count w + 1) the far side's depth (a sensor's shadow behind an occluder), so the fill does not bridge the two
-  // surfaces.
-  std::string fill_mode = "blend";
-  int64_t fill_far_width = 10;
-  // Fill Supports::normal. Not a config key: the model asks for normals only when composer.orientation = surface
-  // reads them; they are nearly free at 2 supports per pixel but add about a third at the paper's 1.5M.
-  bool normals = false;
   void visit(ConfigVisitor& v);
 };
 
@@ -83,7 +64,7 @@ struct Supports {
   torch::Tensor depth;   // [N] planar metres
   torch::Tensor color;   // [N,3] sRGB in [0,1]
   torch::Tensor area;    // [N] surface area each support stands for, m² (area mode: total / N)
-  torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera; only with options.normals
+  torch::Tensor normal;  // [N,3] unit surface normal in the camera frame, facing the camera; only when asked (normals)
   int64_t behind = 0;    // the last `behind` supports are hidden surface under near-side silhouettes (edge_behind)
   int64_t count() const { return uv.size(0); }
 };
@@ -99,9 +80,11 @@ torch::Tensor detail_weights(const torch::Tensor& depth, const torch::Tensor& va
 
 // depth [H,W] float (planar metres), valid [H,W] (nonzero = valid), K [3,3], image [3,H,W] sRGB.
 // Deterministic in `seed`; the count equals the resolved budget (pixel mode: one per valid pixel).
-// Throws Error when no triangle (or pixel) is valid.
+// Throws Error when no triangle (or pixel) is valid. `normals` fills Supports::normal: the model asks for them only
+// when composer.orientation = surface reads them; nearly free at 2 supports per pixel, about a third more at 1.5M.
 Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
-                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed = 0);
+                         const torch::Tensor& image, const SamplerOptions& options, uint64_t seed = 0,
+                         bool normals = false);
 
 // The release's discontinuity test: a triangle is rejected when zmax/zmin >= this threshold.
 double discontinuity_threshold(double z_mean);
