@@ -22,7 +22,7 @@ struct ComposerOptions {
   bool linear_rgb = true;  // convert colours sRGB -> linear for compositing (release behaviour)
   // The frame the rotation update dq acts in: "camera" (release: the identity) or "surface" (the Gaussian's local
   // z axis starts on the support's surface normal, so a Gaussian flattened along z lies in the surface).
-  std::string orientation = "camera";
+  std::string orientation = "camera";  // the release's; the model's default is surface (ModelOptions)
   void visit(ConfigVisitor& v);
 };
 

@@ -13,6 +13,22 @@
 
 namespace isplat {
 
+ModelOptions::ModelOptions() {
+  // 0.85 supports per pixel, edge supports with half the budget spread per pixel and a per-pixel floor, a 2-pixel
+  // band of pixel rays on the near side of silhouettes, 0.5 px off the far side, with 3 pixels of surface behind
+  // them; rotation updates in the surface's frame (lab/2026-11-28-seeds, -behind-band, 2026-11-26-surface-frame).
+  sampler.budget_mode = "per_pixel";
+  sampler.density = 0.85;
+  sampler.edge_supports = true;
+  sampler.image_share = 0.5;
+  sampler.pixel_floor = 1.0;
+  sampler.edge_band = 2;
+  sampler.edge_band_at = "near";
+  sampler.edge_shift = 0.5;
+  sampler.edge_behind = 3;
+  composer.orientation = "surface";
+}
+
 void ModelOptions::visit(ConfigVisitor& v) {
   v.field("variant", variant, "rgb (monocular prior) or lidar (sparse-prompt prior); recorded in checkpoints",
           {"rgb", "lidar"});

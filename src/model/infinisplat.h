@@ -22,7 +22,10 @@ namespace isplat {
 
 class ConfigVisitor;
 
+// The model's defaults are the recipe the lab's studies adopted (config_version 2, lab/README.md): the sampler and
+// composer structs alone keep the paper release's, which model_defaults(1) in model/model_io.h restores.
 struct ModelOptions {
+  ModelOptions();
   std::string variant = "rgb";  // rgb | lidar: which prior family the checkpoint was trained with
   PriorOptions prior;
   SamplerOptions sampler;
