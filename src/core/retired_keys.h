@@ -1,0 +1,27 @@
+// Config keys retired after their studies (issue 70): the behaviour each kept, so stored configs still load.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace isplat {
+
+struct RetiredKey {
+  std::string path;     // from the config's root, e.g. "model.sampler.fill_mode"
+  nlohmann::json kept;  // the value whose behaviour remains; null: any value (it acted only with another retired key)
+  std::string study;    // the lab study that measured it and did not adopt it
+};
+
+// Every retired key, in the order of its section.
+const std::vector<RetiredKey>& retired_keys();
+
+// Removes the retired keys from a stored config's "model" section (the keys under "model."): silently where the key
+// holds the value whose behaviour remains, else fails with an error naming `source`, the key, its value and the
+// study. Apply it before the schema reads a stored config, which would refuse the key as unknown.
+void strip_retired_keys(nlohmann::json& model_section, const std::string& source);
+
+// The same for a whole stored config (every section), e.g. a checkpoint's "config" or a run's config.json.
+void strip_retired_config_keys(nlohmann::json& config, const std::string& source);
+
+}  // namespace isplat
