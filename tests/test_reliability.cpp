@@ -2,6 +2,7 @@
 // never a crash, a hang, an exhausted memory or silently wrong data; training state survives damage.
 #include <catch2/catch.hpp>
 
+#include <sys/wait.h>
 #include <torch/torch.h>
 #include <unistd.h>
 
@@ -264,11 +265,15 @@ TEST_CASE("reliability: checkpoint folder keeps separate files, falls back to an
   found = folder.newest_intact();
   REQUIRE(found);
   CHECK(found->path == folder.path("step_000001"));
-  // A killed write's temporary is removed; real checkpoints are not.
-  test::write_bytes(dir + "/.last.tmp4242_0.safetensors", "half");
+  // A killed write's temporary (its writer's pid has ended) is removed; real checkpoints are not.
+  const pid_t killed = ::fork();
+  if (killed == 0) ::_exit(0);
+  ::waitpid(killed, nullptr, 0);
+  const std::string temporary = cat(dir, "/.last.isplat-tmp", killed, "_0.safetensors");
+  test::write_bytes(temporary, "half");
   CHECK(folder.remove_stale_temporaries() == 1);
   CHECK(fs::exists(folder.path("step_000001")));
-  CHECK_FALSE(fs::exists(dir + "/.last.tmp4242_0.safetensors"));
+  CHECK_FALSE(fs::exists(temporary));
 }
 
 TEST_CASE("reliability: one trainer per run folder, unwritable folders and damaged state fail cleanly",

@@ -14,8 +14,8 @@
 namespace isplat {
 namespace {
 
-std::string lock_path(const std::string& dir) {
-  return (std::filesystem::path(dir) / ".lock").string();
+std::string lock_path(const std::string& dir, const std::string& name = ".lock") {
+  return (std::filesystem::path(dir) / name).string();
 }
 
 // The holder's pid as its lock file records it, "?" when the file holds none yet.
@@ -27,11 +27,11 @@ std::string recorded_pid(int fd) {
 
 }  // namespace
 
-FolderLock::FolderLock(const std::string& dir) {
+FolderLock::FolderLock(const std::string& dir, const std::string& name) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) fail(dir, ": cannot create the folder: ", ec.message());
-  const std::string path = lock_path(dir);
+  const std::string path = lock_path(dir, name);
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
   if (fd_ < 0) fail(dir, ": cannot create the lock file ", path, ": ", std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {

@@ -6,9 +6,10 @@ namespace isplat {
 
 // flock on <dir>/.lock, holding the owner's pid. A second holder fails at once with an Error naming the
 // folder and the pid that holds it. The kernel drops the lock when the process ends, however it ends.
+// `name` other than ".lock" gives writers of disjoint files in one folder (an evaluation's shards) a lock each.
 class FolderLock {
  public:
-  explicit FolderLock(const std::string& dir);
+  explicit FolderLock(const std::string& dir, const std::string& name = ".lock");
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;
