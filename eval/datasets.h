@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "data/colmap.h"
 #include "data/sequence.h"
 
@@ -38,5 +40,13 @@ std::vector<Sequence> load_eval_dataset(const EvalDatasetOptions& options);
 // The COLMAP model of each sequence of a colmap dataset, in load_eval_dataset's order: the source of
 // points3D prompts (prompts = points3d).
 std::vector<ColmapModel> load_eval_points3d(const EvalDatasetOptions& options);
+
+// What a manifest and the scores on it were computed from: the root (canonical path), the frame list, the cameras
+// as read, each frame's image and depth file (relative path, size, modification time: one hash) and the model
+// files (COLMAP sparse folder, nerfstudio transforms: size and content hash each).
+nlohmann::json dataset_fingerprint(const EvalDatasetOptions& options, const std::vector<Sequence>& sequences);
+// What differs between two fingerprints, in words ("root /a -> /b; frame list (32 -> 24 frames); ..."), or "" when
+// nothing does.
+std::string fingerprint_changes(const nlohmann::json& before, const nlohmann::json& now);
 
 }  // namespace isplat

@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include <filesystem>
+#include <regex>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -14,12 +15,24 @@
 #include "data/perturb.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
+#include "io/folder_lock.h"
 #include "io/panel.h"
 #include "metrics/mask.h"
 #include "metrics/stability.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
+
+namespace {
+// Releases scoring.out's lock at the end of the scope that took it (run, or a merge and the run it ends with).
+struct ReleaseLock {
+  std::unique_ptr<FolderLock>& lock;
+  bool mine;
+  ~ReleaseLock() {
+    if (mine) lock.reset();
+  }
+};
+}  // namespace
 
 Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
   check_dataset_names(config_.datasets);
@@ -40,15 +53,41 @@ Evaluator::Evaluator(EvalConfig config) : config_(std::move(config)) {
 Manifest Evaluator::manifest(size_t d, const std::vector<Sequence>& sequences, const std::vector<ColmapModel>& models) {
   const auto& ds = config_.datasets[d];
   const std::string path = (fs::path(dataset_dir(d)) / "manifest.json").string();
+  const nlohmann::json fingerprint = dataset_fingerprint(ds, sequences);
   if (fs::exists(path)) {
     Manifest m = read_manifest(path);
+    // Scores are found by dataset name: data that changed under the same name never reuses them.
+    if (m.dataset_fingerprint.is_null()) {
+      log_info("eval: ", ds.name, ": ", path, " predates dataset fingerprints; it adopts the data at ", ds.root);
+      m.dataset_fingerprint = fingerprint;
+      write_manifest(path, m);
+    }
+    if (const std::string changes = fingerprint_changes(m.dataset_fingerprint, fingerprint); !changes.empty())
+      fail("eval: dataset '", ds.name, "' changed since ", path, " and the scores beside it were made: ", changes,
+           ". Its old scores are not reused: choose another scoring.out or dataset name, or delete ", dataset_dir(d),
+           " to score it again");
     if (config_to_json(m.protocol) == config_to_json(config_.protocol)) {
       log_info("eval: ", ds.name, ": reusing ", path, " (", m.pairs.size(), " pairs)");
       return m;
     }
     log_info("eval: ", ds.name, ": protocol changed; drawing a new manifest");
+  } else if (fs::is_directory(dataset_dir(d))) {
+    // No manifest, but results may be there (the manifest was deleted): their stamps know the data they were scored
+    // on, checked before a manifest of other data is written beside them.
+    for (const auto& e : fs::directory_iterator(dataset_dir(d))) {
+      const std::string name = e.path().filename().string();
+      if (name.size() < 12 || name.compare(name.size() - 12, 12, ".method.json") != 0) continue;
+      const nlohmann::json stamp = read_json_file(e.path().string());
+      if (!stamp.is_object() || !stamp.contains("dataset_fingerprint")) continue;
+      if (const std::string changes = fingerprint_changes(stamp["dataset_fingerprint"], fingerprint); !changes.empty())
+        fail("eval: dataset '", ds.name, "' changed since the scores in ", dataset_dir(d), " were made (",
+             e.path().string(), "): ", changes,
+             ". Its old scores are not reused: choose another scoring.out or dataset name, or delete ", dataset_dir(d),
+             " to score it again");
+    }
   }
   Manifest m = draw_manifest(ds.name, sequences, config_.protocol, models);
+  m.dataset_fingerprint = fingerprint;
   write_manifest(path, m);
   log_info("eval: ", ds.name, ": ", m.pairs.size(), " pairs -> ", path);
   return m;
@@ -106,10 +145,14 @@ std::string Evaluator::results_path(size_t d, const std::string& method) const {
 }
 
 // Refuses results scored with other method options (or another crack definition) than the config gives now.
-static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring);
+// `dataset`: the manifest's dataset fingerprint (null for manifests written before it).
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring,
+                               const nlohmann::json& dataset);
 
 std::vector<ReportRow> Evaluator::merge(int64_t count) {
   ISPLAT_CHECK(count >= 1, "eval: --merge needs the shard count");
+  const ReleaseLock release{lock_, !lock_};
+  lock_output();
   for (size_t d = 0; d < config_.datasets.size(); ++d) {
     const auto& ds = config_.datasets[d];
     const std::string manifest_path = (fs::path(dataset_dir(d)) / "manifest.json").string();
@@ -124,7 +167,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         const std::string path = results_path(d, mo.name);
         ISPLAT_CHECK(fs::exists(path), "eval --merge: shard ", k, "/", count, " has no results for ", ds.name, " / ",
                      mo.name, " (", path, ")");
-        check_method_stamp(path, mo, config_.scoring);  // scored as this config says
+        check_method_stamp(path, mo, config_.scoring, m.dataset_fingerprint);  // scored as this config says
         const ResultsLog shard(path);
         for (int64_t i : select_pairs(m)) {
           auto it = shard.done().find(i);
@@ -134,7 +177,7 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         }
       }
       set_shard(0, 1);
-      check_method_stamp(results_path(d, mo.name), mo, config_.scoring);
+      check_method_stamp(results_path(d, mo.name), mo, config_.scoring, m.dataset_fingerprint);
       ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.name, ": ", merged.size(),
                    " pairs from the shards, the manifest selects ", all.size());
       // Rewritten whole, in manifest order, so the merged file equals an unsharded run's.
@@ -182,17 +225,34 @@ static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOption
 // the options and the checkpoint's content fingerprint are stamped beside the results (<results>.method.json)
 // and compared on every run. A log without a stamp (older runs) adopts the current options; a stamp without
 // a fingerprint (older runs) adopts the current checkpoint's; a stamp older than an option adopts its default.
-static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring) {
+static void check_method_stamp(const std::string& results, const MethodOptions& mo, const ScoringOptions& scoring,
+                               const nlohmann::json& dataset) {
   if (!mo.checkpoint.empty()) require_finished_run(mo.name, mo.checkpoint);  // before anything is stamped
   nlohmann::json now = stamp_options(mo, scoring);
   if (!mo.checkpoint.empty() && fs::exists(mo.checkpoint))
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
+  if (!dataset.is_null()) now["dataset_fingerprint"] = dataset;
   const std::string stamp = results + ".method.json";
   if (fs::exists(stamp)) {
     nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
-    bool adopt =
+    // The data the results were scored on (a stamp written before fingerprints adopts the current one).
+    bool adopt_data = false;
+    if (before.is_object() && !now.contains("dataset_fingerprint")) before.erase("dataset_fingerprint");
+    if (before.is_object() && now.contains("dataset_fingerprint")) {
+      if (!before.contains("dataset_fingerprint")) {
+        before["dataset_fingerprint"] = now["dataset_fingerprint"];
+        adopt_data = true;
+      } else if (const std::string changes =
+                     fingerprint_changes(before["dataset_fingerprint"], now["dataset_fingerprint"]);
+                 !changes.empty()) {
+        fail("eval: ", results, " was scored on other data for method '", mo.name, "': ", changes, " (", stamp,
+             "); choose another scoring.out or delete both files to score it again");
+      }
+    }
+    const bool adopt_weights =
         before.is_object() && !before.contains("checkpoint_fingerprint") && now.contains("checkpoint_fingerprint");
-    if (adopt) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
+    if (adopt_weights) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
+    bool adopt = adopt_data || adopt_weights;
     adopt = adopt_new_defaults(before, now, stamp_options(MethodOptions{}, ScoringOptions{})) || adopt;
     if (before.is_object() && now.contains("checkpoint_fingerprint") &&
         before.value("checkpoint_fingerprint", "") != now["checkpoint_fingerprint"].get<std::string>() &&
@@ -321,7 +381,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
   const bool has_depth = dataset_has_depth(sequences);
-  check_method_stamp(results_path(d, mo.name), mo, config_.scoring);
+  check_method_stamp(results_path(d, mo.name), mo, config_.scoring, m.dataset_fingerprint);
   ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
@@ -360,6 +420,24 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   return results;
 }
 
+std::string gallery_panel_method(const std::string& file) {
+  // "<method>_worst_<kind><k>_pair<i>.png": the tail holds no "_worst_", so the last one splits the name.
+  static const std::regex panel(R"((.+)_worst_(psnr|holes|cracks)[0-9]+_pair[0-9]+\.png)");
+  std::smatch m;
+  return std::regex_match(file, m, panel) ? m[1].str() : std::string();
+}
+
+void Evaluator::lock_output() {
+  if (lock_) return;
+  // Shards write their own results files and may run at once; an unsharded run or a merge owns the folder.
+  const std::string name = shard_count_ > 1 ? cat(".lock-shard-", shard_index_, "-of-", shard_count_) : ".lock";
+  try {
+    lock_ = std::make_unique<FolderLock>(config_.scoring.out, name);
+  } catch (const Error& e) {
+    fail("eval: scoring.out ", config_.scoring.out, ": ", e.what());
+  }
+}
+
 void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, const Manifest& m,
                               const std::vector<PairResult>& results, const MethodOptions& mo,
                               const std::vector<ColmapModel>& points, bool has_depth) {
@@ -379,12 +457,11 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
       if (k < worst->size())
         wanted.push_back({dir / cat(safe_name(mo.name), "_worst_", kind, k + 1, "_pair", (*worst)[k]->index, ".png"),
                           (*worst)[k]->index});
-  // Panels of pairs that are no longer among the worst (the results changed) go.
-  const std::string prefix = safe_name(mo.name) + "_worst_";
+  // Panels of this method's pairs that are no longer among the worst (the results changed) go: only names that are
+  // exactly this method's panel names (another method's, e.g. "m_worst_a" beside "m", share their start).
   if (fs::exists(dir))
     for (const auto& e : fs::directory_iterator(dir)) {
-      const std::string f = e.path().filename().string();
-      if (f.rfind(prefix, 0) == 0 &&
+      if (gallery_panel_method(e.path().filename().string()) == safe_name(mo.name) &&
           std::none_of(wanted.begin(), wanted.end(), [&](const auto& w) { return w.first == e.path(); }))
         fs::remove(e.path());
     }
@@ -413,7 +490,8 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
 }
 
 std::vector<ReportRow> Evaluator::run(bool pairs_only) {
-  fs::create_directories(config_.scoring.out);
+  const ReleaseLock release{lock_, !lock_};
+  lock_output();
   write_file_atomic((fs::path(config_.scoring.out) / "config.json").string(), config_to_json(config_).dump(2) + "\n");
   const std::vector<std::string>& nets = config_.scoring.lpips;
   std::vector<ReportRow> rows;

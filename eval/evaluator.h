@@ -9,6 +9,7 @@
 #include "eval/eval_config.h"
 #include "eval/methods.h"
 #include "eval/report.h"
+#include "io/folder_lock.h"
 #include "metrics/metrics.h"
 #include "metrics/stability.h"
 
@@ -25,6 +26,10 @@ struct ScoredPair {
   torch::Tensor mask;          // [H,W] the scored region
   MethodOutput output;
 };
+
+// The method whose failure-gallery panel `file` is ("<method>_worst_<kind><k>_pair<i>.png"), or "" when the name is
+// not a panel's. Exact, so that method "m" never claims the panels of method "m_worst_a".
+std::string gallery_panel_method(const std::string& file);
 
 class Evaluator {
  public:
@@ -75,7 +80,12 @@ class Evaluator {
                      const std::vector<PairResult>& results, const MethodOptions& mo,
                      const std::vector<ColmapModel>& points, bool has_depth);
 
+  // Locks scoring.out (io/folder_lock.h) for this evaluator's life: a second evaluation into the same folder fails
+  // at once naming it and the holder's pid. Each shard of a sharded run has its own lock.
+  void lock_output();
+
   EvalConfig config_;
+  std::unique_ptr<FolderLock> lock_;
   std::map<std::string, std::unique_ptr<Lpips>> lpips_;  // available variants
   std::vector<std::string> notes_;
   int64_t shard_index_ = 0, shard_count_ = 1;

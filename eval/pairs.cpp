@@ -271,6 +271,7 @@ nlohmann::ordered_json Manifest::to_json() const {
   j["protocol"] = config_to_json(protocol);
   j["overlap_depth"] = overlap_depth;
   j["rejected"] = rejected;
+  if (!dataset_fingerprint.is_null()) j["dataset_fingerprint"] = dataset_fingerprint;
   j["bins"] = nlohmann::ordered_json::array();
   for (size_t b = 0; b < bin_counts.size(); ++b)
     j["bins"].push_back({{"bin", bin_label(static_cast<int>(b))},
@@ -303,6 +304,7 @@ Manifest Manifest::from_json(const nlohmann::json& j, const std::string& source)
     m.protocol = config_from_json<ProtocolOptions>(j.at("protocol"), source);
     if (j.contains("overlap_depth")) m.overlap_depth = j.at("overlap_depth").get<std::map<std::string, int64_t>>();
     if (j.contains("rejected")) m.rejected = j.at("rejected").get<std::map<std::string, int64_t>>();
+    if (j.contains("dataset_fingerprint")) m.dataset_fingerprint = j.at("dataset_fingerprint");
     for (const auto& b : j.at("bins")) {
       m.bin_counts.push_back(b.at("filled").get<int64_t>());
       m.bin_candidates.push_back(b.at("candidates").get<int64_t>());

@@ -51,6 +51,8 @@ struct Manifest {
   // "source without depth" (frames skipped).
   std::map<std::string, int64_t> rejected;
   std::map<std::string, int64_t> overlap_depth;  // source frames per overlap-depth kind
+  // What the pairs were drawn from (eval/datasets.h dataset_fingerprint); null in manifests written before it.
+  nlohmann::json dataset_fingerprint;
   // One sentence on why `bin` has fewer pairs than requested, naming the dominant cause.
   std::string shortfall_reason(int bin) const;
   nlohmann::ordered_json to_json() const;
