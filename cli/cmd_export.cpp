@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "export/splat_formats.h"
 #include "export/splat_transform.h"
+#include "io/atomic_file.h"
 #include "io/ply.h"
 
 namespace isplat::cli {
@@ -52,6 +53,10 @@ int run_export(int argc, char** argv) {
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!ply.empty() && !format.empty() && !out.empty(),
                "export: --ply, --format and --out are required (see --help)");
+  refuse_output_over_input(
+      "export", {"--out", out},
+      {{"--ply", ply}, {"--camera", camera_json.empty() ? camera_sidecar_path(ply) : camera_json}});
+  remove_temporaries_on_signal();  // SIGINT/SIGTERM leave no temporary of the output behind
   // Colours stay sRGB from file to file: no trip through linear RGB.
   const Gaussians g = read_ply(ply, /*want_linear=*/false);
   if (format == "splat") {

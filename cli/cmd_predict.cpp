@@ -107,9 +107,19 @@ int run_predict(int argc, char** argv) {
                "predict: --checkpoint, --image and --out are required (see --help)");
   ISPLAT_CHECK((depth_model.empty() + depth_path.empty() + prompts_path.empty()) >= 2,
                "predict: give at most one of --depth-model, --depth, --prompts");
+  {  // Neither output may be one of the inputs (the same path, a hard link, a symlinked folder).
+    const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},
+                                           {"--image", image_path},
+                                           {"--depth", depth_path},
+                                           {"--prompts", prompts_path},
+                                           {"--depth-model", depth_model}};
+    refuse_output_over_input("predict", {"--out", out}, inputs);
+    refuse_output_over_input("predict", {"--out's camera JSON", camera_sidecar_path(out)}, inputs);
+  }
   // The merge flags pass the config schema's bounds, with its error naming the key.
   merge = config_from_json<MergeOptions>(config_to_json(merge), "predict's --merge-* flags");
   configure_threads(threads);
+  remove_temporaries_on_signal();  // SIGINT/SIGTERM leave neither output nor a temporary behind
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
 
@@ -194,9 +204,12 @@ int run_predict(int argc, char** argv) {
           << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
           << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
   ply.comments.push_back(pruning.str());
-  write_ply(out, g, pipeline->model()->options.composer.linear_rgb, ply);
-  const double typical_depth = pred.supports.depth.median().item<double>();
-  write_scene_camera(camera_sidecar_path(out), view, typical_depth);
+  {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
+    AtomicPath ply_file(out), camera_file(camera_sidecar_path(out));
+    write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
+    write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>());
+    commit_together({&camera_file, &ply_file});
+  }
 
   std::cout << "photo        " << image_path << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm
             << "\n";

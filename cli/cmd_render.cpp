@@ -2,6 +2,7 @@
 // frames and an MP4, optionally with depth and normal visualizations.
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include <torch/torch.h>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +18,7 @@
 #include "geometry/camera_torch.h"
 #include "geometry/color.h"
 #include "geometry/trajectory.h"
+#include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "io/tensor_image.h"
@@ -91,12 +93,35 @@ int run_render(int argc, char** argv) {
   else
     path = load_camera_path(trajectory, base);
 
+  {  // No file render writes may be one of its inputs (a PLY or camera kept in the output folder).
+    const std::vector<NamedPath> inputs = {
+        {"--ply", ply},
+        {"--camera", cam_path},
+        {"--trajectory", trajectory == "orbit" || trajectory == "dolly" ? "" : trajectory}};
+    refuse_output_over_input("render", {"--out", out}, inputs);
+    std::vector<std::string> names = {"video.mp4"};
+    for (size_t i = 0; i < path.views.size(); ++i)
+      for (const char* kind : {"frame", "depth", "normal", "strip"}) {
+        char name[64];
+        std::snprintf(name, sizeof name, "%s_%04zu.png", kind, i);
+        names.push_back(name);
+      }
+    for (const auto& name : names)
+      refuse_output_over_input("render", {"--out", (fs::path(out) / name).string()}, inputs);
+  }
   fs::create_directories(out);
+  // The first SIGINT/SIGTERM stops after the frame being drawn and finishes the video with the frames so far; a
+  // second one ends at once, removing the temporaries (the video's among them).
+  remove_temporaries_on_signal(/*graceful=*/true);
   cv::VideoWriter video;
   const std::string video_path = (fs::path(out) / "video.mp4").string();
+  // Encoded into a temporary and renamed when finalized: an interrupted render never leaves a video.mp4 without
+  // its index (moov) that no player opens.
+  std::unique_ptr<AtomicPath> video_file;
   const int W = path.views[0].intr.width, H = path.views[0].intr.height;
   if (!no_video) {
-    video.open(video_path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), static_cast<double>(fps),
+    video_file = std::make_unique<AtomicPath>(video_path);
+    video.open(video_file->temp(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), static_cast<double>(fps),
                cv::Size(strip ? 4 * W : W, H));
     if (!video.isOpened()) {
       log_warn("render: OpenCV cannot write MP4 here (", video_path, "); writing PNG frames only");
@@ -105,7 +130,8 @@ int run_render(int argc, char** argv) {
   }
   ProgressBar bar("render", static_cast<int64_t>(path.views.size()), "frame");
   double total_ms = 0;
-  for (size_t i = 0; i < path.views.size(); ++i) {
+  size_t drawn = 0;
+  for (size_t i = 0; i < path.views.size() && !interrupt_signal(); ++i, ++drawn) {
     const View& v = path.views[i];
     ISPLAT_CHECK(v.intr.width == W && v.intr.height == H, "render: all frames of a path must share one size");
     const auto t0 = std::chrono::steady_clock::now();
@@ -143,10 +169,21 @@ int run_render(int argc, char** argv) {
     bar.tick();
   }
   bar.finish();
-  if (!no_video) video.release();
-  std::cout << "rendered " << path.views.size() << " frames of " << g.count() << " Gaussians at " << W << "x" << H
-            << " (" << std::fixed << std::setprecision(1) << total_ms / path.views.size() << " ms per frame)\n";
-  std::cout << "wrote    " << fs::absolute(out).string() << (no_video ? "" : " (frames + video.mp4)") << "\n";
+  if (!no_video) {
+    video.release();  // writes the index: the file plays
+    if (drawn > 0) video_file->commit();
+  }
+  std::cout << "rendered " << drawn << " frames of " << g.count() << " Gaussians at " << W << "x" << H << " ("
+            << std::fixed << std::setprecision(1) << total_ms / std::max<size_t>(1, drawn) << " ms per frame)\n";
+  std::cout << "wrote    " << fs::absolute(out).string() << (no_video || drawn == 0 ? "" : " (frames + video.mp4)")
+            << "\n";
+  if (const int sig = interrupt_signal()) {
+    log_warn("render: interrupted (signal ", sig, ") after ", drawn, " of ", path.views.size(), " frames; ",
+             no_video    ? std::string("no video was asked for")
+             : drawn > 0 ? cat(video_path, " holds those ", drawn, " frames and plays")
+                         : cat("no frame was drawn, so no ", video_path, " was written"));
+    return 128 + sig;
+  }
   return 0;
 }
 
