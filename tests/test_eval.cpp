@@ -772,7 +772,8 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
       grey += px[0] == px[1] && px[1] == px[2] && px[0] > 50 && px[0] < 100;
       broken += (px[2] > 200 && px[0] < 100) || (px[0] > 200 && px[2] < 100);
     }
-  CHECK(grey > 1000);
+  INFO("scored " << grey << " of " << tile * crack_png.rows << " pixels in the crack tile");
+  CHECK(grey > tile * crack_png.rows / 10);  // a tenth of the frame at least is scored (grey)
   CHECK(broken > 0);
   // The per-pair log keeps the new fields, so a resumed run reports the same timings.
   const auto again = Evaluator(c).run();

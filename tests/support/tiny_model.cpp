@@ -10,6 +10,7 @@ ModelOptions tiny_model_options(int64_t budget, int64_t vit_depth) {
   o.encoder.vit.depth = vit_depth;
   o.encoder.vit.heads = 2;
   o.encoder.cnn_options.width = 4;
+  o.sampler.budget_mode = "fixed";  // the model's defaults otherwise (the recipe), at a size the test chooses
   o.sampler.budget = budget;
   o.decoder.hidden = {32, 16};
   return o;
