@@ -26,10 +26,8 @@ fi
 stamp "3. the learned depth prior for the RGB variant (configs/recipe/depth.json)"
 "$bin/infinisplat-train" --config configs/recipe/depth.json --resume auto
 
-# Variants whose prior is not trained here (wide2, wide_w64, ...) are skipped with a warning until
-# scripts/train_depth_prior.sh trains it.
-stamp "3b. the mixed-style depth priors of the rgb_mixed, rgb_sky, rgb_wide* (not wide2 or w64), rgb_wide_aug* and rgb_wide_aug_clutter* variants (scripts/train_depth_prior.sh)"
-scripts/train_depth_prior.sh squeeze squeeze_sky wide wide_aug wide_aug_clutter
+stamp "3b. the recommended RGB prior of the rgb_wide_aug_clutter_flip_height variant (scripts/train_depth_prior.sh)"
+scripts/train_depth_prior.sh wide_aug_clutter
 
 stamp "4. rows: train, score, report ($config)"
 "$bin/infinisplat-experiment" --config "$config" "$@"
