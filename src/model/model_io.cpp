@@ -49,7 +49,7 @@ ModelOptions model_options_from_checkpoint(const Checkpoint& ck, const std::stri
   doc.json = config["model"];
   doc.origin[""] = source + " (stored config)";
   strip_retired_keys(doc.json, source + " (stored config)");  // options retired since it was written
-  apply_overrides(doc, overrides);  // the --set machinery, on the model section
+  apply_overrides(doc, overrides);                            // the --set machinery, on the model section
   ModelOptions options = model_defaults(config_version(ck, source));
   apply_config(doc, options);
   return options;
