@@ -101,7 +101,7 @@ TEST_CASE("dist: 2 ranks x batch 1 equal 1 rank x batch 2, and a resumed 2-rank 
 }
 
 TEST_CASE("dist: a parameter one rank's batch did not reach is averaged with that rank's zero", "[dist]") {
-  // decoder.behind_code gets no gradient on a rank whose images have no silhouettes; the ranks must still send
+  // A parameter that gets no gradient on one rank (no loss term reached it there): the ranks must still send
   // the same gradient list (else the all-reduce buffers differ in size).
   const int port = free_port();
   std::vector<torch::Tensor> got(2);

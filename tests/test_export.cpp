@@ -100,9 +100,4 @@ TEST_CASE("onnx: unsupported layers and sizes are named", "[export][onnx]") {
   none.decoder.mode = "none";
   InfiniSplat n(none);
   CHECK_THROWS_WITH(export_onnx(n, {64, 48, 17}), Catch::Contains("no learned part to export"));
-  ModelOptions coded = test::tiny_model_options(600, 2);
-  coded.decoder.behind = "code";
-  InfiniSplat c(coded);
-  CHECK_THROWS_WITH(export_onnx(c, {64, 48, 17}),
-                    Catch::Contains("decoder.behind = code treats hidden supports apart"));
 }

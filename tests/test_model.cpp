@@ -127,47 +127,6 @@ TEST_CASE("model: the frozen SqueezeNet semantic branch builds and runs", "[mode
   CHECK(torch::isfinite(render(p.gaussians, camera(0.1)).rgb).all().item<bool>());
 }
 
-TEST_CASE("model: decoder.behind = keep_base leaves the hidden supports at their base Gaussians", "[model]") {
-  torch::manual_seed(5);
-  auto image = torch::rand({3, H, W});
-  const Camera cam = camera(0.0);
-  ModelOptions o = test::tiny_model_options();
-  o.sampler.mode = "pixel";
-  o.sampler.edge_behind = 1;  // the box's silhouette has a wall behind it
-  InfiniSplat shared(o);
-  {
-    torch::NoGradGuard g;
-    shared->decoder->head->weight.normal_(0, 0.1);
-    shared->decoder->head->bias.normal_(0, 0.1);
-  }
-  o.decoder.behind = "keep_base";
-  InfiniSplat keep(o);
-  {
-    torch::NoGradGuard g;
-    for (auto& p : keep->named_parameters()) p.value().copy_(shared->named_parameters()[p.key()]);
-  }
-  const Prediction a = shared->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  const Prediction b = keep->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  const int64_t n = a.supports.count(), nb = b.supports.behind;
-  REQUIRE(nb > 0);
-  CHECK(a.supports.behind == nb);
-  // Decoded apart (keep_base decodes the visible rows only), so equal up to the GEMM's summation order.
-  CHECK(torch::allclose(a.delta.narrow(0, 0, n - nb), b.delta.narrow(0, 0, n - nb), 1e-5, 1e-6));
-  CHECK(b.delta.narrow(0, n - nb, nb).abs().max().item<float>() == 0.0f);
-  CHECK(a.delta.narrow(0, n - nb, nb).abs().max().item<float>() > 0.0f);
-  // decoder.behind = code: the model hands the count to the decoder, so only the hidden rows change.
-  o.decoder.behind = "code";
-  InfiniSplat coded(o);
-  {
-    torch::NoGradGuard g;
-    for (auto& p : shared->named_parameters()) coded->named_parameters()[p.key()].copy_(p.value());
-    coded->decoder->behind_code.normal_(0, 1);
-  }
-  const Prediction c = coded->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  CHECK(torch::equal(c.delta.narrow(0, 0, n - nb), a.delta.narrow(0, 0, n - nb)));
-  CHECK((c.delta.narrow(0, n - nb, nb) - a.delta.narrow(0, n - nb, nb)).abs().max().item<float>() > 1e-4f);
-}
-
 TEST_CASE("model: model.training_sampler changes the supports of training passes only", "[model]") {
   torch::manual_seed(6);
   auto image = torch::rand({3, H, W});

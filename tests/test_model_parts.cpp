@@ -172,43 +172,6 @@ TEST_CASE("decoder: zero-initialized head and gated fusion shapes", "[decoder]")
   CHECK(map.sizes() == torch::IntArrayRef({1, 14, 48, 64}));
 }
 
-TEST_CASE("decoder: behind = code updates the hidden supports apart, in every chunk", "[decoder]") {
-  torch::manual_seed(4);
-  DecoderOptions o;
-  o.behind = "code";
-  o.chunk = 7;                  // chunks [0,7) [7,14) [14,20): 9 hidden supports span the last two
-  ImplicitDecoder d(o, 32, 0);  // one branch: the fused feature is the sampled DINO map
-  EncoderFeatures f{torch::rand({1, 32, 3, 4}), torch::Tensor()};
-  auto uv = torch::rand({20, 2}) * 48;
-  {
-    torch::NoGradGuard g;
-    d->head->weight.normal_(0, 0.1);
-    d->head->bias.normal_(0, 0.1);
-  }
-  REQUIRE(d->behind_code.sizes() == torch::IntArrayRef({32}));
-  const auto shared = d->forward(uv, 64, 48, f, 0).detach();
-  CHECK(torch::equal(d->forward(uv, 64, 48, f, 9), shared));  // zero at the start: the paper's decoder
-  auto out = d->forward(uv, 64, 48, f, 9);
-  out.sum().backward();
-  REQUIRE(d->behind_code.grad().defined());
-  CHECK(d->behind_code.grad().abs().sum().item<double>() > 0);  // it learns
-  {
-    torch::NoGradGuard g;
-    d->behind_code.normal_(0, 1);
-    const auto coded = d->forward(uv, 64, 48, f, 9);
-    CHECK(torch::equal(coded.narrow(0, 0, 11), shared.narrow(0, 0, 11)));
-    const auto want = d->mlp_head(query_features(f.dino, uv.narrow(0, 11, 9), 64, 48) + d->behind_code);
-    CHECK(torch::allclose(coded.narrow(0, 11, 9), want, 1e-4, 1e-5));
-    CHECK((coded.narrow(0, 11, 9) - shared.narrow(0, 11, 9)).abs().max().item<float>() > 1e-3f);
-  }
-  CHECK_THROWS_WITH(d->forward(uv, 64, 48, f, 21), Catch::Contains("21 hidden supports of 20"));
-  // The paper's decoder registers no code, so earlier checkpoints load as they were.
-  CHECK_FALSE(ImplicitDecoder(DecoderOptions{}, 32, 0)->named_parameters().contains("behind_code"));
-  CHECK_THROWS_WITH(config_from_json<DecoderOptions>(nlohmann::json{{"mode", "dense"}, {"behind", "code"}}, "test"),
-                    Catch::Contains("code needs decoder.mode = implicit"));
-  CHECK_NOTHROW(config_from_json<DecoderOptions>(nlohmann::json{{"mode", "dense"}, {"behind", "keep_base"}}, "test"));
-}
-
 TEST_CASE("composer: zero updates reproduce the base Gaussians exactly", "[composer]") {
   BaseGaussians b;
   b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}});

@@ -238,7 +238,7 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   const Supports s = sample_supports(depth, ones(), K(), img, o, 2, true);
   REQUIRE(s.count() == 4000);
   CHECK(plain.behind == 0);
-  CHECK(s.behind == kH);  // the decoder can tell them apart (decoder.behind)
+  CHECK(s.behind == kH);  // counted apart (Supports::behind)
   // The last H supports continue the plane under column 31, the near side, one per row: at the plane's own depth
   // there (each farther neighbour's surface extrapolated), the farther neighbours' mean colour and a pixel's
   // footprint at that depth.

@@ -141,7 +141,7 @@ void DataParallel::average_gradients(const std::vector<torch::Tensor>& parameter
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t bucket = std::max<int64_t>(1, static_cast<int64_t>(options_.bucket_mb * (1 << 20) / 4));
   std::vector<torch::Tensor> grads;
-  // A trainable parameter this rank's batch did not reach (decoder.behind_code on images without silhouettes) gets
+  // A trainable parameter this rank's batch did not reach (one no loss term reached) gets
   // a zero gradient, so every rank sends the same list and the mean counts this rank's zero.
   for (auto p : parameters) {
     if (!p.grad().defined() && p.requires_grad()) p.mutable_grad() = torch::zeros_like(p);

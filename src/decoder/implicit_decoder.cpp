@@ -24,14 +24,6 @@ void DecoderOptions::visit(ConfigVisitor& v) {
   v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C",
           Range::between(1, 16384));
   v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
-  v.field("behind", behind,
-          "supports hidden under silhouettes (sampler.edge_behind > 0; otherwise this does nothing) sit at a visible "
-          "edge's image position, so they read its features: shared gives them the same update (the paper's "
-          "decoder sees only the position), keep_base gives them no update (they keep their base Gaussian), code "
-          "adds a learned vector (zero at the start) to their fused feature, so the MLP can update them apart; "
-          "only shared exports to ONNX",
-          {"shared", "keep_base", "code"});
-  v.require("behind", behind != "code" || mode == "implicit", "code needs decoder.mode = implicit");
 }
 
 namespace {
@@ -59,7 +51,6 @@ ImplicitDecoderImpl::ImplicitDecoderImpl(const DecoderOptions& o, int64_t dd, in
     : dino_dim(dd), cnn_dim(cd), chunk(o.chunk) {
   ISPLAT_CHECK(dd > 0 || cd > 0, "decoder: both encoder branches are off");
   const int64_t fused_dim = dd > 0 ? dd : cd;
-  if (o.behind == "code") behind_code = register_parameter("behind_code", torch::zeros({fused_dim}));
   if (dd > 0 && cd > 0) {
     cnn_proj = register_module("cnn_proj", nn::Linear(cd, dd));
     gate = register_module("gate", nn::Linear(2 * dd, dd));
@@ -96,9 +87,8 @@ torch::Tensor ImplicitDecoderImpl::mlp_head(torch::Tensor h) {
 }
 
 torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t width, int64_t height,
-                                           const EncoderFeatures& f, int64_t behind) {
+                                           const EncoderFeatures& f) {
   const int64_t N = uv.size(0);
-  ISPLAT_CHECK(behind >= 0 && behind <= N, "decoder: ", behind, " hidden supports of ", N);
   // cnn_proj and the gate's input layer are linear, and bilinear sampling is a convex combination, so
   // they commute: apply them once per feature texel, then sample. Same result as decode_features() on
   // sampled features, at a fraction of the cost (thousands of texels instead of 10^5..10^6 supports).
@@ -120,11 +110,8 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
   }
   std::vector<torch::Tensor> out;
   for (int64_t s = 0; s < N; s += chunk) {
-    const int64_t n = std::min(chunk, N - s), hidden = std::clamp<int64_t>(s + n - (N - behind), 0, n);
-    torch::Tensor h = fused(uv.narrow(0, s, n));
-    if (behind_code.defined() && hidden > 0)  // the chunk's last `hidden` rows
-      h = torch::cat({h.narrow(0, 0, n - hidden), h.narrow(0, n - hidden, hidden) + behind_code}, 0);
-    out.push_back(mlp_head(h));
+    const int64_t n = std::min(chunk, N - s);
+    out.push_back(mlp_head(fused(uv.narrow(0, s, n))));
   }
   return out.size() == 1 ? out[0] : torch::cat(out, 0);
 }

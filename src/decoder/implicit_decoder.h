@@ -21,9 +21,6 @@ struct DecoderOptions {
   std::string mode = "implicit";  // implicit | dense | none
   std::vector<int64_t> hidden;    // MLP widths; empty = [C, C/4, C/16] with C the fused width (ViT-L: 1024, 256, 64)
   int64_t chunk = 80000;          // supports decoded per chunk
-  // Supports hidden under silhouettes (Supports::behind): shared (the same update as a visible support at that
-  // image position), keep_base (no update) or code (a learned vector is added to their fused feature).
-  std::string behind = "shared";
   void visit(ConfigVisitor& v);
 };
 
@@ -33,15 +30,13 @@ torch::Tensor query_features(const torch::Tensor& features, const torch::Tensor&
 
 struct ImplicitDecoderImpl : torch::nn::Module {
   ImplicitDecoderImpl(const DecoderOptions& options, int64_t dino_dim, int64_t cnn_dim);
-  // Updates [N,14] for supports uv [N,2] of a W x H image, from one image's features (batch index 0); the last
-  // `behind` supports are hidden ones (with decoder.behind = code they get behind_code added to their feature).
-  torch::Tensor forward(const torch::Tensor& uv, int64_t width, int64_t height, const EncoderFeatures& features,
-                        int64_t behind = 0);
+  // Updates [N,14] for supports uv [N,2] of a W x H image, from one image's features (batch index 0). Supports
+  // hidden under silhouettes (Supports::behind) read the features at their image position like any other.
+  torch::Tensor forward(const torch::Tensor& uv, int64_t width, int64_t height, const EncoderFeatures& features);
   torch::Tensor decode_features(const torch::Tensor& f_dino, const torch::Tensor& f_cnn);  // [N,*] -> [N,14]
   torch::Tensor mlp_head(torch::Tensor fused);  // the MLP and the head on fused features [N,C] -> [N,14]
   torch::nn::Linear cnn_proj{nullptr}, gate{nullptr}, head{nullptr};
   torch::nn::ModuleList mlp{nullptr};
-  torch::Tensor behind_code;  // [C], only with decoder.behind = code; zero at the start
   int64_t dino_dim, cnn_dim, chunk;
 };
 TORCH_MODULE(ImplicitDecoder);

@@ -315,10 +315,6 @@ onnx::ModelProto export_onnx(InfiniSplat& model, const OnnxExportOptions& o) {
   ISPLAT_CHECK(o.width >= 16 && o.height >= 16 && o.width % 16 == 0 && o.height % 16 == 0, "ONNX export: image size ",
                o.width, "x", o.height, " must be multiples of 16");
   ISPLAT_CHECK(model->options.decoder.mode != "none", "ONNX export: decoder.mode = none has no learned part to export");
-  ISPLAT_CHECK(model->options.decoder.behind == "shared",
-               "ONNX export: decoder.behind = ", model->options.decoder.behind,
-               " treats hidden supports apart, and the graph takes no input saying "
-               "which supports are hidden (only decoder.behind = shared exports)");
   check_rules(model);
   torch::NoGradGuard no_grad;
   model->eval();

@@ -61,8 +61,6 @@ InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o), sampler_in
   if (o.decoder.mode == "dense") dense = register_module("dense", DenseHead(dd, cd));
   if (o.decoder.mode == "dense" && o.sampler.mode != "pixel")
     log_warn("decoder.mode = dense predicts per pixel; the paper's ablation pairs it with sampler.mode = pixel");
-  if (o.decoder.behind != "shared" && o.sampler.edge_behind == 0)
-    log_warn("decoder.behind = ", o.decoder.behind, " acts on hidden supports, and sampler.edge_behind = 0 makes none");
 }
 
 Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
@@ -85,7 +83,7 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
     const EncoderFeatures f = encoder->forward(image.unsqueeze(0));
     p.timings_ms["encoder"] = ms_since(t0);
     t0 = std::chrono::steady_clock::now();
-    p.delta = decode(f, p.supports.uv, W, H, p.supports.behind);
+    p.delta = decode(f, p.supports.uv, W, H);
     p.timings_ms["decoder"] = ms_since(t0);
   }
   t0 = std::chrono::steady_clock::now();
@@ -94,18 +92,11 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
   return p;
 }
 
-torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width, int64_t height,
-                                      int64_t behind) {
+torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Tensor& uv, int64_t width,
+                                      int64_t height) {
   ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
-  ISPLAT_CHECK(behind >= 0 && behind <= uv.size(0), "model: ", behind, " hidden supports of ", uv.size(0));
-  auto run = [&](const torch::Tensor& at, int64_t hidden) {
-    return decoder ? decoder->forward(at, width, height, f, hidden)
-                   : sample_features(dense->forward(f, width, height), at, width, height);
-  };
-  if (options.decoder.behind != "keep_base" || behind == 0) return run(uv, behind);
-  // The hidden supports keep their base Gaussian: only the visible ones are decoded.
-  const torch::Tensor visible = run(uv.narrow(0, 0, uv.size(0) - behind), 0);
-  return torch::cat({visible, torch::zeros({behind, visible.size(1)}, visible.options())}, 0);
+  return decoder ? decoder->forward(uv, width, height, f)
+                 : sample_features(dense->forward(f, width, height), uv, width, height);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

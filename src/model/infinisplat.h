@@ -57,10 +57,8 @@ struct InfiniSplatImpl : torch::nn::Module {
   Prediction predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
   // Updates [N,14] at supports uv of a W x H image from its encoder features: the implicit decoder, or
-  // the dense head's map sampled at the supports (decoder.mode = dense). The last `behind` supports are hidden
-  // ones (Supports::behind), treated as decoder.behind says.
-  torch::Tensor decode(const EncoderFeatures& features, const torch::Tensor& uv, int64_t width, int64_t height,
-                       int64_t behind = 0);
+  // the dense head's map sampled at the supports (decoder.mode = dense).
+  torch::Tensor decode(const EncoderFeatures& features, const torch::Tensor& uv, int64_t width, int64_t height);
 
   ModelOptions options;
   SamplerOptions

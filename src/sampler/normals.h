@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/error.h"
 #include "sampler/grid.h"
 
 namespace isplat {
