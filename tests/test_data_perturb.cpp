@@ -35,32 +35,3 @@ TEST_CASE("data: depth_warp is a smooth log-depth field of the requested sigma, 
   CHECK(c.std().item<double>() == Approx(0.2).epsilon(0.1));  // 600 samples: within 10%
   CHECK(std::abs(c.mean().item<double>()) < 0.03);
 }
-
-TEST_CASE("data: draw_depth_error draws scale and blur per tuple with the requested spread", "[data][perturb]") {
-  DepthErrorOptions off;
-  CHECK_FALSE(off.any());
-  CHECK_FALSE(draw_depth_error(off, 3).any_depth());
-  DepthErrorOptions o;
-  o.scale_sigma = 0.25;
-  o.warp_sigma = 0.1;
-  o.warp_cells = 5;
-  o.blur_px = 2.0;
-  CHECK(o.any());
-  const PerturbOptions p = draw_depth_error(o, 11), q = draw_depth_error(o, 11);
-  CHECK(p.depth_scale == q.depth_scale);
-  CHECK(p.depth_blur_px == q.depth_blur_px);
-  CHECK(p.depth_warp == 0.1);
-  CHECK(p.depth_warp_cells == 5);
-  std::vector<double> log_scale, blur;
-  for (uint64_t seed = 0; seed < 800; ++seed) {
-    const PerturbOptions d = draw_depth_error(o, seed);
-    log_scale.push_back(std::log(d.depth_scale));
-    blur.push_back(d.depth_blur_px);
-  }
-  const auto s = torch::tensor(log_scale), b = torch::tensor(blur);
-  CHECK(s.std().item<double>() == Approx(0.25).epsilon(0.1));
-  CHECK(std::abs(s.mean().item<double>()) < 0.03);
-  CHECK(b.min().item<double>() >= 0.0);
-  CHECK(b.max().item<double>() <= 2.0);
-  CHECK(b.mean().item<double>() == Approx(1.0).epsilon(0.1));
-}

@@ -317,38 +317,6 @@ TEST_CASE("prior: learned_sky_m marks depth at or beyond it as sky (invalid, 0)"
   CHECK(torch::equal(cut.depth, torch::where(sky, torch::zeros_like(all.depth), all.depth)));
 }
 
-TEST_CASE("prior: learned_input_width runs the net at that width with scaled intrinsics, at the photo's size",
-          "[prior]") {
-  test::QuietLogs quiet;
-  const int64_t H = 48, W = 72;
-  PriorOptions o = tiny_learned(true);
-  PriorInput in;
-  in.image = torch::rand({3, H, W});
-  in.K = make_K(60.0, 60.0, 36.0, 24.0, torch::kFloat32);
-  torch::manual_seed(5);
-  const torch::Tensor native = make_depth_prior(o)->predict(in).depth;
-  o.learned_input_width = W;  // the photo's own width: nothing changes
-  torch::manual_seed(5);
-  CHECK(torch::equal(make_depth_prior(o)->predict(in).depth, native));
-  o.learned_input_width = 48;
-  torch::manual_seed(5);  // the same untrained weights
-  auto prior = make_depth_prior(o);
-  CHECK_THAT(prior->describe(), Catch::Contains("48 px wide"));
-  const PriorOutput small = prior->predict(in);
-  REQUIRE(small.depth.sizes() == torch::IntArrayRef({H, W}));
-  CHECK(torch::equal(small.valid > 0, small.depth > 0));
-  // The net reads a 48 x 32 photo with its intrinsics scaled (the focal normalization sees the same fx / width),
-  // and its log depth comes back bilinearly.
-  torch::manual_seed(5);
-  LearnedDepthNet net(learned_depth_options(o));
-  torch::NoGradGuard g;
-  const auto [photo, K] = resize_with_K(in.image, in.K, 32, 48);
-  const auto expected = torch::exp(resize_bilinear(net->forward_log(photo.unsqueeze(0), K.unsqueeze(0)), H, W))[0][0];
-  CHECK(torch::allclose(small.depth, expected, 1e-5, 1e-6));
-  CHECK_FALSE(torch::allclose(small.depth, native, 1e-3, 0));
-  CHECK_THROWS_WITH(load_config<PriorOptions>("", {"learned_input_width=8"}), Catch::Contains("learned_input_width"));
-}
-
 TEST_CASE("prior: learned_flip_average is the geometric mean of the photo's and its mirror's depth", "[prior]") {
   test::QuietLogs quiet;
   const int64_t H = 32, W = 48;
@@ -397,47 +365,6 @@ TEST_CASE("prior: the squeeze option trains only its decoder, the pretrained enc
   CHECK(net->head->weight.grad().abs().sum().item<double>() > 0);
 }
 
-TEST_CASE("prior: a fine-tuned encoder trains, ships in the net's weights file, and loading detects it", "[prior]") {
-  ISPLAT_REQUIRE_WEIGHTS();
-  const std::string backbone = test::squeezenet_weights();
-  LearnedDepthNet net(LearnedDepthOptions{"squeeze", 8, false, backbone});
-  const int64_t frozen_count = net->parameters().size();
-  net->tune_backbone();
-  net->tune_backbone();  // idempotent
-  CHECK(net->parameters().size() == frozen_count + net->backbone_parameters().size());
-  REQUIRE(net->backbone_parameters().size() == 50);  // SqueezeNet-1.1: 1 conv + 8 fires of 3 convs, weight + bias
-  const auto x = torch::rand({1, 3, 48, 64});
-  net->forward_log(x).mean().backward();
-  CHECK(net->named_parameters()["backbone.3_squeeze_weight"].grad().abs().sum().item<double>() > 0);
-  {
-    torch::NoGradGuard g;  // a step of fine-tuning, so the file differs from the shipped encoder
-    for (auto& p : net->backbone_parameters()) p.add_(0.01 * torch::randn_like(p));
-  }
-  std::map<std::string, torch::Tensor> file;
-  for (const auto& p : net->named_parameters(true)) file[p.key()] = p.value().detach();
-  CHECK(has_tuned_backbone(file));
-  const std::string path = test::temp_dir("prior_tuned") + "/depth_net.safetensors";
-  write_safetensors(path, file);
-
-  PriorOptions o;
-  o.type = "learned";
-  o.learned_arch = "squeeze";
-  o.learned_width = 8;
-  o.learned_backbone = backbone;
-  o.learned_weights = path;
-  PriorInput in;
-  in.image = x[0];
-  in.K = estimate_K(64, 48, 60.0);
-  torch::NoGradGuard g;
-  const auto expected = net->forward(x)[0][0];
-  CHECK(torch::allclose(make_depth_prior(o)->predict(in).depth, expected, 1e-5, 1e-6));
-  // The same decoder on the shipped (frozen) encoder predicts something else: the tuned weights were used.
-  file.erase(file.lower_bound("backbone."), file.lower_bound("backbone/"));
-  CHECK_FALSE(has_tuned_backbone(file));
-  write_safetensors(path, file);
-  CHECK_FALSE(torch::allclose(make_depth_prior(o)->predict(in).depth, expected, 1e-3, 0));
-}
-
 TEST_CASE("prior: floor_height_scale recovers the metric scale from the camera height", "[prior]") {
   const int64_t H = 96, W = 128;
   const auto K = estimate_K(W, H, 60.0);
@@ -465,26 +392,6 @@ TEST_CASE("prior: floor_height_scale recovers the metric scale from the camera h
   CHECK(floor_height_scale(truth.flip({0}), ones, K, 1.6) == 0.0);
   CHECK(floor_height_scale(truth, torch::zeros({H, W}), K, 1.6) == 0.0);
   CHECK_THROWS_WITH(floor_height_scale(truth, ones, K, 0.0), Catch::Contains("camera height must be positive"));
-}
-
-TEST_CASE("prior: floor_rule nearest takes the floor, not a table top, when the net's scale says so", "[prior]") {
-  const int64_t H = 96, W = 128;
-  const auto K = estimate_K(W, H, 60.0);
-  // A table top 0.8 m below the camera fills the left 70% of the view; the floor (1.6 m below) shows right.
-  auto scene = floor_depth(H, W, K, 1.6, 0.15);
-  scene.narrow(1, 0, 90).copy_(floor_depth(H, W, K, 0.8, 0.15).narrow(1, 0, 90));
-  const auto ones = torch::ones({H, W});
-  // The best-supported plane is the table: the metric depth would be doubled.
-  CHECK(floor_height_scale(scene, ones, K, 1.6, "best") == Approx(2.0).epsilon(0.01));
-  // nearest: of the two planes, the floor's factor (1) is the one the net's own scale agrees with ...
-  CHECK(floor_height_scale(scene, ones, K, 1.6, "nearest") == Approx(1.0).epsilon(0.01));
-  // ... and with a net at a third of the scale, the floor's factor (3.3) is still nearer than the table's (6.7).
-  CHECK(floor_height_scale(scene * 0.3, ones, K, 1.6, "nearest") == Approx(1.0 / 0.3).epsilon(0.01));
-  // With one floor in view the rules agree.
-  const auto floor_only = floor_depth(H, W, K, 1.6, 0.15) * 0.5;
-  CHECK(floor_height_scale(floor_only, ones, K, 1.6, "nearest") ==
-        Approx(floor_height_scale(floor_only, ones, K, 1.6, "best")));
-  CHECK_THROWS_WITH(floor_height_scale(scene, ones, K, 1.6, "lowest"), Catch::Contains("best or nearest"));
 }
 
 TEST_CASE("prior: camera_height_m sets a monocular prior's scale and keeps the contract", "[prior]") {

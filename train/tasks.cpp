@@ -7,7 +7,6 @@
 
 #include "core/log.h"
 #include "core/progress.h"
-#include "data/perturb.h"
 #include "geometry/camera_torch.h"
 #include "geometry/color.h"
 #include "io/safetensors.h"
@@ -47,14 +46,7 @@ class GaussianTask final : public TrainTask {
       in.depth = batch.context_depth[b];
       in.valid = batch.context_valid[b];
       in.seed = mix_seed(static_cast<uint64_t>(config_.runtime.seed), static_cast<uint64_t>(first_sample + b));
-      std::function<void(PriorOutput&)> depth_error;
-      if (train && config_.train.depth_error.any())
-        depth_error = [&](PriorOutput& po) {
-          const PerturbedDepth d =
-              perturb_depth(po.depth, po.valid, draw_depth_error(config_.train.depth_error, in.seed), in.seed);
-          po.depth = d.depth, po.valid = d.valid;
-        };
-      Prediction p = pipeline_.run(in, batch.context_T[b], train, depth_error);
+      Prediction p = pipeline_.run(in, batch.context_T[b], train);
       for (const auto& [k, v] : p.timings_ms) stats.timings_ms[k] += v;
       stats.supports += p.supports.count();
       // Diverged weights give non-finite Gaussians, which the renderer rejects: report the step as
@@ -137,30 +129,12 @@ class GaussianTask final : public TrainTask {
 
 class DepthTask final : public TrainTask {
  public:
-  explicit DepthTask(const TrainConfig& config)
-      : net_(learned_depth_options(config.model.prior)),
-        loss_(config.loss),
-        backbone_lr_(config.model.prior.learned_backbone_lr) {
-    if (backbone_lr_ > 0) net_->tune_backbone();
-  }
+  explicit DepthTask(const TrainConfig& config) : net_(learned_depth_options(config.model.prior)), loss_(config.loss) {}
 
   torch::nn::Module& module() override { return *net_; }
-  std::vector<ParamGroup> param_groups() override {
-    if (!net_->backbone_tuned()) return TrainTask::param_groups();
-    const auto encoder = net_->backbone_parameters();
-    std::vector<torch::Tensor> decoder;
-    for (const auto& p : net_->parameters()) {
-      const bool in_encoder =
-          std::any_of(encoder.begin(), encoder.end(), [&](const torch::Tensor& e) { return e.is_same(p); });
-      if (!in_encoder) decoder.push_back(p);
-    }
-    return {{decoder, 1.0}, {encoder, backbone_lr_}};
-  }
   std::string describe() const override {
-    return cat("learned depth prior (", net_->options.arch,
-               net_->backbone_tuned() ? cat(", encoder fine-tuned at ", backbone_lr_, " x lr") : "",
-               net_->options.focal_normalized ? ", focal-normalized" : "", "; l1_log x ", loss_.depth_l1,
-               " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
+    return cat("learned depth prior (", net_->options.arch, net_->options.focal_normalized ? ", focal-normalized" : "",
+               "; l1_log x ", loss_.depth_l1, " + silog lambda ", loss_.depth_lambda, " + scale x ", loss_.depth_scale,
                loss_.depth_sky > 0 ? cat(" + sky x ", loss_.depth_sky, " beyond ", loss_.depth_sky_m, " m") : "", ")");
   }
 
@@ -170,7 +144,7 @@ class DepthTask final : public TrainTask {
   }
 
   void finish(const std::string& run_dir) const override {
-    // The prior's weights, under the net's own names (with "backbone." when the encoder was fine-tuned).
+    // The prior's weights, under the net's own names.
     std::map<std::string, torch::Tensor> w;
     for (const auto& p : net_->named_parameters(true)) w[p.key()] = p.value().detach();
     write_safetensors((std::filesystem::path(run_dir) / "depth_net.safetensors").string(), w);
@@ -179,7 +153,6 @@ class DepthTask final : public TrainTask {
  private:
   LearnedDepthNet net_;
   LossOptions loss_;
-  double backbone_lr_;
 };
 }  // namespace
 

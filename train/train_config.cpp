@@ -47,10 +47,6 @@ void LoopOptions::visit(ConfigVisitor& v) {
   v.field("target_mask", target_mask, "score target pixels that see the context's surface, or all pixels",
           {"projected", "none"});
   v.field("val_images", val_images, "validation tuples saved as PNG panels", Range::at_least(0));
-  v.section("depth_error",
-            "random errors put on the prior's depth in training steps (never in validation), so the decoder learns "
-            "to cope with a wrong prior; off by default",
-            depth_error);
 }
 
 void TrainConfig::visit(ConfigVisitor& v) {

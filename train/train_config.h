@@ -49,7 +49,6 @@ struct LoopOptions {
   int64_t stop_at = 0;  // end this sitting after this step (checkpointed; --resume auto continues); 0 = off
   std::string target_mask = "projected";  // projected | none
   int64_t val_images = 3;
-  DepthErrorOptions depth_error;  // random errors on the prior's depth, training steps only
   void visit(ConfigVisitor& v);
 };
 

@@ -14,11 +14,31 @@ const std::vector<RetiredKey>& retired_keys() {
       {"model.sampler.edge_scale_at", nullptr, "lab/2026-11-28-crack-side, lab/2026-11-28-edge-near07"},
       {"model.sampler.color", "bilinear", "lab/2026-11-23-ablation-edges"},
       {"model.sampler.placement", "random", "lab/2026-11-25-crack-placement, lab/2026-11-25-cracks-edges"},
+      {"model.decoder.behind", "shared", "lab/2026-11-28-behind-decoder"},
+      {"model.prior.floor_rule", "best", "lab/2026-11-25-prior-scale"},
+      {"model.prior.learned_backbone_lr", 0.0, "lab/2026-11-26-prior-tuned"},
+      {"model.prior.learned_input_width", 0, "lab/2026-11-26-prior-tuned"},
+      {"train.depth_error",
+       {{"scale_sigma", 0.0}, {"warp_sigma", 0.0}, {"blur_px", 0.0}},
+       "lab/2026-11-26-depth-error"},
   };
   return keys;
 }
 
 namespace {
+
+// Numbers compare by value (1 and 1.0 alike), strings exactly; a kept section is matched by the keys it lists (a
+// stored section may hold others, which did nothing without them, and a key it lacks had its default).
+bool same(const nlohmann::json& stored, const nlohmann::json& kept) {
+  if (stored.is_number() && kept.is_number()) return stored.get<double>() == kept.get<double>();
+  if (!kept.is_object()) return stored == kept;
+  if (!stored.is_object()) return false;
+  for (const auto& [key, value] : kept.items()) {
+    const auto it = stored.find(key);
+    if (it != stored.end() && !same(*it, value)) return false;
+  }
+  return true;
+}
 
 // Strips the entries whose path starts with `prefix` from `root` (the section the prefix names).
 void strip(nlohmann::json& root, const std::string& prefix, const std::string& source) {
@@ -37,9 +57,7 @@ void strip(nlohmann::json& root, const std::string& prefix, const std::string& s
     const std::string name = rest.substr(from);
     auto it = section->find(name);
     if (it == section->end()) continue;
-    // Numbers compare by value (1 and 1.0 alike); strings and sections exactly.
-    const bool kept = k.kept.is_null() || *it == k.kept ||
-                      (it->is_number() && k.kept.is_number() && it->get<double>() == k.kept.get<double>());
+    const bool kept = k.kept.is_null() || same(*it, k.kept);
     if (!kept)
       fail(source, ": ", k.path, " = ", it->dump(), " was retired (its study, ", k.study, ", did not adopt it); only ",
            k.kept.dump(),

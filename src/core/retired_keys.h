@@ -8,9 +8,11 @@
 namespace isplat {
 
 struct RetiredKey {
-  std::string path;     // from the config's root, e.g. "model.sampler.fill_mode"
-  nlohmann::json kept;  // the value whose behaviour remains; null: any value (it acted only with another retired key)
-  std::string study;    // the lab study that measured it and did not adopt it
+  std::string path;  // from the config's root, e.g. "model.sampler.fill_mode"
+  // The value whose behaviour remains (a section: the values of the keys it lists); null: any value (it acted only
+  // with another retired key).
+  nlohmann::json kept;
+  std::string study;  // the lab study that measured it and did not adopt it
 };
 
 // Every retired key, in the order of its section.

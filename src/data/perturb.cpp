@@ -62,27 +62,6 @@ void PerturbOptions::visit(ConfigVisitor& v) {
           Range::between(0, 100));
 }
 
-void DepthErrorOptions::visit(ConfigVisitor& v) {
-  v.field("scale_sigma", scale_sigma, "sigma of the log of a global depth scale drawn per tuple (0 = off)",
-          Range::between(0.0, 2.0));
-  v.field("warp_sigma", warp_sigma,
-          "sigma of a smooth log-depth warp drawn per tuple (the stability suite's depth_warp; 0 = off)",
-          Range::between(0.0, 2.0));
-  v.field("warp_cells", warp_cells, "grid cells of the warp across the image width", Range::between(1, 64));
-  v.field("blur_px", blur_px, "largest depth blur sigma in pixels, drawn uniformly from [0, blur_px] per tuple",
-          Range::between(0.0, 100.0));
-}
-
-PerturbOptions draw_depth_error(const DepthErrorOptions& o, uint64_t seed) {
-  auto gen = at::make_generator<at::CPUGeneratorImpl>(seed * 0x9E3779B97F4A7C15ull + 3);
-  PerturbOptions p;
-  p.depth_scale = std::exp(o.scale_sigma * torch::randn({1}, gen).item<double>());
-  p.depth_warp = o.warp_sigma;
-  p.depth_warp_cells = o.warp_cells;
-  p.depth_blur_px = o.blur_px * torch::rand({1}, gen).item<double>();
-  return p;
-}
-
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
   const auto z = depth.contiguous(), ok = valid.to(torch::kFloat32).contiguous();
   const int64_t H = z.size(0), W = z.size(1);

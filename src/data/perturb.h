@@ -48,20 +48,6 @@ torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions
 // Applies the options to the source view's image, depth and valid mask (a copy; the input is unchanged).
 ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& options, uint64_t seed);
 
-// Random depth errors for training a decoder that must cope with a wrong depth prior. Each tuple draws a global
-// scale exp(N(0, scale_sigma²)), a smooth warp of sigma warp_sigma and a blur of U(0, blur_px) pixels.
-struct DepthErrorOptions {
-  double scale_sigma = 0.0;
-  double warp_sigma = 0.0;
-  int64_t warp_cells = 3;
-  double blur_px = 0.0;
-  bool any() const { return scale_sigma > 0 || warp_sigma > 0 || blur_px > 0; }
-  void visit(ConfigVisitor& v);
-};
-
-// The perturbation one tuple gets (deterministic for the seed; the warp's field also follows the seed).
-PerturbOptions draw_depth_error(const DepthErrorOptions& options, uint64_t seed);
-
 // Depth edges: valid pixels whose depth differs from a 4-neighbour's by more than `relative` of itself.
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative = 0.05);
 

@@ -36,12 +36,9 @@ struct PriorOptions {
   bool learned_focal = false;         // the learned net predicts focal-normalized depth
   double learned_sky_m = 0.0;         // predictions at or beyond this depth are sky: invalid (0 = none)
   bool learned_flip_average = false;  // also read the mirrored photo; average the two in log depth
-  int64_t learned_input_width = 0;    // run the net on the photo resized to this width (0 = its own size)
   double camera_height_m = 0.0;       // monocular priors: rescale so the floor lies this far below (0 = off)
-  std::string floor_rule = "best";    // camera_height_m: best-supported plane | nearest the net's own scale
   bool reference_scale = false;       // diagnostic: monocular depth scaled to the frame's own depth (median)
   std::string learned_backbone = "squeezenet1_1_features.safetensors";  // a file name: the weights lookup
-  double learned_backbone_lr = 0.0;  // task: depth, squeeze: fine-tune the encoder at this x optim.lr (0 = frozen)
   SparsePriorOptions sparse;
   void visit(ConfigVisitor& v);
 };
@@ -87,11 +84,9 @@ torch::Tensor estimate_K(int64_t width, int64_t height, double hfov_deg);
 // best-supported plane in the lower half of the back-projected depth whose normal is within 40 degrees of
 // the camera's up axis and which lies below the camera; the result is the factor that puts that plane
 // `height_m` below the camera. 0 when no such floor is found (then the depth keeps its own scale).
-// rule "nearest": of up to three such planes (each fitted to the points the earlier ones left, with at least a
-// third of the first one's support), the one whose factor is nearest 1. depth, valid [H,W]; K [3,3].
-// Deterministic.
+// depth, valid [H,W]; K [3,3]. Deterministic.
 double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,
-                          double height_m, const std::string& rule = "best");
+                          double height_m);
 
 // Sparse alignment (exposed for tests): mono depth [H,W] aligned to prompts [P,3] with a global
 // scale/shift in inverse depth, then a residual log-scale field fitted coarse to fine (kernel widths halving

@@ -1,4 +1,4 @@
-// Learned depth: a U-Net or a decoder on (frozen or fine-tuned) SqueezeNet taps, predicting log depth; instance norm
+// Learned depth: a U-Net or a decoder on frozen SqueezeNet taps, predicting log depth; instance norm
 // keeps it stable at batch size 1.
 #include "prior/learned_depth.h"
 
@@ -21,29 +21,7 @@ namespace {
 // SqueezeNet-1.1 `features` taps at strides 2, 4, 8 and 16, and their channels.
 const std::vector<int> kSqueezeTaps = {1, 4, 7, 12};
 const int64_t kSqueezeChannels[4] = {64, 128, 256, 512};
-// Module parameter names cannot contain dots: torchvision's "3.squeeze.weight" is kept as "3_squeeze_weight".
-std::string tuned_name(std::string name) {
-  std::replace(name.begin(), name.end(), '.', '_');
-  return name;
-}
 }  // namespace
-
-bool has_tuned_backbone(const std::map<std::string, torch::Tensor>& tensors, const std::string& prefix) {
-  return tensors.count(prefix + "backbone.0_weight") > 0;
-}
-
-void LearnedDepthNetImpl::tune_backbone() {
-  ISPLAT_CHECK(options.arch == "squeeze", "learned depth net: only the squeeze arch has a pretrained encoder to tune (",
-               "prior.learned_arch is '", options.arch, "')");
-  if (tuned_backbone_) return;
-  tuned_backbone_ = std::make_shared<torch::nn::Module>();
-  for (const auto& [name, w] : backbone->params()) tuned_backbone_->register_parameter(tuned_name(name), w);
-  register_module("backbone", tuned_backbone_);
-}
-
-std::vector<torch::Tensor> LearnedDepthNetImpl::backbone_parameters() const {
-  return tuned_backbone_ ? tuned_backbone_->parameters() : std::vector<torch::Tensor>{};
-}
 
 LearnedDepthNetImpl::LearnedDepthNetImpl(const LearnedDepthOptions& o) : options(o) {
   const int64_t w = o.width;
@@ -93,8 +71,7 @@ torch::Tensor LearnedDepthNetImpl::forward_log(const torch::Tensor& image, const
   } else {
     std::vector<torch::Tensor> taps;
     {
-      // The pretrained encoder is not trained unless tuned (and never where the caller turned gradients off).
-      torch::AutoGradMode encoder_grad(tuned_backbone_ != nullptr && torch::GradMode::is_enabled());
+      torch::NoGradGuard frozen;  // the pretrained encoder is never trained
       taps = backbone->forward(imagenet_normalize(image));
     }
     x = torch::relu(instance_norm((*lateral)[3]->as<nn::Conv2d>()->forward(taps[3])));
