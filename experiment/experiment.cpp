@@ -13,6 +13,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/retired_keys.h"
 #include "eval/evaluator.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
@@ -226,9 +227,12 @@ std::string Experiment::config_drift(const ExperimentRun& run) const {
 std::string Experiment::config_drift(const ExperimentRun& run, const TrainConfig& want_config) const {
   const fs::path stored = fs::path(run.dir) / "config.json";
   if (!fs::exists(stored)) return "";
-  // Loaded through the schema, so keys added since the run was trained read as their defaults.
+  // Loaded through the schema, so keys added since the run was trained read as their defaults; keys retired since
+  // read as the behaviour that remains (core/retired_keys.h).
   std::map<std::string, std::string> had, want;
-  flatten(config_to_json(load_config<TrainConfig>(stored.string())), "", had);
+  nlohmann::json stored_json = parse_json(read_file_bytes(stored.string()), stored.string());
+  strip_retired_config_keys(stored_json, stored.string());
+  flatten(config_to_json(config_from_json<TrainConfig>(stored_json, stored.string())), "", had);
   flatten(config_to_json(want_config), "", want);
   // Where the run lives, how many threads and workers train it, how long it runs (a longer recipe resumes
   // it), how often it validates and saves, and how many checkpoints it keeps do not change what it learns.
