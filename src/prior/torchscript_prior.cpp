@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/weights.h"
 #include "prior/prior_common.h"
 
 namespace isplat {
@@ -16,11 +17,15 @@ class TorchScriptPrior final : public DepthPrior {
  public:
   explicit TorchScriptPrior(const PriorOptions& o) : o_(o) {
     ISPLAT_CHECK(!o.torchscript.empty(), "prior.type = torchscript needs prior.torchscript (path of a traced model)");
-    ISPLAT_CHECK(std::filesystem::exists(o.torchscript), o.torchscript, ": no such file (prior.torchscript)");
+    // A bare file name is looked up like the other weights (core/weights.h); a path is taken as given.
+    o_.torchscript = find_weights_file(o.torchscript);
+    ISPLAT_CHECK(!o_.torchscript.empty() && std::filesystem::exists(o_.torchscript), o.torchscript,
+                 ": no such file (prior.torchscript; a file name is looked up: ", missing_weights_hint(),
+                 ", though that command fetches no depth model)");
     try {
-      module_ = torch::jit::load(o.torchscript);
+      module_ = torch::jit::load(o_.torchscript);
     } catch (const std::exception& e) {
-      fail(o.torchscript, ": cannot load TorchScript model: ", e.what());
+      fail(o_.torchscript, ": cannot load TorchScript model: ", e.what());
     }
     module_.eval();
   }
