@@ -6,7 +6,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
+#include <memory>
+#include <optional>
 #include <set>
 
 #include "core/build_info.h"
@@ -18,8 +21,8 @@
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
 #include "io/chart.h"
-#include "io/csv.h"
 #include "io/jsonl.h"
+#include "io/table.h"
 #include "metrics/stats.h"
 #include "train/trainer.h"
 
@@ -43,15 +46,8 @@ std::string join_seeds(const ExperimentRow& r) {
   return out;
 }
 
-std::string fmt(double v, int digits) {
-  if (!std::isfinite(v)) return "n/a";
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(digits) << v;
-  return os.str();
-}
-
 std::string signed_fmt(double v, int digits) {
-  return (v >= 0 ? "+" : "") + fmt(v, digits);
+  return (v >= 0 ? "+" : "") + format_fixed(v, digits);
 }
 
 std::string interval_fmt(const Interval& i, int digits) {  // "+0.12 [+0.05, +0.20]"
@@ -98,43 +94,58 @@ struct TableRow {
   std::string interval;     // what the intervals resample: "pairs" or "seeds and pairs"
 };
 
-void add_table_row(CsvTable& csv, nlohmann::ordered_json& js, const std::string& dataset, const std::string& variant,
-                   const std::string& reference, const std::string& lp, const TableRow& t) {
-  std::vector<std::string> cells = {dataset,        variant,        t.row,          t.bin, std::to_string(t.pairs),
-                                    fmt(t.psnr, 4), fmt(t.ssim, 5), fmt(t.lpips, 5)};
-  auto add_interval = [&](const Interval& i, int digits) {
-    for (double x : {i.mean, i.lo, i.hi}) cells.push_back(fmt(x, digits));
-  };
-  add_interval(t.dp, 4), add_interval(t.dl, 5);
-  cells.insert(cells.end(), {fmt(t.holes, 4), fmt(t.cracks, 4), fmt(t.normals, 3)});
-  add_interval(t.dh, 4), add_interval(t.dc, 4);
-  cells.push_back(t.interval);
-  csv.rows.push_back(std::move(cells));
-  auto num = [](double x) { return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
-  js.push_back({{"dataset", dataset},
-                {"variant", variant},
-                {"row", t.row},
-                {"label", t.label},
-                {"bin", t.bin},
-                {"pairs", t.pairs},
-                {"psnr", num(t.psnr)},
-                {"ssim", num(t.ssim)},
-                {"lpips_" + lp, num(t.lpips)},
-                {"delta_psnr", num(t.dp.mean)},
-                {"delta_psnr_ci", {num(t.dp.lo), num(t.dp.hi)}},
-                {"delta_lpips", num(t.dl.mean)},
-                {"delta_lpips_ci", {num(t.dl.lo), num(t.dl.hi)}},
-                {"holes_pct", num(t.holes)},
-                {"cracks_pct", num(t.cracks)},
-                {"normals_deg", num(t.normals)},
-                {"delta_holes", num(t.dh.mean)},
-                {"delta_holes_ci", {num(t.dh.lo), num(t.dh.hi)}},
-                {"delta_cracks", num(t.dc.mean)},
-                {"delta_cracks_ci", {num(t.dc.lo), num(t.dc.hi)}},
-                {"reference", reference},
-                {"interval", t.interval}});
+// report.csv and report.json: the columns, declared once.
+Table results_table(const std::string& lp) {
+  Table t;
+  t.columns = {{"dataset"}, {"variant"}, {"reference"}, {"label"},   {"row"},
+               {"bin"},     {"pairs"},   {"psnr", 4},   {"ssim", 5}, {"lpips_" + lp, 5}};
+  for (const TableColumn& c : std::initializer_list<TableColumn>{{"delta_psnr", 4},
+                                                                 {"delta_psnr_lo", 4},
+                                                                 {"delta_psnr_hi", 4},
+                                                                 {"delta_lpips", 5},
+                                                                 {"delta_lpips_lo", 5},
+                                                                 {"delta_lpips_hi", 5},
+                                                                 {"holes_pct", 4},
+                                                                 {"cracks_pct", 4},
+                                                                 {"normals_deg", 3},
+                                                                 {"delta_holes", 4},
+                                                                 {"delta_holes_lo", 4},
+                                                                 {"delta_holes_hi", 4},
+                                                                 {"delta_cracks", 4},
+                                                                 {"delta_cracks_lo", 4},
+                                                                 {"delta_cracks_hi", 4},
+                                                                 {"interval"}})
+    t.columns.push_back(c);
+  return t;
 }
 
+void add_result(Table& table, const std::string& dataset, const std::string& variant, const std::string& reference,
+                const TableRow& t) {
+  std::vector<TableCell> cells = {dataset, variant, reference, t.label, t.row, t.bin, t.pairs, t.psnr, t.ssim, t.lpips};
+  auto add_interval = [&](const Interval& i) { cells.insert(cells.end(), {i.mean, i.lo, i.hi}); };
+  add_interval(t.dp), add_interval(t.dl);
+  cells.insert(cells.end(), {t.holes, t.cracks, t.normals});
+  add_interval(t.dh), add_interval(t.dc);
+  cells.push_back(t.interval);
+  table.add(std::move(cells));
+}
+
+// One run's (or baseline's) scores against `base` on one bin (-1 = all pairs): means and paired intervals.
+TableRow on_bin(const Scores& s, const Scores& base, const std::vector<int>& pair_bin, int bin, int64_t resamples) {
+  auto sub = [&](const std::vector<double>& v) { return in_bin(v, pair_bin, bin); };
+  TableRow t;
+  const std::vector<double> p = sub(s.psnr);
+  for (double x : p) t.pairs += std::isfinite(x);
+  t.psnr = mean_finite(p), t.ssim = mean_finite(sub(s.ssim)), t.lpips = mean_finite(sub(s.lpips));
+  t.holes = mean_finite(sub(s.holes)), t.cracks = mean_finite(sub(s.cracks));
+  t.normals = mean_finite(sub(s.normals));
+  t.dp = paired_bootstrap(p, sub(base.psnr), resamples);
+  t.dl = paired_bootstrap(sub(s.lpips), sub(base.lpips), resamples);
+  t.dh = paired_bootstrap(sub(s.holes), sub(base.holes), resamples);
+  t.dc = paired_bootstrap(sub(s.cracks), sub(base.cracks), resamples);
+  t.interval = "pairs";
+  return t;
+}
 // A row over its training seeds against the reference's same seeds (mine[k] and ref[k] share seed k) on one bin:
 // means over the seeds, and seed-aware intervals (seed_paired_bootstrap).
 TableRow over_seeds(const std::vector<Scores>& mine, const std::vector<Scores>& ref, const std::vector<int>& pair_bin,
@@ -351,312 +362,253 @@ void Experiment::evaluate(const std::vector<std::string>& only, const std::vecto
   Evaluator(ec).run();
 }
 
-void Experiment::report() {
-  EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
-  ec.scoring.out = (fs::path(config_.out) / "eval").string();
-  ec.scoring.lpips = {};  // the report reads scores; it computes none
-  Evaluator ev(ec);
-  const std::string lp = "squeeze";  // the LPIPS variant reported (the one with real weights here)
+namespace {
+// One dataset's scores on the experiment's pairs: what every variant's tables read.
+struct DatasetScores {
+  std::string name;
+  std::vector<std::string> bins;
+  std::vector<int64_t> bin_counts;
+  std::vector<int> pair_bin;                       // each pair's baseline bin
+  std::function<Scores(const std::string&)> load;  // a scored method's values (none when it has no results)
+};
 
-  std::ostringstream md;
-  md << "# Ablation report\n\n"
-     << "Every row is trained from the same recipe (`" << config_.train_config
-     << "`) and scored on the same pairs with "
-     << "the same masks. Delta = row minus `" << config_.reference
-     << "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval (" << config_.bootstrap
-     << " resamples); an interval that contains 0 is no difference.\n\n";
-  CsvTable csv;
-  csv.header = {"dataset",
-                "variant",
-                "row",
-                "bin",
-                "pairs",
-                "psnr",
-                "ssim",
-                "lpips_" + lp,
-                "delta_psnr",
-                "delta_psnr_lo",
-                "delta_psnr_hi",
-                "delta_lpips",
-                "delta_lpips_lo",
-                "delta_lpips_hi",
-                "holes_pct",
-                "cracks_pct",
-                "normals_deg",
-                "delta_holes",
-                "delta_holes_lo",
-                "delta_holes_hi",
-                "delta_cracks",
-                "delta_cracks_lo",
-                "delta_cracks_hi",
-                "interval"};
-  nlohmann::ordered_json js = nlohmann::ordered_json::array();
-  std::vector<Chart> delta_charts;
+// One line of a variant's tables: a trained run, a baseline, or the reference's seeds against each other.
+struct Entry {
+  std::string name, label;
+  Scores s;
+  bool is_ref_seed = false, is_baseline = false, spread = false;
+};
 
-  for (size_t d = 0; d < ec.datasets.size(); ++d) {
-    const auto& ds = ec.datasets[d];
-    const std::string manifest_path = (fs::path(ev.dataset_dir(d)) / "manifest.json").string();
-    if (!fs::exists(manifest_path)) {
-      md << "## " << ds.name << "\n\nNot evaluated yet (no " << manifest_path << ").\n\n";
-      continue;
-    }
-    const Manifest m = read_manifest(manifest_path);
-    const std::vector<int64_t> pairs = ev.select_pairs(m);
-    std::vector<std::string> bins;
-    for (size_t b = 0; b < m.bin_counts.size(); ++b) bins.push_back(m.bin_label(static_cast<int>(b)));
-    std::vector<int> pair_bin;
-    for (int64_t i : pairs) pair_bin.push_back(m.pairs[static_cast<size_t>(i)].bin);
-    auto load = [&](const std::string& method) {
-      Scores s;
-      const std::string path = ev.results_path(d, method);
-      if (!fs::exists(path)) return s;
-      const ResultsLog log(path, [&](const PairResult& r) { return check_against_manifest(r, m); });
-      for (int64_t i : pairs) {
-        auto it = log.done().find(i);
-        const bool ok = it != log.done().end();
-        s.any |= ok;
-        s.psnr.push_back(ok ? it->second.psnr : NAN);
-        s.ssim.push_back(ok ? it->second.ssim : NAN);
-        const double l = ok && it->second.lpips.count(lp) ? it->second.lpips.at(lp) : NAN;
-        s.lpips.push_back(l);
-        s.holes.push_back(ok ? 100 * it->second.hole_rate : NAN);
-        s.cracks.push_back(ok ? 100 * it->second.crack_rate : NAN);
-        s.normals.push_back(ok ? it->second.normal_deg : NAN);
-      }
-      return s;
+// The reference row's seeds in variant v, and their average per pair (none when it is not scored there).
+std::vector<std::pair<int64_t, Scores>> reference_seeds(const Experiment& ex, const ExperimentConfig& c,
+                                                        const DatasetScores& ds, const ExperimentVariant& v) {
+  std::vector<std::pair<int64_t, Scores>> out;
+  for (const auto& r : c.rows)
+    if (r.name == c.reference)
+      for (const auto& run : ex.runs(r))
+        if (Scores s = ds.load(ex.method_name(r, run.seed, v)); s.any) out.push_back({run.seed, s});
+  return out;
+}
+
+Scores seed_average(const std::vector<std::pair<int64_t, Scores>>& seeds, size_t pairs) {
+  Scores ref;
+  ref.any = true;
+  for (size_t k = 0; k < pairs; ++k) {
+    auto avg = [&](std::vector<double> Scores::*member) {
+      double sum = 0;
+      int n = 0;
+      for (const auto& [seed, s] : seeds)
+        if (std::isfinite((s.*member)[k])) sum += (s.*member)[k], ++n;
+      return n == static_cast<int>(seeds.size()) ? sum / n : NAN;
     };
-    auto subset = [&](const std::vector<double>& v, int bin) { return in_bin(v, pair_bin, bin); };
-    md << "## " << ds.name << " (" << pairs.size() << " pairs; per bin:";
-    for (size_t b = 0; b < bins.size(); ++b) md << " " << bins[b] << " " << m.bin_counts[b];
-    md << ")\n\n";
+    for (auto m : {&Scores::psnr, &Scores::ssim, &Scores::lpips, &Scores::holes, &Scores::cracks, &Scores::normals})
+      (ref.*m).push_back(avg(m));
+  }
+  return ref;
+}
 
-    for (const auto& v : config_.variants) {
-      // Reference: the reference row's seeds, averaged per pair.
-      const ExperimentRow& ref_row = row(config_.reference);
-      std::vector<Scores> ref_seeds;
-      std::map<int64_t, Scores> ref_by_seed;
-      for (const auto& run : runs(ref_row)) {
-        Scores s = load(method_name(ref_row, run.seed, v));
-        if (s.any) ref_seeds.push_back(s), ref_by_seed[run.seed] = s;
-      }
-      if (ref_seeds.empty()) {
-        md << "### " << v.name << "\n\nThe reference row `" << config_.reference
-           << "` is not scored in this variant yet.\n\n";
-        continue;
-      }
-      Scores ref;
-      ref.any = true;
-      for (size_t k = 0; k < pairs.size(); ++k) {
-        auto avg = [&](auto member) {
-          double sum = 0;
-          int n = 0;
-          for (const auto& s : ref_seeds)
-            if (std::isfinite((s.*member)[k])) sum += (s.*member)[k], ++n;
-          return n == static_cast<int>(ref_seeds.size()) ? sum / n : NAN;
-        };
-        ref.psnr.push_back(avg(&Scores::psnr));
-        ref.ssim.push_back(avg(&Scores::ssim));
-        ref.lpips.push_back(avg(&Scores::lpips));
-        ref.holes.push_back(avg(&Scores::holes));
-        ref.cracks.push_back(avg(&Scores::cracks));
-        ref.normals.push_back(avg(&Scores::normals));
-      }
-      md << "### " << v.name << (v.overrides.empty() ? "" : " (model overrides: ");
-      for (size_t k = 0; k < v.overrides.size(); ++k) md << (k ? ", " : "") << "`" << v.overrides[k] << "`";
-      md << (v.overrides.empty() ? "" : ")") << "\n\n| row | PSNR | SSIM | LPIPS (" << lp
-         << ") | ΔPSNR [95% CI] | ΔLPIPS [95% CI] |";
-      for (const auto& b : bins) md << " " << b << " PSNR (Δ [CI]) |";
-      md << "\n|---|---|---|---|---|---|";
-      for (size_t b = 0; b < bins.size(); ++b) md << "---|";
-      md << "\n";
-
-      // Where single-image methods fail: holes and cracks, overall and at the largest baselines.
-      const int last_bin = static_cast<int>(bins.size()) - 1;
-      std::ostringstream stab;
-      stab << "Stability (holes: masked pixels with rendered alpha < 0.5; cracks: neighbours whose rendered depth "
-              "jumps where the reference is smooth; normals: mean angle between neighbouring rendered normals on "
-              "reference-planar surfaces). Δ to `"
-           << config_.reference << "` with a paired 95% interval:\n\n| row | holes % | cracks % | normals deg | "
-           << bins[static_cast<size_t>(last_bin)] << " holes % (Δ [CI]) | " << bins[static_cast<size_t>(last_bin)]
-           << " cracks % (Δ [CI]) |\n|---|---|---|---|---|---|\n";
-      bool any_stability = false;
-      std::vector<std::string> unmeasured;  // rows scored before the stability measures existed
-
-      Chart chart;
-      chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", config_.reference, " per baseline bin");
-      chart.x_label = "baseline bin (0 = smallest)";
-      chart.y_label = "delta PSNR (dB), mean over the bin's pairs";
-      // Rows: every trained row and seed, then the baselines.
-      struct Entry {
-        std::string name, label;
-        Scores s;
-        bool is_ref_seed = false, is_baseline = false;
-      };
-      std::vector<Entry> entries;
-      for (const auto& r : config_.rows) {
-        if (!v.rows.empty() && !wanted(v.rows, r.name)) continue;
-        for (const auto& run : runs(r)) {
-          const std::string name = method_name(r, run.seed, v);
-          Scores s = load(name);
-          if (!s.any) continue;
-          entries.push_back({name, r.label.empty() ? r.name : r.label, s, r.name == config_.reference});
-        }
-      }
-      for (const auto& b : config_.baselines) {
-        Scores s = load(b);
-        if (s.any) entries.push_back({b, b, s, false, true});
-      }
-      if (ref_seeds.size() > 1) {  // training noise: the reference's seeds against each other
-        entries.push_back(
-            {cat(config_.reference, " seed spread"), "seed 1 - seed 0 of the reference", ref_seeds[1], false});
-      }
-      for (size_t k = 0; k < entries.size(); ++k) {
-        const Entry& e = entries[k];
-        const bool spread = e.name.find("seed spread") != std::string::npos;
-        const Scores& base = spread ? ref_seeds[0] : ref;
-        const Interval dp = paired_bootstrap(e.s.psnr, base.psnr, config_.bootstrap);
-        const Interval dl = paired_bootstrap(e.s.lpips, base.lpips, config_.bootstrap);
-        const bool self = e.is_ref_seed && ref_seeds.size() == 1;
-        md << "| " << e.name << (e.label != e.name ? " (" + e.label + ")" : "") << " | "
-           << fmt(mean_finite(e.s.psnr), 2) << " | " << fmt(mean_finite(e.s.ssim), 3) << " | "
-           << fmt(mean_finite(e.s.lpips), 3) << " | " << (self ? "reference" : interval_fmt(dp, 2)) << " | "
-           << (self ? "reference" : interval_fmt(dl, 3)) << " |";
-        ChartSeries series;
-        series.name = e.name;
-        series.marker = static_cast<int>(k % 4);
-        // Stability of one bin (-1 = all pairs): the row's means and its paired differences to the reference.
-        struct Stability {
-          double holes, cracks, normals;
-          Interval dh, dc;
-        };
-        auto stability = [&](int bin) {
-          return Stability{mean_finite(subset(e.s.holes, bin)), mean_finite(subset(e.s.cracks, bin)),
-                           mean_finite(subset(e.s.normals, bin)),
-                           paired_bootstrap(subset(e.s.holes, bin), subset(base.holes, bin), config_.bootstrap),
-                           paired_bootstrap(subset(e.s.cracks, bin), subset(base.cracks, bin), config_.bootstrap)};
-        };
-        std::vector<Stability> stability_of;  // [0]: all pairs, [b + 1]: bin b
-        for (int b = -1; b <= last_bin; ++b) stability_of.push_back(stability(b));
-        const Stability &all = stability_of.front(), &far = stability_of.back();
-        if (!std::isfinite(all.holes)) {
-          unmeasured.push_back(e.name);
-        } else {
-          any_stability = true;
-          stab << "| " << e.name << " | " << fmt(all.holes, 2) << " | " << fmt(all.cracks, 2) << " | "
-               << fmt(all.normals, 1) << " | " << fmt(far.holes, 2)
-               << (self || far.dh.n == 0 ? std::string() : " (" + interval_fmt(far.dh, 2) + ")") << " | "
-               << fmt(far.cracks, 2) << (self || far.dc.n == 0 ? std::string() : " (" + interval_fmt(far.dc, 2) + ")")
-               << " |\n";
-        }
-        auto add_csv = [&](const std::string& bin, const std::vector<double>& p, const std::vector<double>& s,
-                           const std::vector<double>& l, const Interval& ip, const Interval& il, const Stability& st) {
-          TableRow t;
-          t.row = e.name, t.label = e.label, t.bin = bin;
-          for (double x : p) t.pairs += std::isfinite(x);
-          t.psnr = mean_finite(p), t.ssim = mean_finite(s), t.lpips = mean_finite(l);
-          t.holes = st.holes, t.cracks = st.cracks, t.normals = st.normals;
-          t.dp = ip, t.dl = il, t.dh = st.dh, t.dc = st.dc;
-          t.interval = "pairs";
-          add_table_row(csv, js, ds.name, v.name, config_.reference, lp, t);
-        };
-        add_csv("all", e.s.psnr, e.s.ssim, e.s.lpips, dp, dl, all);
-        for (size_t b = 0; b < bins.size(); ++b) {
-          const int bi = static_cast<int>(b);
-          const auto p = subset(e.s.psnr, bi);
-          const Interval bp = paired_bootstrap(p, subset(base.psnr, bi), config_.bootstrap);
-          const Interval bl = paired_bootstrap(subset(e.s.lpips, bi), subset(base.lpips, bi), config_.bootstrap);
-          md << " " << fmt(mean_finite(p), 2);
-          if (!self && bp.n > 0) md << " (" << interval_fmt(bp, 2) << ")";
-          md << " |";
-          add_csv(bins[b], p, subset(e.s.ssim, bi), subset(e.s.lpips, bi), bp, bl, stability_of[b + 1]);
-          series.x.push_back(static_cast<double>(b));
-          series.y.push_back(self ? 0.0 : bp.mean);
-        }
-        md << "\n";
-        // Baselines sit many dB away and would squash the rows' differences: they stay in the tables.
-        if (!self && !spread && !e.is_baseline) chart.series.push_back(series);
-      }
-      md << "\n";
-      if (any_stability) md << stab.str() << "\n";
-      // Rows over their training seeds, seed k against the reference's seed k: the intervals resample seeds as
-      // well as pairs, so they hold training noise, which the per-run intervals above leave out.
-      // The runs' scores are those of `entries` (loaded above), not read again.
-      auto scored = [&](const std::string& name) -> const Scores* {
-        for (const Entry& e : entries)
-          if (!e.is_baseline && e.name == name) return &e.s;
-        return nullptr;
-      };
-      std::ostringstream by_seed;
-      for (const auto& r : config_.rows) {
-        if (r.name == config_.reference || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
-        std::vector<Scores> mine, theirs;
-        std::string seeds;
-        std::vector<int64_t> seed_ids;
-        for (const auto& run : runs(r)) {
-          const auto it = ref_by_seed.find(run.seed);
-          const Scores* s = it == ref_by_seed.end() ? nullptr : scored(method_name(r, run.seed, v));
-          if (s == nullptr) continue;
-          mine.push_back(*s), theirs.push_back(it->second);
-          seeds += cat(seeds.empty() ? "" : "+", run.seed);
-          seed_ids.push_back(run.seed);
-        }
-        if (mine.size() < 2) continue;
-        const std::string name = cat(r.name, "@", v.name, " seeds ", seeds);
-        const TableRow all = over_seeds(mine, theirs, pair_bin, -1, config_.bootstrap);
-        const TableRow far = over_seeds(mine, theirs, pair_bin, last_bin, config_.bootstrap);
-        by_seed << "| " << name << " | " << fmt(all.psnr, 2) << " | " << interval_fmt(all.dp, 2) << " | "
-                << interval_fmt(all.dl, 3) << " | " << (far.dh.n ? interval_fmt(far.dh, 2) : "n/a") << " | "
-                << (far.dc.n ? interval_fmt(far.dc, 2) : "n/a") << " |";
-        // Each seed against its own reference seed, so a reader sees whether the seeds agree in sign.
-        for (size_t k = 0; k < mine.size(); ++k) {
-          auto delta = [&](std::vector<double> Scores::*m, int bin) {  // the paired mean difference
-            return paired_bootstrap(in_bin(mine[k].*m, pair_bin, bin), in_bin(theirs[k].*m, pair_bin, bin), 1).mean;
-          };
-          by_seed << (k ? "; " : " ") << "s" << seed_ids[k] << " " << signed_fmt(delta(&Scores::psnr, -1), 2) << " / "
-                  << signed_fmt(delta(&Scores::holes, last_bin), 2) << " / "
-                  << signed_fmt(delta(&Scores::cracks, last_bin), 2);
-        }
-        by_seed << " |\n";
-        for (int b = -1; b <= last_bin; ++b) {
-          TableRow t = b < 0 ? all : b == last_bin ? far : over_seeds(mine, theirs, pair_bin, b, config_.bootstrap);
-          t.row = name, t.label = r.label.empty() ? r.name : r.label;
-          t.bin = b < 0 ? "all" : bins[static_cast<size_t>(b)];
-          add_table_row(csv, js, ds.name, v.name, config_.reference, lp, t);
-        }
-      }
-      if (!by_seed.str().empty()) {
-        md << "Rows over their training seeds: seed k of a row against seed k of `" << config_.reference
-           << "`, averaged over the seeds both have; the interval resamples the seeds as well as the pairs, so it "
-              "holds training noise, which the per-run rows above leave out. With two seeds it is crude (a "
-              "bootstrap of two seeds understates their spread):\n\n"
-              "| row | PSNR | ΔPSNR [95% CI] | ΔLPIPS [95% CI] | "
-           << bins[static_cast<size_t>(last_bin)] << " Δholes % [CI] | " << bins[static_cast<size_t>(last_bin)]
-           << " Δcracks % [CI] | per seed: ΔPSNR / " << bins[static_cast<size_t>(last_bin)] << " Δholes / Δcracks |\n"
-           << "|---|---|---|---|---|---|---|\n"
-           << by_seed.str() << "\n";
-      }
-      if (any_stability && !unmeasured.empty()) {
-        md << "Without holes and cracks (the method renders no alpha, like identity, or was scored before they were "
-              "measured: delete its results_*.jsonl and stamp to score it again):";
-        for (const auto& n : unmeasured) md << " " << n;
-        md << ".\n\n";
-      }
-      delta_charts.push_back(chart);
+// Every trained row and seed scored in variant v, then the baselines, then the reference's seed spread.
+std::vector<Entry> variant_entries(const Experiment& ex, const ExperimentConfig& c, const DatasetScores& ds,
+                                   const ExperimentVariant& v, const std::vector<std::pair<int64_t, Scores>>& ref) {
+  std::vector<Entry> entries;
+  for (const auto& r : c.rows) {
+    if (!v.rows.empty() && !wanted(v.rows, r.name)) continue;
+    for (const auto& run : ex.runs(r)) {
+      const std::string name = ex.method_name(r, run.seed, v);
+      if (Scores s = ds.load(name); s.any)
+        entries.push_back({name, r.label.empty() ? r.name : r.label, s, r.name == c.reference});
     }
   }
+  for (const auto& b : c.baselines)
+    if (Scores s = ds.load(b); s.any) entries.push_back({b, b, s, false, true});
+  if (ref.size() > 1)  // training noise: the reference's seeds against each other
+    entries.push_back(
+        {cat(c.reference, " seed spread"), "seed 1 - seed 0 of the reference", ref[1].second, false, false, true});
+  return entries;
+}
 
-  // Training curves of every run: loss and validation PSNR against step and against CPU time.
+// The variant's tables in report.md: scores with intervals per bin, and stability; their rows go into
+// `results`, each entry's PSNR difference per bin into `chart`, and the entries without stability measures into
+// `unmeasured_note`.
+std::string entry_tables(const ExperimentConfig& c, const DatasetScores& ds, const ExperimentVariant& v,
+                         const std::vector<Entry>& entries, const std::vector<std::pair<int64_t, Scores>>& ref_seeds,
+                         const Scores& ref, const std::string& lp, Table& results, Chart& chart,
+                         std::string& unmeasured_note) {
+  const int last_bin = static_cast<int>(ds.bins.size()) - 1;
+  const std::string& far_bin = ds.bins[static_cast<size_t>(last_bin)];
+  Table scores, stability;
+  scores.columns = {
+      {"row"}, {"PSNR", 2}, {"SSIM", 3}, {"LPIPS (" + lp + ")", 3}, {"ΔPSNR [95% CI]"}, {"ΔLPIPS [95% CI]"}};
+  for (const auto& b : ds.bins) scores.columns.push_back({b + " PSNR (Δ [CI])"});
+  stability.columns = {{"row"},
+                       {"holes %", 2},
+                       {"cracks %", 2},
+                       {"normals deg", 1},
+                       {far_bin + " holes % (Δ [CI])"},
+                       {far_bin + " cracks % (Δ [CI])"}};
+  std::vector<std::string> unmeasured;  // rows scored before the stability measures existed
+  for (size_t k = 0; k < entries.size(); ++k) {
+    const Entry& e = entries[k];
+    const Scores& base = e.spread ? ref_seeds[0].second : ref;
+    const bool self = e.is_ref_seed && ref_seeds.size() == 1;
+    std::vector<TableRow> on;  // [0]: all pairs, [b + 1]: bin b
+    for (int b = -1; b <= last_bin; ++b) {
+      on.push_back(on_bin(e.s, base, ds.pair_bin, b, c.bootstrap));
+      on.back().row = e.name, on.back().label = e.label, on.back().bin = b < 0 ? "all" : ds.bins[size_t(b)];
+      add_result(results, ds.name, v.name, c.reference, on.back());
+    }
+    const TableRow &all = on.front(), &far = on.back();
+    std::vector<TableCell> cells = {e.name + (e.label != e.name ? " (" + e.label + ")" : ""),
+                                    all.psnr,
+                                    all.ssim,
+                                    all.lpips,
+                                    self ? "reference" : interval_fmt(all.dp, 2),
+                                    self ? "reference" : interval_fmt(all.dl, 3)};
+    ChartSeries series;
+    series.name = e.name;
+    series.marker = static_cast<int>(k % 4);
+    for (size_t b = 0; b < ds.bins.size(); ++b) {
+      const TableRow& t = on[b + 1];
+      cells.push_back(format_fixed(t.psnr, 2) + (!self && t.dp.n > 0 ? " (" + interval_fmt(t.dp, 2) + ")" : ""));
+      series.x.push_back(static_cast<double>(b));
+      series.y.push_back(self ? 0.0 : t.dp.mean);
+    }
+    scores.add(std::move(cells));
+    // Baselines sit many dB away and would squash the rows' differences: they stay in the tables.
+    if (!self && !e.spread && !e.is_baseline) chart.series.push_back(series);
+    if (!std::isfinite(all.holes)) {
+      unmeasured.push_back(e.name);
+      continue;
+    }
+    auto with_interval = [&](double v, const Interval& i) {
+      return format_fixed(v, 2) + (self || i.n == 0 ? std::string() : " (" + interval_fmt(i, 2) + ")");
+    };
+    stability.add({e.name, all.holes, all.cracks, all.normals, with_interval(far.holes, far.dh),
+                   with_interval(far.cracks, far.dc)});
+  }
+  std::string md = table_markdown(scores) + "\n";
+  if (stability.rows.empty()) return md;
+  md +=
+      cat("Stability (holes: masked pixels with rendered alpha < 0.5; cracks: neighbours whose rendered depth jumps "
+          "where the reference is smooth; normals: mean angle between neighbouring rendered normals on "
+          "reference-planar surfaces). Δ to `",
+          c.reference, "` with a paired 95% interval:\n\n", table_markdown(stability), "\n");
+  if (!unmeasured.empty()) {
+    std::string& md = unmeasured_note;
+    md +=
+        "Without holes and cracks (the method renders no alpha, like identity, or was scored before they were "
+        "measured: delete its results_*.jsonl and stamp to score it again):";
+    for (const auto& n : unmeasured) md += " " + n;
+    md += ".\n\n";
+  }
+  return md;
+}
+
+// Rows over their training seeds, seed k against the reference's seed k: the intervals resample seeds as well
+// as pairs, so they hold training noise, which the per-run intervals leave out. The runs' scores are those of
+// `entries`, not read again.
+std::string seed_table(const Experiment& ex, const ExperimentConfig& c, const DatasetScores& ds,
+                       const ExperimentVariant& v, const std::vector<Entry>& entries,
+                       const std::vector<std::pair<int64_t, Scores>>& ref_seeds, Table& results) {
+  const int last_bin = static_cast<int>(ds.bins.size()) - 1;
+  const std::string& far_bin = ds.bins[static_cast<size_t>(last_bin)];
+  auto scored = [&](const std::string& name) -> const Scores* {
+    for (const Entry& e : entries)
+      if (!e.is_baseline && e.name == name) return &e.s;
+    return nullptr;
+  };
+  Table t;
+  t.columns = {{"row"},
+               {"PSNR", 2},
+               {"ΔPSNR [95% CI]"},
+               {"ΔLPIPS [95% CI]"},
+               {far_bin + " Δholes % [CI]"},
+               {far_bin + " Δcracks % [CI]"},
+               {"per seed: ΔPSNR / " + far_bin + " Δholes / Δcracks"}};
+  for (const auto& r : c.rows) {
+    if (r.name == c.reference || (!v.rows.empty() && !wanted(v.rows, r.name))) continue;
+    std::vector<Scores> mine, theirs;
+    std::string seeds;
+    std::vector<int64_t> seed_ids;
+    for (const auto& run : ex.runs(r)) {
+      const auto it = std::find_if(ref_seeds.begin(), ref_seeds.end(), [&](auto& s) { return s.first == run.seed; });
+      const Scores* s = it == ref_seeds.end() ? nullptr : scored(ex.method_name(r, run.seed, v));
+      if (s == nullptr) continue;
+      mine.push_back(*s), theirs.push_back(it->second);
+      seeds += cat(seeds.empty() ? "" : "+", run.seed);
+      seed_ids.push_back(run.seed);
+    }
+    if (mine.size() < 2) continue;
+    const std::string name = cat(r.name, "@", v.name, " seeds ", seeds);
+    std::vector<TableRow> on;  // [0]: all pairs, [b + 1]: bin b
+    for (int b = -1; b <= last_bin; ++b) {
+      on.push_back(over_seeds(mine, theirs, ds.pair_bin, b, c.bootstrap));
+      on.back().row = name, on.back().label = r.label.empty() ? r.name : r.label;
+      on.back().bin = b < 0 ? "all" : ds.bins[static_cast<size_t>(b)];
+      add_result(results, ds.name, v.name, c.reference, on.back());
+    }
+    const TableRow &all = on.front(), &far = on.back();
+    // Each seed against its own reference seed, so a reader sees whether the seeds agree in sign.
+    std::string per_seed;
+    for (size_t k = 0; k < mine.size(); ++k) {
+      auto delta = [&](std::vector<double> Scores::*m, int bin) {  // the paired mean difference
+        return paired_bootstrap(in_bin(mine[k].*m, ds.pair_bin, bin), in_bin(theirs[k].*m, ds.pair_bin, bin), 1).mean;
+      };
+      per_seed +=
+          cat(k ? "; " : "", "s", seed_ids[k], " ", signed_fmt(delta(&Scores::psnr, -1), 2), " / ",
+              signed_fmt(delta(&Scores::holes, last_bin), 2), " / ", signed_fmt(delta(&Scores::cracks, last_bin), 2));
+    }
+    t.add({name, all.psnr, interval_fmt(all.dp, 2), interval_fmt(all.dl, 3), far.dh.n ? interval_fmt(far.dh, 2) : "n/a",
+           far.dc.n ? interval_fmt(far.dc, 2) : "n/a", per_seed});
+  }
+  if (t.rows.empty()) return "";
+  return cat("Rows over their training seeds: seed k of a row against seed k of `", c.reference,
+             "`, averaged over the seeds both have; the interval resamples the seeds as well as the pairs, so it "
+             "holds training noise, which the per-run rows above leave out. With two seeds it is crude (a bootstrap "
+             "of two seeds understates their spread):\n\n",
+             table_markdown(t), "\n");
+}
+
+// One variant's section of report.md.
+std::string variant_section(const Experiment& ex, const ExperimentConfig& c, const DatasetScores& ds,
+                            const ExperimentVariant& v, const std::string& lp, Table& results,
+                            std::vector<Chart>& deltas) {
+  const auto ref_seeds = reference_seeds(ex, c, ds, v);
+  if (ref_seeds.empty())
+    return cat("### ", v.name, "\n\nThe reference row `", c.reference, "` is not scored in this variant yet.\n\n");
+  std::string md = "### " + v.name;
+  for (size_t k = 0; k < v.overrides.size(); ++k) md += (k ? ", `" : " (model overrides: `") + v.overrides[k] + "`";
+  md += v.overrides.empty() ? "\n\n" : ")\n\n";
+  Chart chart;
+  chart.title = cat(ds.name, " / ", v.name, ": PSNR minus ", c.reference, " per baseline bin");
+  chart.x_label = "baseline bin (0 = smallest)";
+  chart.y_label = "delta PSNR (dB), mean over the bin's pairs";
+  const std::vector<Entry> entries = variant_entries(ex, c, ds, v, ref_seeds);
+  const Scores ref = seed_average(ref_seeds, ds.pair_bin.size());
+  std::string unmeasured;
+  md += entry_tables(c, ds, v, entries, ref_seeds, ref, lp, results, chart, unmeasured);
+  md += seed_table(ex, c, ds, v, entries, ref_seeds, results) + unmeasured;
+  deltas.push_back(chart);
+  return md;
+}
+
+// The training runs' table, and their curves: loss and validation PSNR against step and against CPU time.
+std::string training_section(const Experiment& ex, const ExperimentConfig& c, std::vector<Chart>& curves) {
   Chart loss_step{"training loss (total) vs step", "step", "loss", false, {}};
   Chart val_step{"validation masked PSNR vs step", "step", "PSNR (dB)", false, {}};
   Chart loss_cpu{"training loss (total) vs CPU time", "CPU time (s)", "loss", false, {}};
   Chart val_cpu{"validation masked PSNR vs CPU time", "CPU time (s)", "PSNR (dB)", false, {}};
-  md << "Report written by commit " << build_commit()
-     << ".\n\n## Training runs\n\n| run | steps | mean step (ms) | CPU "
-        "time (s) | final val PSNR (dB) | trained by commit |\n|---|---|---|---|---|---|\n";
+  Table t;
+  t.columns = {{"run"},
+               {"steps"},
+               {"mean step (ms)", 0},
+               {"CPU time (s)", 1},
+               {"final val PSNR (dB)", 2},
+               {"trained by commit"}};
   int color = 0;
-  for (const auto& r : config_.rows) {
+  for (const auto& r : c.rows) {
     if (!r.from.empty()) continue;
-    for (const auto& run : runs(r)) {
+    for (const auto& run : ex.runs(r)) {
       const std::string log_path = (fs::path(run.dir) / "train_log.jsonl").string();
       const auto records = read_jsonl(log_path);
       if (records.empty()) continue;
@@ -689,19 +641,81 @@ void Experiment::report() {
         });
       loss_step.series.push_back(ls), val_step.series.push_back(vs);
       loss_cpu.series.push_back(lc), val_cpu.series.push_back(vc);
-      md << "| " << r.name << "_s" << run.seed << " | " << steps << " | " << fmt(timed ? step_ms / timed : NAN, 0)
-         << " | " << fmt(cpu, 1) << " | " << fmt(last_val, 2) << " | " << trained_by(run.dir) << " |\n";
+      t.add({cat(r.name, "_s", run.seed), steps, timed ? step_ms / timed : NAN, cpu, last_val, trained_by(run.dir)});
       ++color;
     }
   }
-  md << "\nCharts: `curves.png` (training curves), `deltas.png` (ΔPSNR per baseline bin).\n";
-  fs::create_directories(config_.out);
-  write_charts((fs::path(config_.out) / "curves.png").string(), {loss_step, val_step, loss_cpu, val_cpu});
-  write_charts((fs::path(config_.out) / "deltas.png").string(),
-               delta_charts.empty() ? std::vector<Chart>{Chart{}} : delta_charts);
-  write_file_atomic((fs::path(config_.out) / "report.md").string(), md.str());
-  write_csv((fs::path(config_.out) / "report.csv").string(), csv);
-  write_file_atomic((fs::path(config_.out) / "report.json").string(), js.dump(2) + "\n");
+  curves = {loss_step, val_step, loss_cpu, val_cpu};
+  return "## Training runs\n\n" + table_markdown(t);
+}
+
+// The scores of dataset d on the experiment's pairs, or nothing when it was not evaluated yet.
+std::optional<DatasetScores> dataset_scores(const Evaluator& ev, const EvalConfig& ec, size_t d,
+                                            const std::string& lp) {
+  const std::string manifest_path = (fs::path(ev.dataset_dir(d)) / "manifest.json").string();
+  if (!fs::exists(manifest_path)) return std::nullopt;
+  auto m = std::make_shared<Manifest>(read_manifest(manifest_path));
+  const std::vector<int64_t> pairs = ev.select_pairs(*m);
+  DatasetScores ds;
+  ds.name = ec.datasets[d].name;
+  for (size_t b = 0; b < m->bin_counts.size(); ++b) ds.bins.push_back(m->bin_label(static_cast<int>(b)));
+  ds.bin_counts.assign(m->bin_counts.begin(), m->bin_counts.end());
+  for (int64_t i : pairs) ds.pair_bin.push_back(m->pairs[static_cast<size_t>(i)].bin);
+  ds.load = [&ev, d, m, pairs, lp](const std::string& method) {
+    Scores s;
+    const std::string path = ev.results_path(d, method);
+    if (!fs::exists(path)) return s;
+    const ResultsLog log(path, [&](const PairResult& r) { return check_against_manifest(r, *m); });
+    for (int64_t i : pairs) {
+      auto it = log.done().find(i);
+      const bool ok = it != log.done().end();
+      s.any |= ok;
+      s.psnr.push_back(ok ? it->second.psnr : NAN);
+      s.ssim.push_back(ok ? it->second.ssim : NAN);
+      s.lpips.push_back(ok && it->second.lpips.count(lp) ? it->second.lpips.at(lp) : NAN);
+      s.holes.push_back(ok ? 100 * it->second.hole_rate : NAN);
+      s.cracks.push_back(ok ? 100 * it->second.crack_rate : NAN);
+      s.normals.push_back(ok ? it->second.normal_deg : NAN);
+    }
+    return s;
+  };
+  return ds;
+}
+}  // namespace
+
+void Experiment::report() {
+  EvalConfig ec = load_config<EvalConfig>(config_.eval_config, config_.eval_set);
+  ec.scoring.out = (fs::path(config_.out) / "eval").string();
+  ec.scoring.lpips = {};  // the report reads scores; it computes none
+  const Evaluator ev(ec);
+  const std::string lp = "squeeze";  // the LPIPS variant reported (the one with real weights here)
+  std::string md = cat("# Ablation report\n\nEvery row is trained from the same recipe (`", config_.train_config,
+                       "`) and scored on the same pairs with the same masks. Delta = row minus `", config_.reference,
+                       "` on the same pairs (its seeds averaged per pair), with a paired bootstrap 95% interval (",
+                       config_.bootstrap, " resamples); an interval that contains 0 is no difference.\n\n");
+  Table results = results_table(lp);
+  std::vector<Chart> deltas, curves;
+  for (size_t d = 0; d < ec.datasets.size(); ++d) {
+    const auto ds = dataset_scores(ev, ec, d, lp);
+    if (!ds) {
+      md += cat("## ", ec.datasets[d].name, "\n\nNot evaluated yet (no ",
+                (fs::path(ev.dataset_dir(d)) / "manifest.json").string(), ").\n\n");
+      continue;
+    }
+    md += cat("## ", ds->name, " (", ds->pair_bin.size(), " pairs; per bin:");
+    for (size_t b = 0; b < ds->bins.size(); ++b) md += cat(" ", ds->bins[b], " ", ds->bin_counts[b]);
+    md += ")\n\n";
+    for (const auto& v : config_.variants) md += variant_section(*this, config_, *ds, v, lp, results, deltas);
+  }
+  md += cat("Report written by commit ", build_commit(), ".\n\n", training_section(*this, config_, curves),
+            "\nCharts: `curves.png` (training curves), `deltas.png` (ΔPSNR per baseline bin).\n");
+  const fs::path out(config_.out);
+  fs::create_directories(out);
+  write_charts((out / "curves.png").string(), curves);
+  write_charts((out / "deltas.png").string(), deltas.empty() ? std::vector<Chart>{Chart{}} : deltas);
+  write_file_atomic((out / "report.md").string(), md);
+  write_table_csv((out / "report.csv").string(), results);
+  write_table_json((out / "report.json").string(), results);
   log_info("experiment: report in ", config_.out, " (report.md, report.csv, report.json, curves.png, deltas.png)");
 }
 

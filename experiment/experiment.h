@@ -35,6 +35,9 @@ class Experiment {
   // What a run's stored config.json differs in from what the experiment now gives it ("" when nothing that
   // changes learning differs, or when the run has not started): "key = old there, new now, ...".
   std::string config_drift(const ExperimentRun& run) const;
+  // The evaluator's method name of a row's run in a variant: <row>[-s<seed>]@<variant> (seed only when the row
+  // has several runs). Generated here and looked up by the same function; never parsed.
+  std::string method_name(const ExperimentRow& row, int64_t seed, const ExperimentVariant& variant) const;
 
  private:
   const ExperimentRow& row(const std::string& name) const;
@@ -42,7 +45,6 @@ class Experiment {
   bool finished(const ExperimentRun& run, int64_t steps) const;
   std::string config_drift(const ExperimentRun& run, const TrainConfig& want) const;
   void check_config(const ExperimentRun& run, const TrainConfig& want) const;  // fails, naming the keys, on drift
-  std::string method_name(const ExperimentRow& row, int64_t seed, const ExperimentVariant& variant) const;
 
   ExperimentConfig config_;
 };

@@ -660,7 +660,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
         << " | " << pruned.prune_counts.at("low_contribution") << " | 0 | " << pruned.gaussians << " |";
     CHECK_THAT(md, Catch::Contains("Pruning (mean Gaussians per pair") && Catch::Contains(row.str()));
     CHECK_THAT(md, !Catch::Contains("| tiny@n900 | 900 | 0 |"));
-    CHECK_THAT(test::read_bytes(c.scoring.out + "/report.json"), Catch::Contains("\"low_contribution\""));
+    CHECK_THAT(test::read_bytes(c.scoring.out + "/report.json"), Catch::Contains("\"prune_low_contribution\""));
   }
   const std::string csv = test::read_bytes(c.scoring.out + "/report.csv");
   CHECK_THAT(csv, Catch::Contains("decoder_ms"));

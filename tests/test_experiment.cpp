@@ -173,8 +173,8 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
                             all_bins["base_gaussians-s1@depth"]["delta_psnr"].get<double>()) /
                            2;
   CHECK(over["delta_psnr"].get<double>() == Approx(runs_mean).margin(1e-9));
-  CHECK(over["delta_psnr_ci"][0].get<double>() <= over["delta_psnr"].get<double>());
-  CHECK(over["delta_psnr_ci"][1].get<double>() >= over["delta_psnr"].get<double>());
+  CHECK(over["delta_psnr_lo"].get<double>() <= over["delta_psnr"].get<double>());
+  CHECK(over["delta_psnr_hi"].get<double>() >= over["delta_psnr"].get<double>());
   CHECK(over["psnr"].get<double>() == Approx((all_bins["base_gaussians-s0@depth"]["psnr"].get<double>() +
                                               all_bins["base_gaussians-s1@depth"]["psnr"].get<double>()) /
                                              2));
