@@ -27,6 +27,10 @@ void MethodOptions::visit(ConfigVisitor& v) {
           "sweep one key on the same pairs: an option of this method (perturb.depth_noise) or a model config key "
           "set as an override (override:prior.sparse.prompts); empty = no sweep");
   v.field("sweep_values", sweep_values, "values of sweep_key, one method each");
+  v.section("sweep",
+            "the budget or sweep point this method was expanded to: written by the evaluator into <out>/config.json "
+            "(so that file scores the same methods and results files again); hand-written configs leave it out",
+            sweep);
 }
 
 namespace {
@@ -35,6 +39,12 @@ namespace {
 std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
   ISPLAT_CHECK(!(m.type == "identity" && m.perturb.any_depth()), "method '", m.name,
                "': identity uses no depth, so its depth perturbations would do nothing");
+  // A recorded point (an evaluation's config.json) is already expanded.
+  ISPLAT_CHECK(
+      !m.sweep.any() || (m.sweep_key.empty() && m.budgets.empty() && m.sweep.budget.empty() != m.sweep.key.empty()),
+      "method '", m.name,
+      "': sweep (a point an evaluation recorded) needs either its key or its budget, and "
+      "no sweep_key or budgets beside it");
   if (m.sweep_key.empty()) {
     ISPLAT_CHECK(m.sweep_values.empty(), "method '", m.name, "': sweep_values are given but sweep_key is empty");
     return {m};
@@ -43,7 +53,6 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
                "': a value sweep and budgets in one method would mix two series; use two methods");
   ISPLAT_CHECK(!m.sweep_values.empty(), "method '", m.name, "': sweep_key '", m.sweep_key, "' has no sweep_values");
   std::vector<MethodOptions> out;
-  const std::string last = m.sweep_key.substr(m.sweep_key.rfind('.') + 1);
   const std::string override_prefix = "override:";
   if (m.sweep_key.rfind(override_prefix, 0) == 0) {  // a model config key, set through the method's overrides
     const std::string key = m.sweep_key.substr(override_prefix.size());
@@ -53,7 +62,7 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
       MethodOptions e = m;
       e.sweep_key.clear(), e.sweep_values.clear();
       e.overrides.push_back(key + "=" + cat(value));
-      e.name = m.name + "~" + last + cat(value);
+      e.sweep = {m.sweep_key, "", value};
       out.push_back(e);
     }
     return out;
@@ -73,7 +82,7 @@ std::vector<MethodOptions> expand_value_sweep(const MethodOptions& m) {
     const bool integral = node->is_number_integer();
     *node = integral ? nlohmann::json(std::llround(value)) : nlohmann::json(value);
     MethodOptions e = config_from_json<MethodOptions>(j, cat("method '", m.name, "' sweep"));
-    e.name = m.name + "~" + last + cat(integral ? static_cast<double>(std::llround(value)) : value);
+    e.sweep = {m.sweep_key, "", integral ? static_cast<double>(std::llround(value)) : value};
     out.push_back(e);
   }
   return out;
@@ -105,7 +114,7 @@ std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input
                    b, "' is not px:<per pixel>, n:<count> or detail:<per pixel> with a positive number");
       MethodOptions e = m;
       e.budgets.clear();
-      e.name = m.name + "@" + kind + value;
+      e.sweep = {"", kind, number};
       if (kind == "n") {
         e.overrides.push_back("sampler.budget_mode=fixed");
         e.overrides.push_back("sampler.budget=" + std::to_string(std::llround(number)));
@@ -118,10 +127,11 @@ std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input
   }
   for (size_t i = 0; i < out.size(); ++i)
     for (size_t j = 0; j < i; ++j) {
-      ISPLAT_CHECK(out[i].name != out[j].name, "eval: two methods are named '", out[i].name, "'");
+      const std::string a = out[i].label(), b = out[j].label();
+      ISPLAT_CHECK(a != b, "eval: two methods are named '", a, "'");
       // Results files are named by safe_name, so such a pair would share (and mix) one file.
-      ISPLAT_CHECK(safe_name(out[i].name) != safe_name(out[j].name), "eval: methods '", out[j].name, "' and '",
-                   out[i].name, "' would share the results file results_", safe_name(out[i].name),
+      ISPLAT_CHECK(safe_name(a) != safe_name(b), "eval: methods '", b, "' and '", a,
+                   "' would share the results file results_", safe_name(a),
                    ".jsonl; rename one (letters, digits, - and _ are kept, anything else becomes _)");
     }
   return out;

@@ -7,6 +7,7 @@
 #include "data/perturb.h"
 #include "eval/datasets.h"
 #include "eval/pairs.h"
+#include "eval/sweep.h"
 #include "render/prune.h"
 #include "render/render.h"
 
@@ -24,7 +25,10 @@ struct MethodOptions {
   PerturbOptions perturb;              // any method: perturbations of the source view (stability suite)
   std::string sweep_key;               // a key of this method's options, e.g. perturb.depth_noise
   std::vector<double> sweep_values;    // ... and the values it takes, one method each
+  SweepPoint sweep;                    // the point expand_sweeps made this method for (recorded in config.json)
   void visit(ConfigVisitor& v);
+  MethodId id() const { return {name, sweep}; }
+  std::string label() const { return id().label(); }  // unique after expand_sweeps: its results file's name
 };
 
 // A method with its name, type and (models) checkpoint and overrides set, the other options at their defaults.
@@ -35,11 +39,10 @@ inline MethodOptions named_method(const std::string& name, const std::string& ty
   return m;
 }
 
-// A model method with budgets becomes one method per budget, named <name>@<budget> (e.g. full@px0.5), with
-// the sampler overrides appended. A method with a sweep becomes one method per value, named
-// <name>~<last key part><value> (e.g. full~depth_noise0.02). Other methods pass through. Throws Error
-// naming a malformed budget, an unknown sweep key, a value out of range, or two methods whose names would share
-// one results file.
+// A model method with budgets becomes one method per budget, with the sampler overrides appended; a method with
+// a sweep becomes one method per value. Each keeps its name and carries its point as `sweep` (its label() is
+// e.g. full@px0.5 or full~depth_noise0.02). Other methods pass through. Throws Error naming a malformed budget,
+// an unknown sweep key, a value out of range, or two methods whose labels would share one results file.
 std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& methods);
 
 // Throws Error naming two datasets whose names would share one output folder (safe_name), or none at all.

@@ -164,9 +164,9 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
       std::map<int64_t, PairResult> merged;
       for (int64_t k = 0; k < count; ++k) {
         set_shard(k, count);
-        const std::string path = results_path(d, mo.name);
+        const std::string path = results_path(d, mo.label());
         ISPLAT_CHECK(fs::exists(path), "eval --merge: shard ", k, "/", count, " has no results for ", ds.name, " / ",
-                     mo.name, " (", path, ")");
+                     mo.label(), " (", path, ")");
         check_method_stamp(path, mo, config_.scoring, m.dataset_fingerprint);  // scored as this config says
         const ResultsLog shard(path);
         for (int64_t i : select_pairs(m)) {
@@ -177,13 +177,13 @@ std::vector<ReportRow> Evaluator::merge(int64_t count) {
         }
       }
       set_shard(0, 1);
-      check_method_stamp(results_path(d, mo.name), mo, config_.scoring, m.dataset_fingerprint);
-      ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.name, ": ", merged.size(),
+      check_method_stamp(results_path(d, mo.label()), mo, config_.scoring, m.dataset_fingerprint);
+      ISPLAT_CHECK(merged.size() == all.size(), "eval --merge: ", ds.name, " / ", mo.label(), ": ", merged.size(),
                    " pairs from the shards, the manifest selects ", all.size());
       // Rewritten whole, in manifest order, so the merged file equals an unsharded run's.
       std::ostringstream out;
       for (int64_t i : all) out << result_json(merged.at(i)).dump() << "\n";
-      write_file_atomic(results_path(d, mo.name), out.str());
+      write_file_atomic(results_path(d, mo.label()), out.str());
     }
   }
   set_shard(0, 1);
@@ -212,6 +212,7 @@ static bool adopt_new_defaults(nlohmann::json& before, const nlohmann::json& now
 static nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOptions& scoring) {
   nlohmann::json j = nlohmann::json::parse(config_to_json(mo).dump());
   j.erase("name");
+  j.erase("sweep");  // the point is the results file's and each record's; its options are stamped above
   j["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
   j["scoring.crack_holes"] = scoring.crack_holes;
   j["scoring.crack_side"] = scoring.crack_side;
@@ -381,38 +382,39 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   const auto& ds = config_.datasets[d];
   const fs::path dir = dataset_dir(d);
   const bool has_depth = dataset_has_depth(sequences);
-  check_method_stamp(results_path(d, mo.name), mo, config_.scoring, m.dataset_fingerprint);
-  ResultsLog log(results_path(d, mo.name), [&](const PairResult& r) { return check_against_manifest(r, m); });
+  check_method_stamp(results_path(d, mo.label()), mo, config_.scoring, m.dataset_fingerprint);
+  ResultsLog log(
+      results_path(d, mo.label()), [&](const PairResult& r) { return check_against_manifest(r, m); }, mo.id());
   std::vector<int64_t> todo;
   for (int64_t i : pairs)
     if (!log.done().count(i)) todo.push_back(i);
   if (!todo.empty()) {
     auto method = make_method(mo, scoring_render());
     if (!has_depth && method->needs_source_depth(!points.empty())) {
-      notes_.push_back(cat(ds.name, " / ", mo.name,
+      notes_.push_back(cat(ds.name, " / ", mo.label(),
                            ": not scored; the method needs the source depth and the dataset "
                            "has none (",
                            method->describe(), ")"));
       log_warn("eval: ", notes_.back());
       return {};
     }
-    log_info("eval: ", ds.name, " / ", mo.name, " (", method->describe(), "): ", todo.size(), " pairs to score",
+    log_info("eval: ", ds.name, " / ", mo.label(), " (", method->describe(), "): ", todo.size(), " pairs to score",
              todo.size() == pairs.size() ? "" : cat(", ", pairs.size() - todo.size(), " resumed"));
-    ProgressBar bar(cat("eval ", ds.name, "/", mo.name), static_cast<int64_t>(todo.size()), "pair");
+    ProgressBar bar(cat("eval ", ds.name, "/", mo.label()), static_cast<int64_t>(todo.size()), "pair");
     int64_t examples = 0;
     for (int64_t i : todo) {
       const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
       const PairResult& r = sp.result;
       log.append(r);
       if (examples++ < config_.scoring.examples)
-        write_panel((dir / "examples" / cat(safe_name(mo.name), "_pair", i, ".png")).string(),
+        write_panel((dir / "examples" / cat(safe_name(mo.label()), "_pair", i, ".png")).string(),
                     {{sp.source.image, sp.target.image, outline_mask(sp.output.image, sp.mask), sp.mask.unsqueeze(0)}});
       bar.postfix(cat("PSNR ", std::setprecision(3), r.psnr));
       bar.tick();
     }
     bar.finish();
   } else {
-    log_info("eval: ", ds.name, " / ", mo.name, ": all ", pairs.size(), " pairs already scored");
+    log_info("eval: ", ds.name, " / ", mo.label(), ": all ", pairs.size(), " pairs already scored");
   }
   std::vector<PairResult> results;
   for (int64_t i : pairs) results.push_back(log.done().at(i));
@@ -455,13 +457,13 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
   for (size_t k = 0; k < static_cast<size_t>(config_.scoring.gallery); ++k)
     for (const auto& [kind, worst] : {std::pair{"psnr", &by_psnr}, {"holes", &by_holes}, {"cracks", &by_cracks}})
       if (k < worst->size())
-        wanted.push_back({dir / cat(safe_name(mo.name), "_worst_", kind, k + 1, "_pair", (*worst)[k]->index, ".png"),
+        wanted.push_back({dir / cat(safe_name(mo.label()), "_worst_", kind, k + 1, "_pair", (*worst)[k]->index, ".png"),
                           (*worst)[k]->index});
   // Panels of this method's pairs that are no longer among the worst (the results changed) go: only names that are
   // exactly this method's panel names (another method's, e.g. "m_worst_a" beside "m", share their start).
   if (fs::exists(dir))
     for (const auto& e : fs::directory_iterator(dir)) {
-      if (gallery_panel_method(e.path().filename().string()) == safe_name(mo.name) &&
+      if (gallery_panel_method(e.path().filename().string()) == safe_name(mo.label()) &&
           std::none_of(wanted.begin(), wanted.end(), [&](const auto& w) { return w.first == e.path(); }))
         fs::remove(e.path());
     }
@@ -486,7 +488,7 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
     write_panel(path.string(), {row});
   }
   if (!wanted.empty())
-    log_info("eval: failure gallery of ", config_.datasets[d].name, " / ", mo.name, " in ", dir.string());
+    log_info("eval: failure gallery of ", config_.datasets[d].name, " / ", mo.label(), " in ", dir.string());
 }
 
 std::vector<ReportRow> Evaluator::run(bool pairs_only) {
@@ -565,15 +567,15 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
     const std::vector<ColmapModel> no_points;
     const std::vector<ColmapModel>& points = ds.prompts == "points3d" ? models : no_points;
     const std::vector<int64_t> pairs = select_pairs(m);
-    std::map<std::string, std::vector<PairResult>> by_method;
+    ScoredMethods by_method;
     for (const auto& mo : config_.methods) {
       auto results = score(d, sequences, m, pairs, mo, points);
       if (results.empty() && !pairs.empty()) continue;  // not applicable here; score() left a note
-      auto r = summarize(ds.name, mo.name, labels, requested, results, nets);
+      auto r = summarize(ds.name, mo.id(), labels, requested, results, nets);
       rows.insert(rows.end(), r.begin(), r.end());
-      auto b = breakdown(ds.name, mo.name, results, nets, config_.scoring.baseline_step);
+      auto b = breakdown(ds.name, mo.id(), results, nets, config_.scoring.baseline_step);
       breakdowns.insert(breakdowns.end(), b.begin(), b.end());
-      by_method[mo.name] = std::move(results);
+      by_method[mo.id()] = std::move(results);
     }
     if (!config_.scoring.reference.empty()) {
       auto diffs =

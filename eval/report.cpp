@@ -52,13 +52,13 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
     if (std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end()) datasets.push_back(r.dataset);
   std::vector<Chart> charts;
   for (const auto& d : datasets) {
-    // One series per method family: "full@px0.5" and "full@px2" are points of the series "full px".
+    // One series per method family: full at budgets px 0.5 and px 2 are points of the series "full px".
     std::vector<std::string> families;
     std::vector<const ReportRow*> pts;
     for (const auto& r : rows) {
       if (r.dataset != d || r.bin != "all" || !std::isfinite(r.psnr)) continue;
       pts.push_back(&r);
-      const std::string f = method_family(r.method);
+      const std::string f = r.method.family();
       if (std::find(families.begin(), families.end(), f) == families.end()) families.push_back(f);
     }
     for (int axis = 0; axis < 2; ++axis) {
@@ -73,7 +73,7 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
         ChartSeries s{families[k], {}, {}, true, marker, color};
         std::vector<const ReportRow*> mine;
         for (const auto* r : pts)
-          if (method_family(r->method) == families[k] && xval(r) > 0) mine.push_back(r);
+          if (r->method.family() == families[k] && xval(r) > 0) mine.push_back(r);
         std::sort(mine.begin(), mine.end(), [&](auto* a, auto* b) { return xval(a) < xval(b); });
         for (const auto* r : mine) s.x.push_back(xval(r)), s.y.push_back(r->psnr);
         c.series.push_back(s);
@@ -90,45 +90,18 @@ static std::vector<Chart> speed_quality_charts(const std::vector<ReportRow>& row
   return charts;
 }
 
-namespace {
-// Position of the sweep marker ('@' budget or '~' value sweep) and the end of the key after it.
-std::pair<size_t, size_t> sweep_marker(const std::string& method) {
-  const auto at = method.find_last_of("@~");
-  if (at == std::string::npos) return {at, at};
-  size_t k = at + 1;
-  while (k < method.size() && (std::isalpha(static_cast<unsigned char>(method[k])) || method[k] == '_')) ++k;
-  return {at, k};
-}
-}  // namespace
-
-std::string method_family(const std::string& method) {
-  const auto [at, k] = sweep_marker(method);
-  if (at == std::string::npos) return method;
-  return method.substr(0, at) + " " + method.substr(at + 1, k - at - 1);
-}
-
-double sweep_value(const std::string& method) {
-  const auto [at, k] = sweep_marker(method);
-  if (at == std::string::npos || k >= method.size()) return std::numeric_limits<double>::quiet_NaN();
-  try {
-    return std::stod(method.substr(k));
-  } catch (const std::exception&) {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
-}
-
-// A value sweep's point on dataset d over all bins ("full~depth_noise0.02"; budgets use '@').
+// A value sweep's point on dataset d over all bins (budgets are not value sweeps).
 static bool is_sweep_point(const ReportRow& r, const std::string& d) {
-  return r.dataset == d && r.bin == "all" && r.method.find('~') != std::string::npos &&
-         std::isfinite(sweep_value(r.method));
+  return r.dataset == d && r.bin == "all" && !r.method.sweep.key.empty() && std::isfinite(r.method.sweep.value);
 }
 
-// The value sweeps ("full depth_noise") on dataset d, in the order they first appear.
-static std::vector<std::string> sweep_families(const std::vector<ReportRow>& rows, const std::string& d) {
-  std::vector<std::string> families;
+// The value sweeps on dataset d ("full depth_noise"), each as its first point, in the order they first appear.
+static std::vector<MethodId> sweep_families(const std::vector<ReportRow>& rows, const std::string& d) {
+  std::vector<MethodId> families;
   for (const auto& r : rows)
-    if (is_sweep_point(r, d) && std::find(families.begin(), families.end(), method_family(r.method)) == families.end())
-      families.push_back(method_family(r.method));
+    if (is_sweep_point(r, d) && std::none_of(families.begin(), families.end(),
+                                             [&](const MethodId& f) { return f.family() == r.method.family(); }))
+      families.push_back(r.method);
   return families;
 }
 
@@ -140,27 +113,21 @@ static const std::map<std::string, double>& neutral_values() {
   return neutral;
 }
 
-// "full depth_noise" -> "depth_noise".
-static std::string family_key(const std::string& family) {
-  return family.substr(family.rfind(' ') + 1);
-}
-
 // A sweep's points (value, field) on dataset d, all bins. When the sweep leaves out the unperturbed value of
 // a perturbation (scale and exposure 1, the others 0) and the same method runs unperturbed (the family's
-// name before the key), that run is the point there.
+// name without a sweep), that run is the point there.
 static std::vector<std::pair<double, double>> sweep_points(const std::vector<ReportRow>& rows, const std::string& d,
-                                                           const std::string& family, double ReportRow::*field,
+                                                           const MethodId& family, double ReportRow::*field,
                                                            double scale = 1) {
   const std::map<std::string, double>& neutral = neutral_values();
   std::vector<std::pair<double, double>> pts;
   for (const auto& r : rows)
-    if (is_sweep_point(r, d) && method_family(r.method) == family)
-      pts.push_back({sweep_value(r.method), scale * (r.*field)});
-  const auto space = family.rfind(' ');
-  const auto it = space == std::string::npos ? neutral.end() : neutral.find(family.substr(space + 1));
+    if (is_sweep_point(r, d) && r.method.family() == family.family())
+      pts.push_back({r.method.sweep.value, scale * (r.*field)});
+  const auto it = neutral.find(family.sweep.axis());
   if (it != neutral.end() && std::none_of(pts.begin(), pts.end(), [&](auto& p) { return p.first == it->second; }))
     for (const auto& r : rows)
-      if (r.dataset == d && r.bin == "all" && r.method == family.substr(0, space))
+      if (r.dataset == d && r.bin == "all" && r.method == MethodId{family.name, {}})
         pts.push_back({it->second, scale * (r.*field)});
   std::sort(pts.begin(), pts.end());
   return pts;
@@ -169,7 +136,7 @@ static std::vector<std::pair<double, double>> sweep_points(const std::vector<Rep
 static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
   std::vector<std::string> datasets;
   for (const auto& r : rows)
-    if (r.bin == "all" && r.method.find('~') != std::string::npos &&
+    if (r.bin == "all" && !r.method.sweep.key.empty() &&
         std::find(datasets.begin(), datasets.end(), r.dataset) == datasets.end())
       datasets.push_back(r.dataset);
   std::vector<Chart> charts;
@@ -185,10 +152,10 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
   // One row of charts per dataset and swept key (its own x axis), one chart per measure, one series per
   // method swept over that key.
   for (const auto& d : datasets) {
-    const std::vector<std::string> families = sweep_families(rows, d);
+    const std::vector<MethodId> families = sweep_families(rows, d);
     std::vector<std::string> keys;
     for (const auto& f : families)
-      if (std::find(keys.begin(), keys.end(), family_key(f)) == keys.end()) keys.push_back(family_key(f));
+      if (std::find(keys.begin(), keys.end(), f.sweep.axis()) == keys.end()) keys.push_back(f.sweep.axis());
     for (const auto& key : keys)
       for (const auto& m : measures) {
         Chart c;
@@ -197,9 +164,9 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
         c.y_label = m.title;
         int k = 0;
         for (const auto& f : families) {
-          if (family_key(f) != key) continue;
+          if (f.sweep.axis() != key) continue;
           const auto pts = sweep_points(rows, d, f, m.field, m.scale);
-          ChartSeries s{f.substr(0, f.rfind(' ')), {}, {}, true, k % 4, k};
+          ChartSeries s{f.name, {}, {}, true, k % 4, k};
           for (const auto& [x, y] : pts) s.x.push_back(x), s.y.push_back(y);
           c.series.push_back(s);
           ++k;
@@ -210,7 +177,7 @@ static std::vector<Chart> stability_charts(const std::vector<ReportRow>& rows) {
   return charts;
 }
 
-std::vector<ReportRow> summarize(const std::string& dataset, const std::string& method,
+std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& method,
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets) {
   std::vector<ReportRow> rows;
@@ -271,7 +238,7 @@ std::vector<ReportRow> summarize(const std::string& dataset, const std::string& 
   return rows;
 }
 
-std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& method,
+std::vector<ReportRow> breakdown(const std::string& dataset, const MethodId& method,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets,
                                  double step_m) {
   ISPLAT_CHECK(step_m > 0 && std::isfinite(step_m), "breakdown: baseline step ", step_m, " is not positive");
@@ -300,11 +267,11 @@ std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& 
 }
 
 std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
-                                        const std::map<std::string, std::vector<PairResult>>& results,
-                                        const std::string& lpips_net, int64_t resamples,
+                                        const ScoredMethods& results, const std::string& lpips_net, int64_t resamples,
                                         const std::vector<std::string>& bin_labels) {
   std::vector<DiffRow> out;
-  const auto ref = results.find(reference);
+  const auto ref =
+      std::find_if(results.begin(), results.end(), [&](const auto& m) { return m.first.label() == reference; });
   if (ref == results.end()) return out;
   std::map<int64_t, const PairResult*> by_pair;
   for (const auto& r : ref->second) by_pair[r.index] = &r;
@@ -314,7 +281,7 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
     return it == r.lpips.end() ? nan : it->second;
   };
   for (const auto& [method, res] : results) {
-    if (method == reference) continue;
+    if (method.label() == reference) continue;
     for (int bin = -1; bin < static_cast<int>(bin_labels.size()); ++bin) {
       std::vector<double> a, b, la, lb, ha, hb, ca, cb;
       double ga = 0, gb = 0;
@@ -353,19 +320,21 @@ static std::pair<std::function<double(double)>, std::string> perturbation_streng
   return {[](double v) { return v; }, key == "depth_blur_px" || key == "depth_edge_holes" ? "pixel" : "unit"};
 }
 
-std::vector<SweepSlope> sweep_slopes(const std::string& dataset,
-                                     const std::map<std::string, std::vector<PairResult>>& results, int64_t resamples) {
+std::vector<SweepSlope> sweep_slopes(const std::string& dataset, const ScoredMethods& results, int64_t resamples) {
   const std::map<std::string, double>& neutral = neutral_values();
   std::map<std::string, std::vector<std::pair<double, const std::vector<PairResult>*>>> families;
+  std::map<std::string, MethodId> first;  // each family's first point
   for (const auto& [method, res] : results)
-    if (method.find('~') != std::string::npos && std::isfinite(sweep_value(method)))
-      families[method_family(method)].push_back({sweep_value(method), &res});
+    if (!method.sweep.key.empty() && std::isfinite(method.sweep.value)) {
+      families[method.family()].push_back({method.sweep.value, &res});
+      first.emplace(method.family(), method);
+    }
   std::vector<SweepSlope> out;
   for (auto& [family, points] : families) {
-    const std::string key = family_key(family);
+    const std::string key = first.at(family).sweep.axis();
     // The unperturbed run stands for the neutral value when the sweep leaves it out (as sweep_points does).
     const auto it = neutral.find(key);
-    const auto plain = results.find(family.substr(0, family.rfind(' ')));
+    const auto plain = results.find(MethodId{first.at(family).name, {}});
     if (it != neutral.end() && plain != results.end() &&
         std::none_of(points.begin(), points.end(), [&](auto& p) { return p.first == it->second; }))
       points.push_back({it->second, &plain->second});
@@ -415,13 +384,13 @@ static std::vector<Chart> baseline_charts(const std::vector<ReportRow>& breakdow
       c.y_label = measure == 0 ? "PSNR (dB)" : "holes (% of masked pixels)";
       std::vector<std::string> methods;
       for (const auto& r : breakdowns)
-        if (r.dataset == d && r.method.find_first_of("@~") == std::string::npos &&
-            std::find(methods.begin(), methods.end(), r.method) == methods.end())
-          methods.push_back(r.method);
+        if (r.dataset == d && !r.method.sweep.any() &&
+            std::find(methods.begin(), methods.end(), r.method.name) == methods.end())
+          methods.push_back(r.method.name);
       for (size_t k = 0; k < methods.size(); ++k) {
         ChartSeries s{methods[k], {}, {}, true, static_cast<int>(k % 4), static_cast<int>(k)};
         for (const auto& r : breakdowns) {
-          if (r.dataset != d || r.method != methods[k] || r.bin.rfind("baseline [", 0) != 0) continue;
+          if (r.dataset != d || r.method != MethodId{methods[k], {}} || r.bin.rfind("baseline [", 0) != 0) continue;
           const double lo = std::stod(r.bin.substr(10)), hi = std::stod(r.bin.substr(r.bin.find(',') + 1));
           s.x.push_back(0.5 * (lo + hi));
           s.y.push_back(measure == 0 ? r.psnr : 100 * r.hole_rate);
@@ -448,6 +417,18 @@ std::string interval_text(const Interval& i, int digits) {
                         format_fixed(i.hi, digits), "]", i.excludes_zero() ? "" : " (no difference)");
 }
 
+// The columns that name a method in CSV and JSON: its name and its sweep point as typed fields (report.md shows
+// the label instead).
+void add_method_columns(Table& t) {
+  t.columns.insert(t.columns.end(), {{"method"}, {"sweep_key"}, {"budget"}, {"sweep_value", -1}});
+}
+
+void add_method_cells(std::vector<TableCell>& cells, const MethodId& m) {
+  auto text = [](const std::string& s) { return s.empty() ? TableCell() : TableCell(s); };
+  cells.insert(cells.end(), {m.name, text(m.sweep.key), text(m.sweep.budget),
+                             m.sweep.any() ? TableCell(m.sweep.value) : TableCell()});
+}
+
 // The scores of dataset d: one row per method and bin.
 Table scores_table(const std::vector<ReportRow>& rows, const std::string& d, const std::vector<std::string>& nets) {
   Table t;
@@ -459,8 +440,8 @@ Table scores_table(const std::vector<ReportRow>& rows, const std::string& d, con
   for (const auto& r : rows) {
     if (r.dataset != d) continue;
     std::vector<TableCell> cells = {
-        r.method, r.bin, r.pairs < r.requested ? TableCell(cat(r.pairs, " of ", r.requested)) : TableCell(r.pairs),
-        r.psnr, r.ssim};
+        r.method.label(), r.bin,
+        r.pairs < r.requested ? TableCell(cat(r.pairs, " of ", r.requested)) : TableCell(r.pairs), r.psnr, r.ssim};
     for (const auto& n : nets) cells.push_back(r.lpips.at(n));
     cells.insert(cells.end(), {r.infer_ms, r.render_ms, r.gaussians});
     t.add(std::move(cells));
@@ -479,7 +460,7 @@ Table time_table(const std::vector<ReportRow>& rows, const std::string& d) {
   for (const auto& r : rows) {
     if (r.dataset != d || r.bin != "all") continue;
     const bool pruned = std::isfinite(r.decoded) && std::llround(r.decoded) != std::llround(r.gaussians);
-    std::vector<TableCell> cells = {r.method,
+    std::vector<TableCell> cells = {r.method.label(),
                                     format_fixed(r.decoded, 0) + (pruned ? " -> " + format_fixed(r.gaussians, 0) : "")};
     for (const char* st : kStages) cells.push_back(r.stage_ms.count(st) ? TableCell(r.stage_ms.at(st)) : TableCell());
     cells.insert(cells.end(), {r.infer_ms, r.render_ms, r.peak_mb, r.work_mb});
@@ -495,7 +476,7 @@ Table pruning_table(const std::vector<ReportRow>& rows, const std::string& d) {
   for (const auto& r : rows) {
     if (r.dataset != d || r.bin != "all" || r.prune_counts.empty()) continue;
     auto count = [&](const char* k) { return r.prune_counts.count(k) ? r.prune_counts.at(k) : 0.0; };
-    t.add({r.method, r.decoded, count("low_opacity"), count("low_contribution"),
+    t.add({r.method.label(), r.decoded, count("low_opacity"), count("low_contribution"),
            count("merged_members") - count("merged_groups"), r.gaussians});
   }
   return t;
@@ -507,7 +488,7 @@ Table stability_table(const std::vector<ReportRow>& rows, const std::string& d) 
   t.columns = {{"method"}, {"bin"}, {"holes %", 2}, {"cracks %", 2}, {"normals deg", 2}};
   for (const auto& r : rows)
     if (r.dataset == d && std::isfinite(r.hole_rate))
-      t.add({r.method, r.bin, 100 * r.hole_rate, 100 * r.crack_rate, r.normal_deg});
+      t.add({r.method.label(), r.bin, 100 * r.hole_rate, 100 * r.crack_rate, r.normal_deg});
   return t;
 }
 
@@ -525,13 +506,13 @@ Table sweep_table(const std::vector<ReportRow>& rows, const std::string& d, cons
   t.columns = {
       {"sweep"},    {"values"}, {"PSNR"}, {"slope"}, {"slope 95% interval (pairs)"}, {"PSNR as strength grows"},
       {"the paper"}};
-  std::vector<std::string> families = sweep_families(rows, d);
-  std::sort(families.begin(), families.end());
+  std::vector<MethodId> families = sweep_families(rows, d);
+  std::sort(families.begin(), families.end(), [](auto& a, auto& b) { return a.family() < b.family(); });
   for (const auto& family : families) {
     auto pts = sweep_points(rows, d, family, &ReportRow::psnr);
     pts.erase(std::remove_if(pts.begin(), pts.end(), [](auto& p) { return !std::isfinite(p.second); }), pts.end());
     if (pts.size() < 2) continue;
-    const std::string key = family_key(family);
+    const std::string key = family.sweep.axis();
     const auto [strength, unit] = perturbation_strength(key);
     std::vector<std::pair<double, double>> by_strength;
     for (const auto& [x, y] : pts) by_strength.push_back({strength(x), y});
@@ -553,7 +534,7 @@ Table sweep_table(const std::vector<ReportRow>& rows, const std::string& d, cons
       xs += (xs.empty() ? "" : ", ") + v.str(), ys += (ys.empty() ? "" : ", ") + format_fixed(y, 2);
     }
     const auto ci = std::find_if(intervals.begin(), intervals.end(),
-                                 [&](const SweepSlope& s) { return s.dataset == d && s.family == family; });
+                                 [&](const SweepSlope& s) { return s.dataset == d && s.family == family.family(); });
     const std::string interval =
         ci == intervals.end() || ci->slope.n == 0
             ? std::string("n/a")
@@ -561,7 +542,7 @@ Table sweep_table(const std::vector<ReportRow>& rows, const std::string& d, cons
                   ci->slope.hi < 0   ? "falls"
                   : ci->slope.lo > 0 ? "rises"
                                      : "no measurable change");
-    t.add({family, xs, ys, format_fixed(slope, 3) + " dB per " + unit, interval,
+    t.add({family.family(), xs, ys, format_fixed(slope, 3) + " dB per " + unit, interval,
            falls   ? "falls"
            : rises ? "rises"
                    : "not monotone",
@@ -575,8 +556,13 @@ Table breakdown_table(const std::vector<ReportRow>& breakdowns, const std::strin
                       const std::vector<std::string>& nets, bool markdown) {
   Table t;
   const int p = markdown ? 2 : 4, s = markdown ? 3 : 5;
-  if (!markdown) t.columns.push_back({"dataset"});
-  t.columns.insert(t.columns.end(), {{"method"}, {"group"}, {"pairs"}, {"psnr", p, "PSNR"}, {"ssim", s, "SSIM"}});
+  if (markdown) {
+    t.columns.push_back({"method"});
+  } else {
+    t.columns.push_back({"dataset"});
+    add_method_columns(t);
+  }
+  t.columns.insert(t.columns.end(), {{"group"}, {"pairs"}, {"psnr", p, "PSNR"}, {"ssim", s, "SSIM"}});
   for (size_t k = 0; k < nets.size() && (k == 0 || !markdown); ++k)
     t.columns.push_back({"lpips_" + nets[k], s, "LPIPS"});
   if (markdown) {
@@ -588,8 +574,13 @@ Table breakdown_table(const std::vector<ReportRow>& breakdowns, const std::strin
   for (const auto& r : breakdowns) {
     if (!d.empty() && r.dataset != d) continue;
     std::vector<TableCell> cells;
-    if (!markdown) cells.push_back(r.dataset);
-    cells.insert(cells.end(), {r.method, r.bin, r.pairs, r.psnr, r.ssim});
+    if (markdown) {
+      cells.push_back(r.method.label());
+    } else {
+      cells.push_back(r.dataset);
+      add_method_cells(cells, r.method);
+    }
+    cells.insert(cells.end(), {r.bin, r.pairs, r.psnr, r.ssim});
     for (size_t k = 0; k < nets.size() && (k == 0 || !markdown); ++k) cells.push_back(r.lpips.at(nets[k]));
     cells.insert(cells.end(), {pct * r.hole_rate, pct * r.crack_rate});
     if (!markdown) cells.push_back(r.normal_deg);
@@ -648,10 +639,10 @@ Table differences_markdown(const std::vector<DiffRow>& differences, bool per_bin
   for (const auto& d : differences) {
     if ((d.bin != "all") != per_bin) continue;
     if (per_bin)
-      t.add({d.dataset, d.method, d.bin, d.psnr.n, interval_text(d.psnr, 2), interval_text(d.holes, 2),
+      t.add({d.dataset, d.method.label(), d.bin, d.psnr.n, interval_text(d.psnr, 2), interval_text(d.holes, 2),
              interval_text(d.cracks, 2)});
     else
-      t.add({d.dataset, d.method, d.reference, interval_text(d.psnr, 2), interval_text(d.lpips, 3),
+      t.add({d.dataset, d.method.label(), d.reference, interval_text(d.psnr, 2), interval_text(d.lpips, 3),
              interval_text(d.holes, 2), interval_text(d.cracks, 2), d.gaussians});
   }
   return t;
@@ -672,7 +663,8 @@ std::string differences_section(const std::vector<DiffRow>& differences) {
 Table differences_table(const std::vector<DiffRow>& differences) {
   Table t;
   t.columns = {{"dataset"}};
-  for (const TableColumn& c : std::initializer_list<TableColumn>{{"method"}, {"bin"}, {"reference"}, {"pairs"}})
+  add_method_columns(t);
+  for (const TableColumn& c : std::initializer_list<TableColumn>{{"bin"}, {"reference"}, {"pairs"}})
     t.columns.push_back(c);
   for (const TableColumn& c : std::initializer_list<TableColumn>{{"psnr_diff", 4},
                                                                  {"psnr_lo", 4},
@@ -689,7 +681,9 @@ Table differences_table(const std::vector<DiffRow>& differences) {
     t.columns.push_back(c);
   t.columns.push_back({"gaussians_ratio", 4});
   for (const auto& d : differences) {
-    std::vector<TableCell> cells = {d.dataset, d.method, d.bin, d.reference, d.psnr.n};
+    std::vector<TableCell> cells = {d.dataset};
+    add_method_cells(cells, d.method);
+    cells.insert(cells.end(), {d.bin, d.reference, d.psnr.n});
     for (const Interval* i : {&d.psnr, &d.lpips, &d.holes, &d.cracks})
       cells.insert(cells.end(), {i->mean, i->lo, i->hi});
     cells.push_back(d.gaussians);
@@ -709,7 +703,11 @@ Table slopes_table(const std::vector<SweepSlope>& slopes) {
 // report.csv and report.json: every row with every measure.
 Table summary_table(const std::vector<ReportRow>& rows, const std::vector<std::string>& nets) {
   Table t;
-  t.columns = {{"dataset"}, {"method"}, {"bin"}, {"pairs"}, {"requested"}, {"psnr", 4}, {"ssim", 5}};
+  t.columns = {{"dataset"}};
+  add_method_columns(t);
+  for (const TableColumn& c :
+       std::initializer_list<TableColumn>{{"bin"}, {"pairs"}, {"requested"}, {"psnr", 4}, {"ssim", 5}})
+    t.columns.push_back(c);
   for (const auto& n : nets) t.columns.push_back({"lpips_" + n, 5});
   for (const TableColumn& c : std::initializer_list<TableColumn>{{"infer_ms", 2},
                                                                  {"render_ms", 2},
@@ -727,7 +725,9 @@ Table summary_table(const std::vector<ReportRow>& rows, const std::vector<std::s
     for (const auto& kv : r.prune_counts) pruning.insert(kv.first);
   for (const auto& k : pruning) t.columns.push_back({"prune_" + k, 1});
   for (const auto& r : rows) {
-    std::vector<TableCell> cells = {r.dataset, r.method, r.bin, r.pairs, r.requested, r.psnr, r.ssim};
+    std::vector<TableCell> cells = {r.dataset};
+    add_method_cells(cells, r.method);
+    cells.insert(cells.end(), {r.bin, r.pairs, r.requested, r.psnr, r.ssim});
     for (const auto& n : nets) cells.push_back(r.lpips.at(n));
     cells.insert(cells.end(), {r.infer_ms, r.render_ms, r.gaussians, r.decoded, r.peak_mb, r.work_mb, r.hole_rate,
                                r.crack_rate, r.normal_deg});

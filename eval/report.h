@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "eval/sweep.h"
 #include "metrics/stats.h"
 
 namespace isplat {
@@ -31,10 +32,13 @@ struct PairResult {
   double normal_deg = std::numeric_limits<double>::quiet_NaN();
   double rotation_deg = std::numeric_limits<double>::quiet_NaN();  // between optical axes
   std::string motion;  // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
+  MethodId method;     // who scored it (results log fields; a log that predates them is its file's method)
 };
 
 struct ReportRow {
-  std::string dataset, method, bin;  // bin "all" = average over pairs
+  std::string dataset;
+  MethodId method;
+  std::string bin;  // "all" = average over pairs
   int64_t pairs = 0, requested = 0;
   double psnr = 0, ssim = 0;
   std::map<std::string, double> lpips;
@@ -47,38 +51,35 @@ struct ReportRow {
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".
-std::vector<ReportRow> summarize(const std::string& dataset, const std::string& method,
+std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& method,
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets);
 
 // The same rows regrouped beyond the protocol's bins: by baseline in steps of `step_m` up to the largest
 // scored (bin "baseline [1.5,2)") and by motion type (bin "motion lateral"); groups without pairs are left out.
-std::vector<ReportRow> breakdown(const std::string& dataset, const std::string& method,
+std::vector<ReportRow> breakdown(const std::string& dataset, const MethodId& method,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets,
                                  double step_m = 0.5);
 
 // One method against the reference method on the same pairs: paired bootstrap 95% intervals.
 struct DiffRow {
-  std::string dataset, method, reference;
-  Interval psnr, lpips;  // method − reference (lpips: the first variant scored)
-  double gaussians = 0;  // mean Gaussians rendered, method / reference
+  std::string dataset;
+  MethodId method;
+  std::string reference;  // the reference's label (scoring.reference)
+  Interval psnr, lpips;   // method − reference (lpips: the first variant scored)
+  double gaussians = 0;   // mean Gaussians rendered, method / reference
   std::string bin = "all";
   Interval holes, cracks;  // hole and crack rates, method − reference, in percentage points
 };
 
-// Differences of every method to `reference` per dataset (empty when the reference was not scored there):
-// over all pairs, then per bin for each of `bin_labels` (PairResult::bin indexes them).
+// Each scored method's results on one dataset, listed by label.
+using ScoredMethods = std::map<MethodId, std::vector<PairResult>>;
+
+// Differences of every method to the one labelled `reference` per dataset (empty when the reference was not
+// scored there): over all pairs, then per bin for each of `bin_labels` (PairResult::bin indexes them).
 std::vector<DiffRow> paired_differences(const std::string& dataset, const std::string& reference,
-                                        const std::map<std::string, std::vector<PairResult>>& results,
-                                        const std::string& lpips_net, int64_t resamples = 2000,
-                                        const std::vector<std::string>& bin_labels = {});
-
-// "full@px0.5" -> "full px", "full~depth_noise0.02" -> "full depth_noise" (a sweep's points form one
-// series); other names pass through.
-std::string method_family(const std::string& method);
-
-// The swept value in "full~depth_noise0.02" (0.02) or "full@px0.5" (0.5); NaN when there is none.
-double sweep_value(const std::string& method);
+                                        const ScoredMethods& results, const std::string& lpips_net,
+                                        int64_t resamples = 2000, const std::vector<std::string>& bin_labels = {});
 
 // Palette index (tab10) and marker of the k-th method family on the speed/quality charts. The Pareto front is
 // grey crosses; no family gets grey, so the front never looks like a method's series.
@@ -92,11 +93,10 @@ std::vector<size_t> pareto_front(const std::vector<std::pair<double, double>>& p
 // strength (per % for noise and shares), computed per pair over the pairs every point scored and averaged
 // (the slope of the mean curve), with a paired bootstrap 95% interval over pairs.
 struct SweepSlope {
-  std::string dataset, family, unit;  // family "lidar prior.sparse.noise"
+  std::string dataset, family, unit;  // family: MethodId::family(), e.g. "lidar noise"
   Interval slope;                     // dB per unit; n = pairs
 };
-std::vector<SweepSlope> sweep_slopes(const std::string& dataset,
-                                     const std::map<std::string, std::vector<PairResult>>& results,
+std::vector<SweepSlope> sweep_slopes(const std::string& dataset, const ScoredMethods& results,
                                      int64_t resamples = 2000);
 
 // Writes report.md, report.csv, report.json and speed_quality.png (per dataset: PSNR against time and

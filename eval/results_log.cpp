@@ -31,6 +31,10 @@ nlohmann::json result_json(const PairResult& r) {
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
   if (!r.prune_counts.empty()) j["prune"] = r.prune_counts;
+  if (!r.method.name.empty()) j["method"] = r.method.name;
+  if (!r.method.sweep.key.empty()) j["sweep_key"] = r.method.sweep.key;
+  if (!r.method.sweep.budget.empty()) j["budget"] = r.method.sweep.budget;
+  if (r.method.sweep.any()) j["sweep_value"] = r.method.sweep.value;
   return j;
 }
 
@@ -96,6 +100,12 @@ PairResult result_from_json(const nlohmann::json& j) {
       ISPLAT_CHECK(count >= 0, "'prune.", it.key(), "' = ", count, " is negative");
       r.prune_counts[it.key()] = count;
     }
+  r.method.name = j.value("method", "");
+  r.method.sweep.key = j.value("sweep_key", "");
+  r.method.sweep.budget = j.value("budget", "");
+  if (r.method.sweep.any()) r.method.sweep.value = j.at("sweep_value").get<double>();
+  ISPLAT_CHECK(r.method.sweep.key.empty() || r.method.sweep.budget.empty(),
+               "a record with both a sweep_key and a budget");
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key().rfind("lpips_", 0) == 0) {
       r.lpips[it.key().substr(6)] = it.value().is_null() ? nan : it.value().get<double>();
@@ -104,12 +114,17 @@ PairResult result_from_json(const nlohmann::json& j) {
   return r;
 }
 
-ResultsLog::ResultsLog(const std::string& path, const std::function<std::string(const PairResult&)>& check) {
+ResultsLog::ResultsLog(const std::string& path, const std::function<std::string(const PairResult&)>& check,
+                       const MethodId& method)
+    : method_(method) {
   for (const auto& j : read_jsonl(path, [&](int64_t line, const std::string&why) {
          log_warn("eval: ", path, ":", line, " is unreadable (", why, "); that pair is scored again");
        })) {
     try {
       PairResult r = result_from_json(j);
+      if (!method_.name.empty() && r.method.name.empty()) r.method = method_;  // a record from before the fields
+      if (!method_.name.empty() && !(r.method == method_))
+        fail("a record of method '", r.method.label(), "' in the log of '", method_.label(), "'");
       const std::string why = check ? check(r) : "";
       if (!why.empty()) fail(why);
       done_.emplace(r.index, r);
@@ -121,8 +136,10 @@ ResultsLog::ResultsLog(const std::string& path, const std::function<std::string(
 }
 
 void ResultsLog::append(const PairResult& r) {
-  writer_->write(result_json(r));
-  done_.emplace(r.index, r);
+  PairResult stamped = r;
+  if (!method_.name.empty()) stamped.method = method_;
+  writer_->write(result_json(stamped));
+  done_.emplace(r.index, stamped);
 }
 
 std::string check_against_manifest(const PairResult& r, const Manifest& m) {

@@ -12,7 +12,8 @@
 
 namespace isplat {
 
-// One pair's record as a JSON object, and back (non-finite values are null; a PSNR of null reads as +inf).
+// One pair's record as a JSON object, and back (non-finite values are null; a PSNR of null reads as +inf). The
+// method that scored it is in the fields method, sweep_key, budget and sweep_value (when known).
 nlohmann::json result_json(const PairResult& r);
 PairResult result_from_json(const nlohmann::json& j);
 
@@ -20,13 +21,17 @@ class ResultsLog {
  public:
   // Reads the finished pairs of `path` (a missing file is an empty log). Unreadable lines, values out of
   // range and records that `check` (optional) returns a reason for, e.g. a bin that disagrees with the
-  // manifest, are warned about and their pairs scored again.
-  explicit ResultsLog(const std::string& path, const std::function<std::string(const PairResult&)>& check = nullptr);
+  // manifest, are warned about and their pairs scored again. With `method` (a name), records of another method
+  // or sweep point are too; records without method fields (logs written before them, whose file name was made
+  // from the same fields) are the file's method, and appended records carry its fields.
+  explicit ResultsLog(const std::string& path, const std::function<std::string(const PairResult&)>& check = nullptr,
+                      const MethodId& method = {});
   const std::map<int64_t, PairResult>& done() const { return done_; }
   void append(const PairResult& r);  // flushed before it returns: a crash loses at most one pair
 
  private:
   std::map<int64_t, PairResult> done_;
+  MethodId method_;
   std::unique_ptr<JsonlWriter> writer_;
 };
 

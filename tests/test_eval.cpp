@@ -129,7 +129,7 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   REQUIRE(rows.size() == 3 * 5);  // (4 bins + all) x (lift, identity, lidar)
   const auto all = [&](const std::string& method) {
     for (const auto& r : rows)
-      if (r.method == method && r.bin == "all") return r;
+      if (r.method.label() == method && r.bin == "all") return r;
     FAIL("no row for " << method);
     return ReportRow{};
   };
@@ -208,7 +208,11 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   const auto out = expand_sweeps({named_method("lift", "lift"), m});
   REQUIRE(out.size() == 4);
   CHECK(out[0].name == "lift");
-  CHECK(out[1].name == "full@px0.5");
+  CHECK(out[1].name == "full");  // the budget is a field, not a suffix of the name
+  CHECK(out[1].sweep == SweepPoint{"", "px", 0.5});
+  CHECK(out[1].label() == "full@px0.5");
+  CHECK(out[2].sweep == SweepPoint{"", "n", 50000});
+  CHECK(out[2].label() == "full@n50000");
   CHECK(out[1].overrides ==
         std::vector<std::string>{"prior.type=dataset", "sampler.budget_mode=per_pixel", "sampler.density=0.5"});
   CHECK(out[2].overrides.back() == "sampler.budget=50000");
@@ -229,9 +233,10 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   m.budgets = {"px:1"};
   CHECK_THROWS_WITH(expand_sweeps({m, named_method("full_px1", "lift")}),
                     Catch::Contains("methods 'full@px1' and 'full_px1' would share the results file results_full_px1"));
-  CHECK(method_family("full@px0.25") == "full px");
-  CHECK(method_family("full+prune@detail2") == "full+prune detail");
-  CHECK(method_family("lift") == "lift");
+  CHECK((MethodId{"full", {"", "px", 0.25}}.family()) == "full px");
+  CHECK((MethodId{"full+prune", {"", "detail", 2}}.family()) == "full+prune detail");
+  CHECK((MethodId{"lift", {}}.family()) == "lift");
+  CHECK((MethodId{"full", {"", "n", 1e6}}.label()) == "full@n1000000");
   // Cheaper and better points form the front; dominated ones do not.
   const std::vector<std::pair<double, double>> pts = {{10, 20}, {5, 21}, {20, 22}, {30, 21.5}, {20, 19}, {1, 15}};
   CHECK(pareto_front(pts) == std::vector<size_t>{5, 1, 2});
@@ -239,18 +244,18 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
   for (size_t k = 0; k < 40; ++k) CHECK(family_style(k).first != kParetoColor);
   CHECK(family_style(0) != family_style(1));
   // Paired differences: a method 1 dB better on every shared pair, with half the Gaussians.
-  std::map<std::string, std::vector<PairResult>> res;
+  ScoredMethods res;
   for (int64_t i = 0; i < 20; ++i) {
     PairResult r;
     r.index = i, r.psnr = 20 + 0.1 * static_cast<double>(i), r.gaussians = 1000, r.lpips["squeeze"] = 0.2;
     r.bin = static_cast<int>(i % 2), r.hole_rate = 0.01, r.crack_rate = 0.02;
-    res["ref"].push_back(r);
+    res[{"ref", {}}].push_back(r);
     r.psnr += 1.0, r.gaussians = 500, r.hole_rate = r.bin == 1 ? 0.03 : 0.01;
-    if (i != 3) res["better"].push_back(r);  // one pair missing: only shared pairs count
+    if (i != 3) res[{"better", {}}].push_back(r);  // one pair missing: only shared pairs count
   }
   const auto d = paired_differences("set", "ref", res, "squeeze");
   REQUIRE(d.size() == 1);
-  CHECK(d[0].method == "better");
+  CHECK(d[0].method.label() == "better");
   CHECK(d[0].psnr.n == 19);
   CHECK(d[0].psnr.mean == Approx(1.0));
   CHECK(d[0].psnr.excludes_zero());
@@ -273,21 +278,21 @@ TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budget
 
   // Sweep slopes over pairs: PSNR falls 0.5 dB per % of noise on every pair (plus pair-specific jitter that
   // does not trend), is flat under blur, and the pair one point missed is left out.
-  std::map<std::string, std::vector<PairResult>> sweeps;
+  ScoredMethods sweeps;
   for (int64_t i = 0; i < 30; ++i)
     for (double noise : {0.0, 0.01, 0.02, 0.05}) {
       PairResult r;
       r.index = i;
       r.psnr = 25 + 0.2 * static_cast<double>(i % 3) - 50 * noise + 0.3 * std::sin(7.0 * i + 100 * noise);
-      if (!(i == 4 && noise == 0.02)) sweeps[cat("lidar~noise", noise)].push_back(r);
+      if (!(i == 4 && noise == 0.02)) sweeps[{"lidar", {"override:prior.sparse.noise", "", noise}}].push_back(r);
     }
   for (int64_t i = 0; i < 30; ++i)
     for (double px : {2.0, 4.0}) {
       PairResult r;
       r.index = i, r.psnr = 24 + 0.4 * ((i + static_cast<int64_t>(px)) % 2 ? 1 : -1);
-      sweeps[cat("full~depth_blur_px", px)].push_back(r);
+      sweeps[{"full", {"perturb.depth_blur_px", "", px}}].push_back(r);
       r.psnr = 24;  // unperturbed: the 0 px point
-      if (px == 2.0) sweeps["full"].push_back(r);
+      if (px == 2.0) sweeps[{"full", {}}].push_back(r);
     }
   const auto slopes = sweep_slopes("set", sweeps);
   REQUIRE(slopes.size() == 2);
@@ -452,12 +457,13 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   m.sweep_values = {0, 0.02};
   const auto out = expand_sweeps({m});
   REQUIRE(out.size() == 2);
-  CHECK(out[0].name == "full~depth_noise0");
-  CHECK(out[1].name == "full~depth_noise0.02");
+  CHECK(out[0].name == "full");  // the swept key and value are fields, not a suffix of the name
+  CHECK(out[0].label() == "full~depth_noise0");
+  CHECK(out[1].label() == "full~depth_noise0.02");
   CHECK(out[1].perturb.depth_noise == 0.02);
   CHECK(out[1].sweep_key.empty());
-  CHECK(sweep_value(out[1].name) == Approx(0.02));
-  CHECK(method_family(out[1].name) == "full depth_noise");
+  CHECK(out[1].sweep == SweepPoint{"perturb.depth_noise", "", 0.02});
+  CHECK(out[1].id().family() == "full depth_noise");
   m.sweep_key = "perturb.jpeg_quality";
   m.sweep_values = {90};
   CHECK(expand_sweeps({m})[0].perturb.jpeg_quality == 90);
@@ -465,9 +471,9 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   m.sweep_values = {500, 20};
   const auto prompts = expand_sweeps({m});
   REQUIRE(prompts.size() == 2);
-  CHECK(prompts[1].name == "full~prompts20");
+  CHECK(prompts[1].label() == "full~prompts20");
   CHECK(prompts[1].overrides.back() == "prior.sparse.prompts=20");
-  CHECK(sweep_value(prompts[0].name) == Approx(500));
+  CHECK(prompts[0].sweep.value == 500);
   // The same depth options act on a prior's output map as on the source view's depth.
   o = PerturbOptions{};
   o.depth_holes = 0.5;
@@ -502,7 +508,7 @@ TEST_CASE("eval: perturbations have the requested strength, are deterministic, a
   CHECK_THROWS_WITH(expand_sweeps({idm}), Catch::Contains("identity uses no depth"));
   m.sweep_key = "perturb.jpeg_quality";  // an integer option names the rounded value
   m.sweep_values = {30.4};
-  CHECK(expand_sweeps({m})[0].name == "full~jpeg_quality30");
+  CHECK(expand_sweeps({m})[0].label() == "full~jpeg_quality30");
   m.sweep_key = "perturb.no_such_key";
   CHECK_THROWS_WITH(expand_sweeps({m}), Catch::Contains("sweep_key 'perturb.no_such_key'"));
   m.sweep_key = "perturb.depth_noise";
@@ -548,7 +554,7 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
     results[k].motion = motions[k];
   }
   std::map<std::string, ReportRow> by;
-  for (const auto& r : breakdown("set", "m", results, {}, 0.5)) by[r.bin] = r;
+  for (const auto& r : breakdown("set", {"m", {}}, results, {}, 0.5)) by[r.bin] = r;
   REQUIRE(by.size() == 6);  // 3 baseline groups with pairs (of 6) and 3 motion types
   CHECK(by.at("baseline [0,0.5)").pairs == 1);
   CHECK(by.at("baseline [0.5,1)").pairs == 2);
@@ -558,18 +564,19 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
   CHECK(by.at("motion lateral").pairs == 2);
   CHECK(by.at("motion lateral").psnr == Approx(25));
   CHECK(by.at("motion rotation").psnr == Approx(15));
-  CHECK_THROWS_AS(breakdown("set", "m", results, {}, 0.0), Error);
+  CHECK_THROWS_AS(breakdown("set", {"m", {}}, results, {}, 0.0), Error);
 
   // A sweep without its neutral value takes the unperturbed run of the same method as that point.
   std::vector<ReportRow> rows;
-  for (const auto& [name, value] : std::vector<std::pair<std::string, double>>{{"m", 30},
-                                                                               {"m~depth_holes0.2", 25},
-                                                                               {"m~depth_holes0.4", 20},
-                                                                               {"m~depth_noise0.01", 29},
-                                                                               {"m~depth_scale0.8", 26},
-                                                                               {"m~depth_scale1.25", 26}}) {
+  for (const auto& [point, value] :
+       std::vector<std::pair<SweepPoint, double>>{{{}, 30},
+                                                  {{"perturb.depth_holes", "", 0.2}, 25},
+                                                  {{"perturb.depth_holes", "", 0.4}, 20},
+                                                  {{"perturb.depth_noise", "", 0.01}, 29},
+                                                  {{"perturb.depth_scale", "", 0.8}, 26},
+                                                  {{"perturb.depth_scale", "", 1.25}, 26}}) {
     ReportRow r;
-    r.dataset = "set", r.method = name, r.bin = "all", r.pairs = 1, r.psnr = value;
+    r.dataset = "set", r.method = {"m", point}, r.bin = "all", r.pairs = 1, r.psnr = value;
     rows.push_back(r);
   }
   const std::string out = test::temp_dir("eval_slopes");
@@ -610,7 +617,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   const auto rows = Evaluator(c).run();
   std::map<std::string, ReportRow> all;
   for (const auto& r : rows)
-    if (r.bin == "all") all[r.method] = r;
+    if (r.bin == "all") all[r.method.label()] = r;
   REQUIRE(all.size() == 6);
   const ReportRow &px = all.at("tiny@px0.25"), &n = all.at("tiny@n900"), &pruned = all.at("tiny+prune@n900");
   REQUIRE(n.pairs > 0);
@@ -664,12 +671,35 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   }
   const std::string csv = test::read_bytes(c.scoring.out + "/report.csv");
   CHECK_THAT(csv, Catch::Contains("decoder_ms"));
+  {  // Sweep points are typed fields, never suffixes of a name: in every log record, and as report columns.
+    std::ifstream log(c.scoring.out + "/courtyard/results_tiny_px0_25.jsonl");
+    std::string line;
+    REQUIRE(std::getline(log, line));
+    const auto record = nlohmann::json::parse(line);
+    CHECK(record["method"] == "tiny");
+    CHECK(record["budget"] == "px");
+    CHECK(record["sweep_value"].get<double>() == 0.25);
+    CHECK_THAT(csv, Catch::StartsWith("dataset,method,sweep_key,budget,sweep_value,bin,"));
+    CHECK_THAT(csv, Catch::Contains("\ncourtyard,tiny,,px,0.25,all,") &&
+                        Catch::Contains("\ncourtyard,lift,perturb.depth_scale,,0.8,all,"));
+    bool typed = false;
+    for (const auto& r : nlohmann::json::parse(test::read_bytes(c.scoring.out + "/report.json")))
+      typed = typed || (r["method"] == "tiny" && r["budget"] == "n" && r["sweep_value"] == 900 && r["bin"] == "all");
+    CHECK(typed);
+    // The evaluation's config.json records each method's point, so it names the same methods and files again.
+    const auto recorded = config_from_json<EvalConfig>(read_json_file(c.scoring.out + "/config.json"), "config.json");
+    const auto expanded = expand_sweeps(recorded.methods);
+    REQUIRE(expanded.size() == 6);
+    CHECK(expanded[0].label() == "tiny@px0.25");
+    CHECK(expanded[0].overrides == expand_sweeps(c.methods)[0].overrides);
+    CHECK(expanded.back().label() == "lift~depth_scale1");
+  }
   CHECK_THAT(csv, Catch::Contains("peak_mb"));
   // Every method against the reference on the same pairs.
   CHECK_THAT(md, Catch::Contains("## Differences to the reference"));
   const std::string diffs = test::read_bytes(c.scoring.out + "/differences.csv");
-  CHECK_THAT(diffs, Catch::Contains("tiny+prune@n900,all,tiny@n900"));
-  CHECK_THAT(diffs, Catch::Contains("tiny@px0.25,all,tiny@n900"));
+  CHECK_THAT(diffs, Catch::Contains("tiny+prune,,n,900,all,tiny@n900"));
+  CHECK_THAT(diffs, Catch::Contains("tiny,,px,0.25,all,tiny@n900"));
   // Stability measures on every rendering method, and the perturbation sweep's chart.
   CHECK(n.hole_rate >= 0);
   CHECK(n.hole_rate <= 1);
@@ -740,7 +770,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   CHECK_THAT(md, Catch::Contains("| tiny@n900 | baseline [0,0.5) |"));
   CHECK_THAT(md, Catch::Contains("| tiny@n900 | motion "));
   CHECK(fs::exists(fs::path(c.scoring.out) / "baseline.png"));
-  CHECK_THAT(test::read_bytes(c.scoring.out + "/breakdown.csv"), Catch::Contains("tiny@n900,\"baseline [0,0.5)\""));
+  CHECK_THAT(test::read_bytes(c.scoring.out + "/breakdown.csv"), Catch::Contains("tiny,,n,900,\"baseline [0,0.5)\""));
   int64_t gallery_psnr = 0, gallery_holes = 0, gallery_cracks = 0;
   fs::path crack_panel;
   for (const auto& e : fs::recursive_directory_iterator(c.scoring.out)) {
@@ -775,10 +805,24 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   INFO("scored " << grey << " of " << tile * crack_png.rows << " pixels in the crack tile");
   CHECK(grey > tile * crack_png.rows / 10);  // a tenth of the frame at least is scored (grey)
   CHECK(broken > 0);
+  // A log written before the method fields resumes as its file's method (the file name is generated from the
+  // same fields, never read back).
+  const std::string scaled_log = c.scoring.out + "/courtyard/results_lift_depth_scale0_8.jsonl";
+  std::string without_fields;
+  for (const auto& j : read_jsonl(scaled_log)) {
+    nlohmann::json old = j;
+    for (const char* k : {"method", "sweep_key", "sweep_value"}) old.erase(k);
+    without_fields += old.dump() + "\n";
+  }
+  write_file_atomic(scaled_log, without_fields);
   // The per-pair log keeps the new fields, so a resumed run reports the same timings.
   const auto again = Evaluator(c).run();
+  CHECK(test::read_bytes(scaled_log) == without_fields);  // nothing scored again
   for (const auto& r : again)
-    if (r.method == "tiny@n900" && r.bin == "all") CHECK(r.stage_ms.at("decoder") == n.stage_ms.at("decoder"));
+    if (r.method.label() == "lift~depth_scale0.8" && r.bin == "all")
+      CHECK(r.psnr == all.at("lift~depth_scale0.8").psnr);
+  for (const auto& r : again)
+    if (r.method.label() == "tiny@n900" && r.bin == "all") CHECK(r.stage_ms.at("decoder") == n.stage_ms.at("decoder"));
 }
 
 TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D and scores on full frames",
@@ -814,7 +858,7 @@ TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D an
   c.scoring.lpips = {};
   const auto rows = Evaluator(c).run();
   std::set<std::string> methods;
-  for (const auto& r : rows) methods.insert(r.method);
+  for (const auto& r : rows) methods.insert(r.method.label());
   CHECK(methods == std::set<std::string>{"identity", "lidar"});  // lift needs depth: not scored, and said so
   for (const auto& r : rows)
     if (r.bin == "all") CHECK(std::isfinite(r.psnr));
