@@ -31,11 +31,13 @@ def slopes(out):
 
 def rows_at_largest(out):
     report = json.load(open(os.path.join(out, "report.json")))
-    diffs = {(r["dataset"], r["method"], r["bin"]): r for r in csv.DictReader(open(os.path.join(out, "differences.csv")))}
+    # Sweep points share their method's name and carry sweep_value (empty or absent for the rows themselves).
+    diffs = {(r["dataset"], r["method"], r["bin"]): r for r in csv.DictReader(open(os.path.join(out, "differences.csv")))
+             if not r.get("sweep_value")}
     print("| set | method | pairs | PSNR all bins | holes % at [2,inf) | cracks % at [2,inf) | row - full: PSNR dB (all) | "
           "holes pp at [2,inf) | cracks pp at [2,inf) |")
     print("|---|---|---|---|---|---|---|---|---|")
-    by = {(r["dataset"], r["method"], r["bin"]): r for r in report}
+    by = {(r["dataset"], r["method"], r["bin"]): r for r in report if r.get("sweep_value") is None}
     for dataset in sorted({r["dataset"] for r in report}):
         for m in ROWS:
             a, w = by.get((dataset, m, "all")), by.get((dataset, m, "[2,inf)"))
