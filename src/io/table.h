@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -18,6 +19,8 @@ namespace isplat {
 using TableCell = std::variant<std::monostate, std::string, int64_t, double>;
 
 struct TableColumn {
+  TableColumn(std::string name, int digits = 0, std::string title = "")
+      : name(std::move(name)), digits(digits), title(std::move(title)) {}
   std::string name;   // CSV header and JSON key
   int digits = 0;     // decimals of a measurement in Markdown and CSV (fixed; -1 = as needed); JSON keeps every digit
   std::string title;  // Markdown header; empty = name
