@@ -81,7 +81,8 @@ TEST_CASE("no data loss: train.out in a user's folder removes only temporaries o
                                           cat(".x.isplat-tmp", dead, "_0.json.bak")};
   const std::vector<std::string> ours_dead = {cat(".config.isplat-tmp", dead, "_0.json"),
                                               cat(".train_log.isplat-tmp", dead, "_4.jsonl")};
-  const std::vector<std::string> ours_live = {cat(".config.isplat-tmp", getpid(), "_0.json"),
+  // Counter 999: the trainer's own first writes in this process use low counters (and rename those files away).
+  const std::vector<std::string> ours_live = {cat(".config.isplat-tmp", getpid(), "_999.json"),
                                               ".config.isplat-tmp1_0.json"};  // pid 1 is alive
   for (const auto& f : users) test::write_bytes(dir + "/" + f, "the user's");
   for (const auto& f : ours_dead) test::write_bytes(dir + "/" + f, "half");
