@@ -93,7 +93,7 @@ TEST_CASE("all or nothing: SIGTERM removes the temporaries a process has open an
   CHECK_FALSE(fs::exists(dir + "/scene.camera.json"));
 }
 
-TEST_CASE("all or nothing: predict writes the PLY and its camera JSON both or neither; render and export stop clean",
+TEST_CASE("all or nothing: predict writes the PLY and its camera JSON both or neither (render and export stop clean)",
           "[reliability][allornothing][use]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("aon_data", 8);
