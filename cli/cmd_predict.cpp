@@ -1,8 +1,14 @@
 // `infinisplat predict`: one photograph -> Gaussians in a standard 3DGS PLY.
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <set>
 #include <sstream>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include <torch/torch.h>
 
@@ -12,6 +18,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/paths.h"
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "geometry/camera_torch.h"
@@ -26,6 +33,7 @@
 #include "io/tensor_image.h"
 #include "model/model_io.h"
 #include "render/prune.h"
+#include "sampler/sampler.h"
 
 namespace isplat::cli {
 namespace fs = std::filesystem;
@@ -50,6 +58,94 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
   auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
   return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
 }
+enum class InputKind { Image, Folder, List, Video };
+
+std::string lower_extension(const fs::path& p) {
+  std::string e = p.extension().string();
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+bool is_image_file(const fs::path& p) {
+  static const std::set<std::string> kinds = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp", ".exr"};
+  return kinds.count(lower_extension(p)) > 0;
+}
+
+InputKind input_kind(const std::string& path) {
+  if (fs::is_directory(path)) return InputKind::Folder;
+  const std::string e = lower_extension(path);
+  if (e == ".txt" || e == ".lst" || e == ".list") return InputKind::List;
+  if (e == ".mp4" || e == ".mov" || e == ".avi" || e == ".mkv" || e == ".webm" || e == ".m4v") return InputKind::Video;
+  return InputKind::Image;
+}
+
+struct BatchInput {
+  std::string path, name;  // name: the outputs' stem
+  int64_t frame = -1;      // video frame index
+};
+
+// The images of a folder (sorted by name) or of a list file, each named by its stem; a stem that repeats gets
+// _2, _3, ... in input order (stable, so a rerun finds the same outputs).
+std::vector<BatchInput> image_inputs(const std::string& source, InputKind kind) {
+  std::vector<BatchInput> inputs;
+  if (kind == InputKind::Folder) {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(source))
+      if (e.is_regular_file() && is_image_file(e.path())) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) inputs.push_back({f.string(), f.stem().string()});
+  } else {
+    std::istringstream lines(read_file_bytes(source));
+    std::string line;
+    for (int64_t number = 1; std::getline(lines, line); ++number) {
+      const size_t a = line.find_first_not_of(" \t\r"), b = line.find_last_not_of(" \t\r");
+      if (a == std::string::npos || line[a] == '#') continue;
+      fs::path p = line.substr(a, b - a + 1);
+      if (p.is_relative()) p = fs::path(source).parent_path() / p;
+      if (!fs::is_regular_file(p)) fail(source, ": line ", number, ": ", p.string(), ": no such file");
+      inputs.push_back({p.string(), p.stem().string()});
+    }
+  }
+  std::map<std::string, int64_t> seen;
+  for (auto& in : inputs) {
+    in.name = safe_name(in.name);
+    if (const int64_t n = ++seen[in.name]; n > 1) in.name += cat("_", n);
+  }
+  return inputs;
+}
+
+// Every `every`-th frame of a video, by the count its container declares (frames past the real end fail by name).
+std::vector<BatchInput> video_inputs(const std::string& source, int64_t every) {
+  if (!fs::is_regular_file(source)) fail(source, ": no such file");
+  cv::VideoCapture video(source);
+  if (!video.isOpened()) fail(source, ": OpenCV cannot read this video");
+  int64_t frames = static_cast<int64_t>(video.get(cv::CAP_PROP_FRAME_COUNT));
+  if (frames <= 0) {  // no count in the container: count by decoding
+    frames = 0;
+    while (video.grab()) ++frames;
+  }
+  std::vector<BatchInput> inputs;
+  char name[32];
+  for (int64_t f = 0; f < frames; f += every) {
+    std::snprintf(name, sizeof name, "frame_%06lld", static_cast<long long>(f));
+    inputs.push_back({source, name, f});
+  }
+  return inputs;
+}
+
+// True when a PLY and its camera JSON are both there and read: what an earlier run finished (the two appear
+// together, commit_together).
+bool outputs_complete(const std::string& ply) {
+  const std::string camera = camera_sidecar_path(ply);
+  if (!fs::is_regular_file(ply) || !fs::is_regular_file(camera)) return false;
+  try {
+    double typical_depth = 0;
+    read_scene_camera(camera, typical_depth);
+    return read_ply(ply).count() > 0;
+  } catch (const Error&) {
+    return false;
+  }
+}
 }  // namespace
 
 int run_predict(int argc, char** argv) {
@@ -59,13 +155,29 @@ int run_predict(int argc, char** argv) {
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
   bool keep_outside = false;
   std::vector<std::string> sets;
+  int64_t max_gaussians = 0, every = 1;
   ArgParser args("infinisplat predict",
-                 "Turn one photograph into a 3D Gaussian scene (standard 3DGS PLY) with a trained "
-                 "checkpoint. Intrinsics: --fx, else the photo's EXIF, else --hfov (default: "
-                 "the model's prior.hfov_deg).");
+                 "Turn a photograph into a 3D Gaussian scene (standard 3DGS PLY) with a trained "
+                 "checkpoint; or every photo of a folder, of a list file or every frame of a video, in one "
+                 "process with the model loaded once. Intrinsics: --fx, else the photo's EXIF, else --hfov "
+                 "(default: the model's prior.hfov_deg).");
   args.option("--checkpoint", checkpoint, "trained checkpoint (.safetensors)", "FILE");
-  args.option("--image", image_path, "the photograph (PNG/JPG, any size)", "FILE");
-  args.option("--out", out, "output PLY (a .camera.json is written beside it)", "FILE");
+  args.option("--image", image_path,
+              "the photograph (PNG/JPG, any size); or a folder of photos, a list file (.txt: one image path per line, "
+              "relative to the list's folder; # comments) or a video (.mp4 .mov .avi .mkv .webm .m4v, frames through "
+              "OpenCV)",
+              "PATH");
+  args.option("--out", out,
+              "output PLY (a .camera.json is written beside it); for a folder, list or video: the output folder, one "
+              "<name>.ply and <name>.camera.json per input (video: frame_<index>); inputs whose two files are already "
+              "there and readable are skipped, so an interrupted run resumes",
+              "PATH");
+  args.option("--max-gaussians", max_gaussians,
+              "at most this many Gaussians in each output (0 = no limit): when the checkpoint's sampler would place "
+              "more supports, it places exactly this many instead (sampler.budget_mode = fixed; pixel mode becomes "
+              "area), before decoding; the decoded set is never cut",
+              "N");
+  args.option("--every", every, "video: predict every N-th frame", "N");
   args.option("--depth-model", depth_model, "TorchScript depth model instead of the checkpoint's prior", "FILE");
   args.option("--depth", depth_path, "metric depth (EXR, planar metres) instead of a prior", "FILE");
   args.option("--prompts", prompts_path, "sparse depth prompts, CSV with columns u,v,z (photo pixels, metres)", "FILE");
@@ -107,14 +219,23 @@ int run_predict(int argc, char** argv) {
                "predict: --checkpoint, --image and --out are required (see --help)");
   ISPLAT_CHECK((depth_model.empty() + depth_path.empty() + prompts_path.empty()) >= 2,
                "predict: give at most one of --depth-model, --depth, --prompts");
-  {  // Neither output may be one of the inputs (the same path, a hard link, a symlinked folder).
-    const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},
-                                           {"--image", image_path},
-                                           {"--depth", depth_path},
-                                           {"--prompts", prompts_path},
-                                           {"--depth-model", depth_model}};
+  ISPLAT_CHECK(max_gaussians >= 0 && max_gaussians <= kMaxSupports, "predict: --max-gaussians ", max_gaussians,
+               " is outside [0, ", kMaxSupports, "] (0 = no limit)");
+  ISPLAT_CHECK(every >= 1, "predict: --every ", every, " must be at least 1");
+  const InputKind kind = input_kind(image_path);
+  const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},
+                                         {"--image", image_path},
+                                         {"--depth", depth_path},
+                                         {"--prompts", prompts_path},
+                                         {"--depth-model", depth_model}};
+  if (kind == InputKind::Image) {  // Neither output may be one of the inputs (same path, hard link, symlinked folder).
     refuse_output_over_input("predict", {"--out", out}, inputs);
     refuse_output_over_input("predict", {"--out's camera JSON", camera_sidecar_path(out)}, inputs);
+  } else {
+    ISPLAT_CHECK(depth_path.empty() && prompts_path.empty(), "predict: --depth and --prompts hold one photo's data; ",
+                 "with a folder, list or video as --image (", image_path, ") give neither");
+    ISPLAT_CHECK(!fs::exists(out) || fs::is_directory(out), "predict: --out ", out,
+                 " must be a folder when --image is a folder, list or video (", image_path, ")");
   }
   // The merge flags pass the config schema's bounds, with its error naming the key.
   merge = config_from_json<MergeOptions>(config_to_json(merge), "predict's --merge-* flags");
@@ -130,113 +251,190 @@ int run_predict(int argc, char** argv) {
   const Checkpoint ck = load_checkpoint(checkpoint);
   auto pipeline = load_pipeline(ck, checkpoint, sets);
 
-  cv::Mat photo = read_image(image_path);
-  const int W0 = photo.cols, H0 = photo.rows;
-  Intrinsics intr;
-  std::string k_source;
-  if (fx > 0) {
-    intr = {fx, fy > 0 ? fy : fx, cx >= 0 ? cx : W0 / 2.0, cy >= 0 ? cy : H0 / 2.0, W0, H0};
-    k_source = "given";
-  } else {
-    const ExifFocal exif = read_exif_focal(read_file_bytes(image_path));
-    if (exif.focal_35mm) {
-      const double f = fx_from_35mm(*exif.focal_35mm, W0, H0);
-      intr = {f, f, W0 / 2.0, H0 / 2.0, W0, H0};
-      k_source = cat("EXIF (", *exif.focal_35mm, " mm, 35 mm equivalent)");
+  const SamplerOptions configured = pipeline->model()->options.sampler;
+  // One photo -> its PLY and camera JSON at `ply_out`. `exif_from`: the file whose EXIF may give the focal length.
+  const auto predict_one = [&](const cv::Mat& photo, const std::string& exif_from, const std::string& label,
+                               const std::string& ply_out, bool verbose) {
+    const int W0 = photo.cols, H0 = photo.rows;
+    Intrinsics intr;
+    std::string k_source;
+    if (fx > 0) {
+      intr = {fx, fy > 0 ? fy : fx, cx >= 0 ? cx : W0 / 2.0, cy >= 0 ? cy : H0 / 2.0, W0, H0};
+      k_source = "given";
     } else {
-      const double fov = hfov > 0 ? hfov : pipeline->model()->options.prior.hfov_deg;
-      intr = Intrinsics::from_hfov(fov * M_PI / 180.0, W0, H0);
-      k_source = cat("estimated from a ", fov, " degree field of view");
+      const ExifFocal exif = exif_from.empty() ? ExifFocal{} : read_exif_focal(read_file_bytes(exif_from));
+      if (exif.focal_35mm) {
+        const double f = fx_from_35mm(*exif.focal_35mm, W0, H0);
+        intr = {f, f, W0 / 2.0, H0 / 2.0, W0, H0};
+        k_source = cat("EXIF (", *exif.focal_35mm, " mm, 35 mm equivalent)");
+      } else {
+        const double fov = hfov > 0 ? hfov : pipeline->model()->options.prior.hfov_deg;
+        intr = Intrinsics::from_hfov(fov * M_PI / 180.0, W0, H0);
+        k_source = cat("estimated from a ", fov, " degree field of view");
+      }
     }
-  }
-  const auto [Wm, Hm] = working_size(ck, W0, H0, width, height);
-  cv::Mat image = resize_image(photo, Wm, Hm);
-  const Intrinsics work = intr.resized(Wm, Hm);
-  View view{work, Pose::Identity()};
-  PriorInput in;
-  in.image = image_to_tensor(image);
-  in.K = to_camera(view).K;
-  in.seed = static_cast<uint64_t>(seed);
-  if (!depth_path.empty()) {
-    const DepthMap d = read_depth_exr(depth_path);
-    in.depth = map_to_tensor(resize_depth(d.depth, Wm, Hm));
-    in.valid = (in.depth > 0).to(torch::kFloat32);
-  }
-  if (!prompts_path.empty()) {
-    const CsvTable t = read_csv(prompts_path);
-    auto p = torch::empty({static_cast<int64_t>(t.size()), 3});
-    for (size_t r = 0; r < t.size(); ++r) {
-      p[r][0] = t.number(r, "u") * Wm / W0;
-      p[r][1] = t.number(r, "v") * Hm / H0;
-      p[r][2] = t.number(r, "z");
+    const auto [Wm, Hm] = working_size(ck, W0, H0, width, height);
+    cv::Mat image = resize_image(photo, Wm, Hm);
+    const Intrinsics work = intr.resized(Wm, Hm);
+    View view{work, Pose::Identity()};
+    PriorInput in;
+    in.image = image_to_tensor(image);
+    in.K = to_camera(view).K;
+    in.seed = static_cast<uint64_t>(seed);
+    if (!depth_path.empty()) {
+      const DepthMap d = read_depth_exr(depth_path);
+      in.depth = map_to_tensor(resize_depth(d.depth, Wm, Hm));
+      in.valid = (in.depth > 0).to(torch::kFloat32);
     }
-    in.prompts = p;
-  }
-  const Prediction pred = pipeline->run(in, torch::eye(4), false);
-  Gaussians g = pred.gaussians;
-  const int64_t made = g.count();
-  int64_t outside = 0;
-  if (!keep_outside) {
-    auto uv = project_points(g.means, in.K);
-    auto keep = (g.means.select(1, 2) > 0) & (uv.select(1, 0) >= 0) & (uv.select(1, 0) < Wm) & (uv.select(1, 1) >= 0) &
-                (uv.select(1, 1) < Hm);
-    outside = made - keep.sum().item<int64_t>();
-    g = g.index(keep);
-  }
-  PruneOptions po;
-  po.enabled = true;
-  po.min_opacity = prune_opacity;
-  po.min_contribution = prune_contribution;
-  po.views = prune_views;
-  po.merge = merge;
-  const auto t_prune = Clock::now();
-  const PruneResult pruned = prune_gaussians(g, to_camera(view), po);
-  const double prune_ms = ms_since(t_prune);
-  g = pruned.kept;
-  const int64_t faint = pruned.low_opacity;
-  ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
-               " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
-               pruned.merge.removed(), " merged); not writing an empty scene to ", out);
-  PlyOptions ply;  // what pruning removed travels with the scene
-  std::ostringstream pruning;
-  pruning << "pruning: decoded " << made << ", outside_view " << outside << ", low_opacity " << faint
-          << " (min_opacity " << prune_opacity << "), low_contribution " << pruned.low_contribution
-          << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
-          << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
-  ply.comments.push_back(pruning.str());
-  {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
-    AtomicPath ply_file(out), camera_file(camera_sidecar_path(out));
-    write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
-    write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>());
-    commit_together({&camera_file, &ply_file});
-  }
+    if (!prompts_path.empty()) {
+      const CsvTable t = read_csv(prompts_path);
+      auto p = torch::empty({static_cast<int64_t>(t.size()), 3});
+      for (size_t r = 0; r < t.size(); ++r) {
+        p[r][0] = t.number(r, "u") * Wm / W0;
+        p[r][1] = t.number(r, "v") * Hm / H0;
+        p[r][2] = t.number(r, "z");
+      }
+      in.prompts = p;
+    }
+    // --max-gaussians: the supports the checkpoint's sampler would place on this photo's prior depth, counted before
+    // decoding; above the limit, the sampler places exactly the limit (pruning below only removes).
+    pipeline->model()->options.sampler = configured;
+    int64_t would_place = 0;
+    const auto cap_budget = [&](PriorOutput& prior) {
+      if (max_gaussians <= 0) return;
+      would_place = sample_supports(prior.depth, prior.valid, prior.K, in.image, configured, in.seed, false).count();
+      if (would_place <= max_gaussians) return;
+      SamplerOptions& capped = pipeline->model()->options.sampler;
+      capped.budget_mode = "fixed";
+      capped.budget = max_gaussians;
+      if (capped.mode == "pixel") capped.mode = "area";  // pixel mode has no budget: one support per valid pixel
+    };
+    const Prediction pred = pipeline->run(in, torch::eye(4), false, cap_budget);
+    pipeline->model()->options.sampler = configured;
+    ISPLAT_CHECK(max_gaussians <= 0 || pred.gaussians.count() <= max_gaussians, "predict: ", label,
+                 ": the sampler placed ", pred.supports.count(), " supports for --max-gaussians ", max_gaussians,
+                 " (sampler.mode ", configured.mode, ")");
+    Gaussians g = pred.gaussians;
+    const int64_t made = g.count();
+    int64_t outside = 0;
+    if (!keep_outside) {
+      auto uv = project_points(g.means, in.K);
+      auto keep = (g.means.select(1, 2) > 0) & (uv.select(1, 0) >= 0) & (uv.select(1, 0) < Wm) &
+                  (uv.select(1, 1) >= 0) & (uv.select(1, 1) < Hm);
+      outside = made - keep.sum().item<int64_t>();
+      g = g.index(keep);
+    }
+    PruneOptions po;
+    po.enabled = true;
+    po.min_opacity = prune_opacity;
+    po.min_contribution = prune_contribution;
+    po.views = prune_views;
+    po.merge = merge;
+    const auto t_prune = Clock::now();
+    const PruneResult pruned = prune_gaussians(g, to_camera(view), po);
+    const double prune_ms = ms_since(t_prune);
+    g = pruned.kept;
+    const int64_t faint = pruned.low_opacity;
+    ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
+                 " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
+                 pruned.merge.removed(), " merged); not writing an empty scene to ", ply_out, " (", label, ")");
+    PlyOptions ply;  // what pruning removed travels with the scene
+    std::ostringstream pruning;
+    pruning << "pruning: decoded " << made << ", outside_view " << outside << ", low_opacity " << faint
+            << " (min_opacity " << prune_opacity << "), low_contribution " << pruned.low_contribution
+            << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
+            << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
+    ply.comments.push_back(pruning.str());
+    {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
+      AtomicPath ply_file(ply_out), camera_file(camera_sidecar_path(ply_out));
+      write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
+      write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>());
+      commit_together({&camera_file, &ply_file});
+    }
 
-  std::cout << "photo        " << image_path << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm
-            << "\n";
-  std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
-  std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
-  std::cout << "supports     " << pred.supports.count() << "\n";
-  std::cout << "Gaussians    " << g.count() << " written of " << made << " decoded (pruned: " << outside
-            << " outside the view, " << faint << " below opacity " << std::setprecision(3) << std::defaultfloat
-            << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
-            << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
-            << pruned.merge.removed() << " merged into neighbours)\n";
-  if (merge.cell_px > 0)
-    std::cout << "merging      groups refused: " << pruned.merge.refused_color << " by colour, "
-              << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals; "
-              << pruned.merge.alone << " Gaussians alone in their cell\n";
-  std::cout << "time (ms)   ";
-  double stages = prune_ms;
-  for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
-    if (pred.timings_ms.count(k)) {
-      std::cout << " " << k << " " << std::fixed << std::setprecision(0) << pred.timings_ms.at(k);
-      stages += pred.timings_ms.at(k);
+    if (!verbose) return g.count();
+    std::cout << "photo        " << label << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm << "\n";
+    std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
+    std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
+    std::cout << "supports     " << pred.supports.count()
+              << (max_gaussians > 0 && would_place > max_gaussians
+                      ? cat(" (--max-gaussians ", max_gaussians, "; the checkpoint's sampler would place ", would_place,
+                            ")")
+                      : std::string())
+              << "\n";
+    std::cout << "Gaussians    " << g.count() << " written of " << made << " decoded (pruned: " << outside
+              << " outside the view, " << faint << " below opacity " << std::setprecision(3) << std::defaultfloat
+              << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
+              << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
+              << pruned.merge.removed() << " merged into neighbours)\n";
+    if (merge.cell_px > 0)
+      std::cout << "merging      groups refused: " << pruned.merge.refused_color << " by colour, "
+                << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals; "
+                << pruned.merge.alone << " Gaussians alone in their cell\n";
+    std::cout << "time (ms)   ";
+    double stages = prune_ms;
+    for (const char* k : {"prior", "sampler", "encoder", "decoder", "composer"})
+      if (pred.timings_ms.count(k)) {
+        std::cout << " " << k << " " << std::fixed << std::setprecision(0) << pred.timings_ms.at(k);
+        stages += pred.timings_ms.at(k);
+      }
+    std::cout << " prune " << std::fixed << std::setprecision(0) << prune_ms;
+    // The stages are the prediction itself; the total adds loading the checkpoint and photo and writing the files.
+    std::cout << " | stages " << stages << " | total with loading and writing " << ms_since(t_start) << "\n";
+    std::cout << "wrote        " << fs::absolute(ply_out).string() << "\n             "
+              << fs::absolute(camera_sidecar_path(ply_out)).string() << "\n";
+    return g.count();
+  };
+
+  if (kind == InputKind::Image) {
+    predict_one(read_image(image_path), image_path, image_path, out, true);
+    return 0;
+  }
+  // A folder, a list or a video: one PLY and camera JSON per input under --out; complete ones are skipped.
+  std::vector<BatchInput> batch =
+      kind == InputKind::Video ? video_inputs(image_path, every) : image_inputs(image_path, kind);
+  ISPLAT_CHECK(!batch.empty(), "predict: ", image_path, " holds no ", kind == InputKind::Video ? "frame" : "image");
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) fail("predict: --out ", out, ": cannot create the folder: ", ec.message());
+  cv::VideoCapture video;
+  int64_t video_at = 0;  // the next frame the capture returns
+  if (kind == InputKind::Video && !video.open(image_path)) fail(image_path, ": OpenCV cannot read this video");
+  int64_t predicted = 0, skipped = 0, written = 0;
+  ProgressBar bar("predict", static_cast<int64_t>(batch.size()), kind == InputKind::Video ? "frame" : "image");
+  for (const BatchInput& input : batch) {
+    const std::string ply_out = (fs::path(out) / (input.name + ".ply")).string();
+    refuse_output_over_input("predict", {"--out", ply_out}, {inputs[0], {"--image", input.path}, inputs[1]});
+    refuse_output_over_input("predict", {"--out", camera_sidecar_path(ply_out)},
+                             {inputs[0], {"--image", input.path}, inputs[1]});
+    if (outputs_complete(ply_out)) {
+      ++skipped;
+      bar.tick();
+      continue;
     }
-  std::cout << " prune " << std::fixed << std::setprecision(0) << prune_ms;
-  // The stages are the prediction itself; the total adds loading the checkpoint and photo and writing the files.
-  std::cout << " | stages " << stages << " | total with loading and writing " << ms_since(t_start) << "\n";
-  std::cout << "wrote        " << fs::absolute(out).string() << "\n             "
-            << fs::absolute(camera_sidecar_path(out)).string() << "\n";
+    cv::Mat photo;
+    if (kind == InputKind::Video) {
+      for (; video_at < input.frame; ++video_at)
+        if (!video.grab()) fail(image_path, ": the video ends at frame ", video_at, " before frame ", input.frame);
+      cv::Mat bgr;
+      if (!video.read(bgr) || bgr.empty()) fail(image_path, ": cannot decode frame ", input.frame);
+      ++video_at;
+      cv::cvtColor(bgr, photo, cv::COLOR_BGR2RGB);
+      photo.convertTo(photo, CV_32FC3, 1.0 / 255.0);
+    } else {
+      photo = read_image(input.path);
+    }
+    const std::string label = kind == InputKind::Video ? cat(image_path, " frame ", input.frame) : input.path;
+    written += predict_one(photo, kind == InputKind::Video ? std::string() : input.path, label, ply_out, false);
+    ++predicted;
+    bar.postfix(input.name);
+    bar.tick();
+  }
+  bar.finish();
+  std::cout << "predicted    " << predicted << " of " << batch.size() << " inputs (" << written
+            << " Gaussians written), " << skipped << " skipped (their PLY and camera JSON were already in " << out
+            << ")\n";
+  std::cout << "wrote        " << fs::absolute(out).string() << "\n";
   return 0;
 }
 
