@@ -33,8 +33,19 @@ std::string aon_tool() {
 
 // Starts the tool with `args` (no shell), its output into `log`; returns its pid.
 pid_t aon_spawn(const std::vector<std::string>& args, const std::string& log) {
+  // A signal the test sends before the child has exec'd must not reach the test framework's handlers (they allocate,
+  // and a forked child of a threaded process may hang in malloc): held off until the child has reset them.
+  sigset_t held, before;
+  sigemptyset(&held);
+  sigaddset(&held, SIGINT);
+  sigaddset(&held, SIGTERM);
+  ::pthread_sigmask(SIG_BLOCK, &held, &before);
   const pid_t pid = ::fork();
+  if (pid != 0) ::pthread_sigmask(SIG_SETMASK, &before, nullptr);
   if (pid == 0) {
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
+    ::pthread_sigmask(SIG_SETMASK, &before, nullptr);
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(fd, 1);
     ::dup2(fd, 2);
