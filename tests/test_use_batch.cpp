@@ -42,7 +42,7 @@ int64_t pb_value(const std::string& text, const std::string& key) {
 
 }  // namespace
 
-TEST_CASE("predict batch: a folder, a list and a video in one process, resumable; --max-gaussians caps the budget",
+TEST_CASE("predict batch: a folder, a list and a video in one process, resumable, and --max-gaussians caps the budget",
           "[use][predict]") {
   test::QuietLogs quiet;
   const auto data = test::make_tiny_dataset("pb_data", 8);
