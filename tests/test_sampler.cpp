@@ -284,23 +284,8 @@ TEST_CASE("sampler: edge_behind continues the farther surface under a silhouette
   CHECK((tight.depth.narrow(0, 1000 - 182, 182) > 3.0).all().item<bool>());  // the plane: 3.7 m and more
   CHECK(std::get<0>(at::_unique(tv)).size(0) == kH);
   CHECK(tight.behind == 182);
-  // edge_behind_start = 1: the same layers, one pixel further in (under columns 30 and 29), on the plane.
-  o.edge_behind = 2;
-  o.budget = 4000;
-  o.edge_behind_start = 1;
-  const Supports deeper = sample_supports(depth, ones(), K(), img, o, 2, true);
-  const auto du = deeper.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 0);
-  CHECK(((du - 30.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
-  CHECK(((du - 29.5).abs() < 1e-5).sum().item<int64_t>() == kH - 2);
-  CHECK(((du - 31.5).abs() < 1e-5).sum().item<int64_t>() == 0);
-  const auto at30 = (du - 30.5).abs() < 1e-5;
-  const auto rows30 = deeper.uv.narrow(0, 4000 - 2 * kH, 2 * kH).select(1, 1).masked_select(at30).floor();
-  const auto z30 = deeper.depth.narrow(0, 4000 - 2 * kH, 2 * kH).masked_select(at30).to(torch::kDouble);
-  CHECK((z30 * (1.0 / 6.0 + 0.002 * rows30.to(torch::kDouble) + 0.002) - 1).abs().max().item<double>() < 1e-5);
   CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind", 1}}, "test"),
                     Catch::Contains("edge_supports = true"));
-  CHECK_THROWS_WITH(config_from_json<SamplerOptions>(nlohmann::json{{"edge_behind_start", 1}}, "test"),
-                    Catch::Contains("edge_behind > 0"));
 }
 
 TEST_CASE("sampler: edge_behind stays hidden: thin lines, and planes that come as near as the silhouette",

@@ -15,6 +15,7 @@ const std::vector<RetiredKey>& retired_keys() {
       {"model.sampler.color", "bilinear", "lab/2026-11-23-ablation-edges"},
       {"model.sampler.placement", "random", "lab/2026-11-25-crack-placement, lab/2026-11-25-cracks-edges"},
       {"model.decoder.behind", "shared", "lab/2026-11-28-behind-decoder"},
+      {"model.sampler.edge_behind_start", 0, "lab/2026-11-28-behind"},
       {"model.prior.floor_rule", "best", "lab/2026-11-25-prior-scale"},
       {"model.prior.learned_backbone_lr", 0.0, "lab/2026-11-26-prior-tuned"},
       {"model.prior.learned_input_width", 0, "lab/2026-11-26-prior-tuned"},

@@ -35,7 +35,7 @@ class AreaStrategy final : public SupportStrategy {
       write_pixel_supports(g, o, chosen, ne);
       shift_edge_supports(g, o, chosen, options.edge_shift);
       if (options.edge_behind > 0) {  // at most half the budget with the edge supports, thinned evenly
-        behind = behind_places(g, chosen, options.edge_behind, options.edge_behind_start);
+        behind = behind_places(g, chosen, options.edge_behind);
         const int64_t places = static_cast<int64_t>(behind.depth.size());
         nb = std::min<int64_t>(places, n / 2 - ne);
         if (nb < places) {

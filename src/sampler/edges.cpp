@@ -152,7 +152,7 @@ void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64
   }
 }
 
-Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t layers, int64_t start) {
+Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t layers) {
   Behind b;
   const int64_t HW = g.H * g.W;
   std::vector<int64_t> far;
@@ -168,7 +168,7 @@ Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t 
     }
     const double n = static_cast<double>(far.size());
     const bool flat = away[0] == 0.0 && away[1] == 0.0;  // no inward direction: one place, under the pixel
-    for (int64_t s = flat ? 0 : start; s < (flat ? 1 : start + layers); ++s) {
+    for (int64_t s = 0; s < (flat ? 1 : layers); ++s) {  // the first layer under the edge pixel itself
       const double u = j + 0.5 - s * away[0], v = i + 0.5 - s * away[1];
       const int64_t x = static_cast<int64_t>(std::floor(u)), y = static_cast<int64_t>(std::floor(v));
       if (x < 0 || y < 0 || x >= g.W || y >= g.H || g.valid[y * g.W + x] == 0.0f) break;

@@ -22,8 +22,8 @@ std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, i
 void shift_edge_supports(const Grid& g, const Output& o, const std::vector<int64_t>& pixels, double shift);
 
 // Where the farther surface continues under a silhouette: for each of `pixels` on the near side of a depth edge
-// (near_side; the others are skipped), up to `layers` places one pixel apart, from `start` pixels in from its
-// centre, going inwards, away from the farther neighbours. Each farther neighbour's surface is extrapolated as a
+// (near_side; the others are skipped), up to `layers` places one pixel apart, from its centre
+// going inwards, away from the farther neighbours. Each farther neighbour's surface is extrapolated as a
 // plane to the place (or kept at its own depth where the plane would come as near as the pixel over the place); the
 // place takes their mean depth and their mean colour. Layering stops where the place would not be hidden: beyond the
 // image, over an invalid pixel or one not nearer than it, or (after the first) where the farther neighbours surround
@@ -34,7 +34,7 @@ struct Behind {
   std::vector<int64_t> from;        // the farther neighbour whose surface it continues (its normal is used)
 };
 
-Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t layers, int64_t start);
+Behind behind_places(const Grid& g, const std::vector<int64_t>& pixels, int64_t layers);
 
 // The places of `b` at `indices`, in that order.
 Behind select_places(const Behind& b, const std::vector<int64_t>& indices);

@@ -22,7 +22,7 @@ class PixelStrategy final : public SupportStrategy {
       if (g.valid[p] != 0.0f) idx.push_back(p);
     ISPLAT_CHECK(!idx.empty(), "sampler: the depth map has no valid pixel (all depth is invalid: NaN/inf/<=0)");
     Behind behind;  // pixel mode has no budget: hidden supports come on top of one support per pixel
-    if (options.edge_behind > 0) behind = behind_places(g, idx, options.edge_behind, options.edge_behind_start);
+    if (options.edge_behind > 0) behind = behind_places(g, idx, options.edge_behind);
     const int64_t nv = static_cast<int64_t>(idx.size()), nb = static_cast<int64_t>(behind.depth.size());
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);

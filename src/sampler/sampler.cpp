@@ -81,11 +81,6 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "pixel mode: on top of one per pixel; 0 = off)",
           Range::between(0, 4));
   v.require("edge_behind", edge_behind == 0 || at_edges, at_edges_needs);
-  v.field("edge_behind_start", edge_behind_start,
-          "with edge_behind: how many pixels in from the edge pixel's centre the first hidden support sits (0 = "
-          "under the edge pixel, which a view near the source partly sees through)",
-          Range::between(0, 2));
-  v.require("edge_behind_start", edge_behind_start == 0 || edge_behind > 0, "needs sampler.edge_behind > 0");
   v.field("fill_px", fill_px,
           "before sampling, fill invalid depth within this many pixels of valid depth (push-pull in log depth), so "
           "small holes (sensor drop-outs, invalid prior pixels) get supports; the inside of larger missing regions "

@@ -49,8 +49,6 @@ struct SamplerOptions {
   // each near-side silhouette pixel, up to this many pixels deep while they stay hidden in the source view (on the
   // farther neighbours' surfaces extrapolated as planes, in their colour). 0 = off.
   int64_t edge_behind = 0;
-  // With edge_behind: how many pixels in from the edge pixel's centre the first hidden support sits (0 = under it).
-  int64_t edge_behind_start = 0;
   // Before sampling, invalid pixels within this many pixels of valid depth get depth filled in from around them
   // (sampler/depth_fill.h), so small holes in the depth get supports. 0 = off (the paper: supports only where
   // depth is).
