@@ -4,7 +4,6 @@
 
 #include <torch/torch.h>
 
-#include <cstdlib>
 #include <filesystem>
 
 #include "core/config.h"
@@ -42,12 +41,6 @@ Gaussians predict(const std::string& checkpoint, const std::map<std::string, tor
                 3)
       .gaussians;
 }
-
-// Which vector kernels LibTorch picks on this CPU (its ATEN_CPU_CAPABILITY rule): the same bits need the same kind.
-std::string capability() {
-  if (const char* env = std::getenv("ATEN_CPU_CAPABILITY"); env && *env) return env;
-  return __builtin_cpu_supports("avx512f") ? "avx512" : __builtin_cpu_supports("avx2") ? "avx2" : "default";
-}
 }  // namespace
 
 // Run once, by hand, at the commit before the defaults changed (e8a194c + the weights lookup):
@@ -74,7 +67,8 @@ TEST_CASE("checkpoint versions: write the v1 fixture", "[.write_checkpoint_v1]")
   const Gaussians g = predict((kFixture / "full_config.safetensors").string(), expected);
   expected["expected/means"] = g.means, expected["expected/scales"] = g.scales, expected["expected/quats"] = g.quats;
   expected["expected/colors"] = g.colors, expected["expected/opacities"] = g.opacities;
-  write_safetensors((kFixture / "expected.safetensors").string(), expected, {{"cpu_capability", capability()}});
+  write_safetensors((kFixture / "expected.safetensors").string(), expected,
+                    {{"cpu_capability", test::aten_capability()}});
   CHECK(g.count() > 0);
 }
 
@@ -83,7 +77,7 @@ TEST_CASE("checkpoint versions: a v1 checkpoint predicts the Gaussians it predic
   const SafeTensors expected = read_safetensors((kFixture / "expected.safetensors").string());
   // Bit for bit where the CPU runs the same vector kernels as the machine that wrote the fixture; elsewhere
   // LibTorch's exp/erf kernels may differ in the last bit, so within 1e-5.
-  const bool same_kernels = expected.metadata.at("cpu_capability") == capability();
+  const bool same_kernels = expected.metadata.at("cpu_capability") == test::aten_capability();
   const std::string full = (kFixture / "full_config.safetensors").string();
   Checkpoint ck = load_checkpoint(full);
   CHECK(ck.metadata.count("config_version") == 0);  // written before versions existed

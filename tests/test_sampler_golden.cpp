@@ -13,6 +13,7 @@
 
 #include "geometry/camera_torch.h"
 #include "sampler/sampler.h"
+#include "support/test_util.h"
 
 using namespace isplat;
 
@@ -25,27 +26,8 @@ using namespace isplat;
 // checked only under the capability they were taken with; elsewhere the areas' total is checked to 1e-5 instead.
 
 namespace sampler_golden {
-
-// The ATen CPU capability this process runs its vectorized kernels at, as ATen chooses it (not exported by
-// LibTorch): ATEN_CPU_CAPABILITY when set, else the widest of avx512 (F, BW, DQ, VL), avx2 (with FMA), default.
-std::string aten_capability() {
-  if (const char* env = std::getenv("ATEN_CPU_CAPABILITY")) return env;
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
-      __builtin_cpu_supports("avx512vl"))
-    return "avx512";
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return "avx2";
-  return "default";
-}
-
-uint64_t fnv1a(const torch::Tensor& t) {
-  if (!t.defined()) return 0;
-  const torch::Tensor c = t.contiguous();
-  const auto* p = static_cast<const unsigned char*>(c.data_ptr());
-  const size_t n = static_cast<size_t>(c.numel()) * c.element_size();
-  uint64_t h = 1469598103934665603ull;
-  for (size_t k = 0; k < n; ++k) h = (h ^ p[k]) * 1099511628211ull;
-  return h;
-}
+using test::aten_capability;
+using test::fnv1a;
 
 struct Scene {
   torch::Tensor depth, valid, K, image;

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/paths.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -16,18 +17,13 @@ bool is_dir(const fs::path& p) {
   return fs::is_directory(p, ec);
 }
 
-// The checkout's weights/: beside the working directory, else above the running executable (build/tool).
+// The checkout's weights/: beside the working directory, else above the running executable (build/tool), where a
+// checkout is recognised by its weights/README.md, so an unrelated folder named weights is not taken.
 fs::path checkout_weights() {
   std::error_code ec;
   if (is_dir("weights")) return fs::absolute("weights", ec);
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return {};
-  for (fs::path dir = exe.parent_path(); !dir.empty(); dir = dir.parent_path()) {
-    // A checkout is recognised by its weights/README.md, so an unrelated folder named weights is not taken.
-    if (fs::exists(dir / "weights" / "README.md", ec)) return dir / "weights";
-    if (dir == dir.root_path()) break;
-  }
-  return {};
+  const fs::path readme = resolve_shipped_path("weights/README.md");
+  return fs::exists(readme, ec) ? readme.parent_path() : fs::path();
 }
 
 bool bare_name(const std::string& value) {

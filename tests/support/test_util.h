@@ -1,7 +1,10 @@
 // Shared test helpers: a fresh temporary folder per test and the shared-weights location.
 #pragma once
+#include <cstdint>
 #include <functional>
 #include <string>
+
+#include <torch/types.h>
 
 #include "core/log.h"
 
@@ -28,6 +31,12 @@ constexpr int kSkipReturnCode = 77;
 // True when the weights are found. Otherwise, under ctest ($ISPLAT_TEST_TMP set), prints why and ends the process
 // with kSkipReturnCode, so ctest reports the test as skipped, never as passed; run by hand, warns and returns false.
 bool weights_or_skip();
+// The ATen CPU capability this process runs its vectorized kernels at, as ATen chooses it (LibTorch does not export
+// it): ATEN_CPU_CAPABILITY when set, else the widest of avx512 (F, BW, DQ, VL), avx2 (with FMA), default. Golden
+// values that pass through LibTorch's vectorized kernels are bit-exact only under the capability they were taken with.
+std::string aten_capability();
+// FNV-1a over a tensor's bytes (contiguous); 0 for an undefined tensor.
+uint64_t fnv1a(const torch::Tensor& t);
 // Writes raw bytes to a file (for crafting corrupt inputs).
 void write_bytes(const std::string& path, const std::string& bytes);
 std::string read_bytes(const std::string& path);
