@@ -199,16 +199,11 @@ int run_predict(int argc, char** argv) {
   args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6");
   args.option("--merge-cell", merge.cell_px,
               "merge the flat, single-coloured Gaussians of each cell of this many pixels into one (0 = off)");
-  args.option("--merge-color", merge.max_color,
-              "largest colour difference within a merged cell (in --merge-color-space)");
-  args.option("--merge-color-space", merge.color_space,
-              "where --merge-color is measured: linear (the stored colours) or srgb (the metrics' space)");
+  args.option("--merge-color", merge.max_color, "largest colour difference within a merged cell (stored colours)");
   args.option("--merge-flatness", merge.max_flatness, "largest thickness / width of a merged Gaussian (1 = any)");
   args.option("--merge-normal-cos", merge.min_normal_cos,
               "smallest cosine between a flat member's normal and the merged normal (0 = any)");
   args.flag("--merge-split", merge.split, "merge each single-coloured part of a cell that cannot merge whole");
-  args.option("--merge-levels", merge.levels, "merge passes with cells of 1, 2, 4, ... times --merge-cell");
-  args.option("--merge-level-color", merge.level_color, "each further merge level multiplies --merge-color by this");
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");

@@ -14,13 +14,11 @@
 # check (loso_hall, loso_hall_aug: trained without the hall scenes, then scored on them with the loso_eval stage);
 # the mirrored-photo average scored by that check (loso_eval_flip); 40 domain-randomized "clutter" scenes added to
 # the augmented prior's data (wide_aug_clutter; loso_hall_aug_clutter, scored by loso_eval_clutter); the same
-# check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long); clutter scenes
-# with large objects just ahead of the cameras instead (wide_aug_clutter_near; loso_hall_aug_clutter_near, scored
-# by loso_eval_clutter_near); priors trained without the streets (loso_street_aug, loso_street_aug_clutter) and the
-# check of decoders trained on held-out priors' depth (loso_trained_eval); the augmented prior with its pretrained
-# encoder fine-tuned at a tenth of the learning rate (wide_aug_tuned; loso_hall_aug_tuned, scored by loso_eval_tuned,
-# which rejected it: lab/2026-11-26-prior-tuned/README.md); the augmented prior run at the tuples' width on
-# 384x256 photos of the held-out style, scored in the evaluation sets' format (format_eval_width; also rejected).
+# check trained twice as long, 3000 steps (loso_hall_aug_clutter_long, scored by loso_eval_long); priors trained
+# without the streets (loso_street_aug, loso_street_aug_clutter) and the check of decoders trained on held-out
+# priors' depth (loso_trained_eval). Stages of rejected options left with their options: clutter scenes with large
+# objects just ahead of the cameras (lab/2026-11-26-clutter-near), the fine-tuned encoder and the tuples' width
+# (lab/2026-11-26-prior-tuned); each study names the commit that still runs them.
 # Usage: scripts/train_depth_prior.sh [STAGE ...]   (the stages are listed in `known` below;
 #        default: unet squeeze squeeze_hall squeeze_sky wide eval)
 set -euo pipefail
@@ -29,8 +27,7 @@ cd "$root"
 bin="${BUILD_DIR:-$root/build}"
 known=(unet squeeze squeeze_hall squeeze_sky wide wide_aug wide_w64 loso_hall loso_hall_aug loso_eval loso_eval_flip
        wide_aug_clutter loso_hall_aug_clutter loso_eval_clutter loso_hall_aug_clutter_long loso_eval_long
-       wide_aug_clutter_near loso_hall_aug_clutter_near loso_eval_clutter_near loso_street_aug loso_street_aug_clutter
-       loso_trained_eval wide_aug_tuned loso_hall_aug_tuned loso_eval_tuned format_eval_width eval)
+       loso_street_aug loso_street_aug_clutter loso_trained_eval eval)
 stages=("$@")
 [ ${#stages[@]} -gt 0 ] || stages=(unet squeeze squeeze_hall squeeze_sky wide eval)
 for stage in "${stages[@]}"; do  # a typo fails before the set-up and the build
@@ -69,16 +66,12 @@ for stage in "${stages[@]}"; do
     squeeze_hall|squeeze_sky)
       data data_hall out/depth_prior/data_hall
       "$bin/infinisplat-train" --config "$(cfg $stage)" --resume auto ;;
-    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug|wide_aug_tuned|loso_hall_aug_tuned)
+    wide|wide_aug|wide_w64|loso_hall|loso_hall_aug|loso_street_aug)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
     wide_aug_clutter|loso_hall_aug_clutter|loso_hall_aug_clutter_long|loso_street_aug_clutter)
       data data_wide out/depth_prior/data_wide
       data data_clutter out/depth_prior/data_clutter
-      "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
-    wide_aug_clutter_near|loso_hall_aug_clutter_near)
-      data data_wide out/depth_prior/data_wide
-      data data_clutter_near out/depth_prior/data_clutter_near
       "$bin/infinisplat-train" --config "$(cfg squeeze_${stage})" --resume auto ;;
     loso_trained_eval)
       # decoders trained on the held-out priors' depth (needs loso_hall_aug, loso_hall_aug_clutter, loso_street_aug
@@ -99,23 +92,11 @@ for stage in "${stages[@]}"; do
                eval_prior_loso_street_trained; do
         "$bin/infinisplat-eval" --config "$(cfg $c)"
       done ;;
-    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long|loso_eval_clutter_near|loso_eval_tuned)
+    loso_eval|loso_eval_flip|loso_eval_clutter|loso_eval_long)
       # end to end it scores the experiments' full_s0 (scripts/experiments.sh trains it)
       data data_wide out/depth_prior/data_wide
       "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_loso_hall${stage#loso_eval})"
       "$bin/infinisplat-eval" --config "$(cfg eval_prior_loso_hall${stage#loso_eval})" ;;
-    format_eval_width)
-      # needs loso_hall_aug and the decoders full (seed 0) and prior_trained_loso_aug_height (loso_trained_eval)
-      [ -d out/experiments/data_heldout_format/eval/hall_colmap ] ||
-        "$bin/infinisplat" generate --config "$(cfg data_heldout_format)"
-      [ -d out/experiments/data_heldout_format_halls/eval/hall_colmap ] ||
-        "$bin/infinisplat" generate --config "$(cfg data_heldout_format_halls)"
-      for c in heldout_format_width heldout_format_halls_width; do
-        "$bin/infinisplat" eval-depth --config "$(cfg depth_eval_$c)"
-      done
-      for c in eval_heldout_format_width eval_heldout_format_halls; do
-        "$bin/infinisplat-eval" --config "$(cfg $c)"
-      done ;;
     eval)
       [ -f out/experiments/data/hypersim/metadata_images_split_scene_v1.csv ] ||
         "$bin/infinisplat" generate --config configs/recipe/data.json

@@ -127,50 +127,6 @@ TEST_CASE("model: the frozen SqueezeNet semantic branch builds and runs", "[mode
   CHECK(torch::isfinite(render(p.gaussians, camera(0.1)).rgb).all().item<bool>());
 }
 
-TEST_CASE("model: model.training_sampler changes the supports of training passes only", "[model]") {
-  torch::manual_seed(6);
-  auto image = torch::rand({3, H, W});
-  const Camera cam = camera(0.0);
-  ModelOptions o = test::tiny_model_options();
-  o.sampler.edge_supports = true;
-  o.sampler.edge_behind = 1;  // the box's silhouette has a wall behind it
-  o.training_sampler = {"edge_behind=0", "budget=300"};
-  InfiniSplat m(o);
-  CHECK(m->sampler_in_training.edge_behind == 0);
-  CHECK(m->sampler_in_training.budget == 300);
-  CHECK(m->sampler_in_training.edge_supports);  // keys not listed follow model.sampler
-  CHECK(m->options.sampler.edge_behind == 1);   // the inference settings are kept as given
-  m->train();
-  const Prediction trained = m->forward(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  const Prediction predicted = m->predict(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  CHECK(trained.supports.behind == 0);
-  CHECK(predicted.supports.behind > 0);
-  CHECK(trained.supports.count() < predicted.supports.count());
-  CHECK(m->is_training());  // predict restores the mode it found
-  // A training pass samples exactly as a model built with the training settings does.
-  ModelOptions t = test::tiny_model_options();
-  t.sampler.edge_supports = true;
-  t.sampler.budget = 300;
-  InfiniSplat reference(t);
-  reference->train();
-  const Prediction r = reference->forward(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
-  CHECK(torch::equal(trained.supports.uv, r.supports.uv));
-  CHECK(torch::equal(trained.supports.area, r.supports.area));
-  // The key reads from JSON, and a bad entry is an error naming the key and the entry.
-  ModelOptions from_json =
-      config_from_json<ModelOptions>(nlohmann::json{{"sampler", {{"edge_supports", true}, {"edge_behind", 2}}},
-                                                    {"training_sampler", {"edge_behind=0"}}},
-                                     "test.json");
-  CHECK(resolve_training_sampler(from_json).edge_behind == 0);
-  CHECK(resolve_training_sampler(ModelOptions{}).edge_behind == ModelOptions{}.sampler.edge_behind);
-  o.training_sampler = {"edge_bahind=0"};
-  CHECK_THROWS_WITH(InfiniSplat(o), Catch::Contains("model.training_sampler") && Catch::Contains("edge_bahind"));
-  o.training_sampler = {"budget=-1"};
-  CHECK_THROWS_WITH(InfiniSplat(o), Catch::Contains("model.training_sampler") && Catch::Contains("budget"));
-  o.training_sampler = {"edge_behind"};
-  CHECK_THROWS_WITH(InfiniSplat(o), Catch::Contains("model.training_sampler") && Catch::Contains("key.path=value"));
-}
-
 TEST_CASE("model: NaN depth holes are masked, all-invalid depth and tiny images are errors", "[model]") {
   InfiniSplat m(test::tiny_model_options());
   const Camera cam = camera(0.0);

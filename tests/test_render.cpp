@@ -1172,14 +1172,15 @@ TEST_CASE("merge: other colours, a depth edge and Gaussians behind the camera st
   CHECK(merge_gaussians(behind, cam, o).merged.count() == 2);
   CHECK(merge_gaussians(behind, cam, o).alone == 2);  // behind the camera: no cell, nothing to merge with
   CHECK(merge_gaussians(pair(2.0, 0.58), cam, o).alone == 0);
-  // Two members in 4-px cells of their own (u 26.5 and 30.5 px: cells 6 and 7) are alone, though they share an 8-px
-  // cell and merge at the second level: only the first level counts.
+  // Two members in 4-px cells of their own (u 26.5 and 30.5 px: cells 6 and 7) are alone; in 8-px cells they merge.
   const Gaussians apart = head_on(
       {{0.2, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}, {0.6, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, 0.5, 0.5, 0.5}});
-  o.cell_px = 4, o.levels = 2;
+  o.cell_px = 4;
   const MergeResult two = merge_gaussians(apart, cam, o);
   CHECK(two.alone == 2);
-  CHECK(two.groups == 1);  // merged at the second level (8-px cells)
+  CHECK(two.groups == 0);
+  o.cell_px = 8;
+  CHECK(merge_gaussians(apart, cam, o).groups == 1);
 }
 
 TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd member", "[render]") {
@@ -1225,37 +1226,6 @@ TEST_CASE("merge: a split cell merges its single-coloured part and keeps the odd
   CHECK(parts.refused_shape + parts.refused_normal == 1);
 }
 
-TEST_CASE("merge: in srgb the colour test is fine in the dark and coarse in the light, like the metrics", "[render]") {
-  const Camera cam = centred_camera(48, 32, 20.0);
-  // Two grey members in one 8-px cell, linear values a and b (0.02 apart: 0.01 each from their mean).
-  auto pair = [](double a, double b) {
-    return head_on(
-        {{0.2, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, a, a, a}, {0.25, 0.1, 2.0, 0.02, 0.02, 0.001, 0.9, b, b, b}});
-  };
-  MergeOptions o;
-  o.cell_px = 8;
-  o.max_color = 0.02;
-  // Dark: linear 0.01 and 0.03 are sRGB 0.100 and 0.190, 0.045 from their mean. Light: linear 0.70 and 0.72 are
-  // sRGB 0.854 and 0.864, 0.005 from theirs.
-  CHECK(merge_gaussians(pair(0.01, 0.03), cam, o).merged.count() == 1);
-  CHECK(merge_gaussians(pair(0.70, 0.72), cam, o).merged.count() == 1);
-  o.color_space = "srgb";
-  const MergeResult dark = merge_gaussians(pair(0.01, 0.03), cam, o);
-  CHECK(dark.merged.count() == 2);
-  CHECK(dark.refused_color == 1);
-  CHECK(merge_gaussians(pair(0.70, 0.72), cam, o).merged.count() == 1);
-  // Light members 0.06 apart in linear (0.03 from the mean) fail the linear test at 0.02 but pass in sRGB (0.015).
-  const Gaussians light = pair(0.70, 0.76);
-  const MergeResult merged = merge_gaussians(light, cam, o);
-  REQUIRE(merged.merged.count() == 1);
-  CHECK(merged.merged.colors[0][0].item<double>() == Approx(0.73));  // the merged colour stays the linear mean
-  o.color_space = "linear";
-  CHECK(merge_gaussians(light, cam, o).merged.count() == 2);
-  o.color_space = "hsv";
-  CHECK_THROWS_AS(merge_gaussians(light, cam, o), Error);
-  CHECK_THROWS_AS(config_from_json<MergeOptions>(nlohmann::json{{"color_space", "hsv"}}, "merge"), Error);
-}
-
 TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the same, a textured one keeps all",
           "[render]") {
   const Camera cam = centred_camera(48, 32, 40.0);
@@ -1286,31 +1256,3 @@ TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the
   CHECK(pr.after() == pr.kept.count());
 }
 
-TEST_CASE("merge: a second level merges a plain plane's 2-px cells again into 4-px ones, and a textured one not at all",
-          "[render]") {
-  const Camera cam = centred_camera(48, 32, 40.0);
-  MergeOptions o;
-  o.cell_px = 2;
-  o.levels = 2;
-  const Gaussians plain = pixel_plane(cam, 2.0, false), textured = pixel_plane(cam, 2.0, true);
-  const MergeResult merged = merge_gaussians(plain, cam, o);
-  CHECK(merged.merged.count() == plain.count() / 16);
-  CHECK(merged.removed() == plain.count() - plain.count() / 16);
-  CHECK(merge_gaussians(textured, cam, o).merged.count() == textured.count());
-  // A gradient of 0.02 per pixel: 2-px cells stay within 0.03 of their mean (0.01), the 4-px cells made of them
-  // within 0.02, which passes the same colour test and fails one tightened by level_color 0.3 (0.009; applied at
-  // the first level too, it would refuse the 2-px cells as well).
-  Gaussians graded = plain;
-  const Tensor column = torch::arange(plain.count(), torch::kInt64).remainder(cam.width).remainder(24).to(kF64);
-  graded.colors = (0.1 + 0.02 * column).unsqueeze(1).repeat({1, 3});
-  CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 16);
-  o.level_color = 0.3;
-  CHECK(merge_gaussians(graded, cam, o).merged.count() == plain.count() / 4);
-  CHECK(merge_gaussians(plain, cam, o).merged.count() == plain.count() / 16);
-  const auto inner = [](const Tensor& t, int64_t border) {
-    return t.slice(1, border, -border).slice(2, border, -border);
-  };
-  const RenderOutput before = render(plain, cam), after = render(merged.merged, cam);
-  CHECK(max_abs(inner(after.rgb - before.rgb, 4)) < 0.03);
-  CHECK(inner(after.alpha, 4).min().item<double>() > 0.9);
-}

@@ -55,7 +55,8 @@ TEST_CASE("retired keys: the schema knows none of them, and each kept value load
     for (size_t dot; (dot = rest.find('.')) != std::string::npos; rest = rest.substr(dot + 1))
       at = &(*at)[rest.substr(0, dot)];
     (*at)[rest] = k.kept.is_null() ? nlohmann::json(1) : k.kept;
-    CHECK_THROWS_AS(config_from_json<TrainConfig>(config, "stored"), Error);
+    CHECK_THROWS_WITH(config_from_json<TrainConfig>(config, "stored"),
+                      Catch::Contains("was retired") && Catch::Contains(k.study));
     strip_retired_config_keys(config, "stored");
     CHECK_NOTHROW(config_from_json<TrainConfig>(config, "stored"));
   }

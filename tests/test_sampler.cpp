@@ -426,13 +426,12 @@ TEST_CASE("sampler: edge_band puts a band of pixel-centre supports along edges a
     CHECK(((bu - col).abs().lt(1e-4) & inside).sum().item<int64_t>() == kH - 2);
 }
 
-TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges, over its own surface", "[sampler]") {
+TEST_CASE("sampler: edge_band widens only the near side of depth edges, over its own surface", "[sampler]") {
   auto depth = torch::full({kH, kW}, 6.0f);
   depth.narrow(1, 0, 32).fill_(2.0f);  // the near side is columns 0..31
   SamplerOptions o = fixed(4000);
   o.edge_supports = true;
   o.edge_band = 2;
-  o.edge_band_at = "near";
   const Supports s = sample_supports(depth, ones(), K(), image(), o, 2);
   REQUIRE(s.count() == 4000);
   const auto u = s.uv.select(1, 0), v = s.uv.select(1, 1);
@@ -448,21 +447,16 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   CHECK((face & (v > 0.5) & (v < 2.5) & (u > 40.0)).sum().item<int64_t>() > 0);
   CHECK((face & (u > 0.5) & (u < 2.5)).sum().item<int64_t>() > 0);
   CHECK(((u - 33.5).abs().lt(1e-4) & on_centre & (v > 1.0) & (v < kH - 1.0)).sum().item<int64_t>() == 0);
-  // Fewer band supports than the whole band; the represented area is still the surface's, once.
-  o.edge_band_at = "all";
-  const Supports all = sample_supports(depth, ones(), K(), image(), o, 2);
-  CHECK(on_centre.sum().item<int64_t>() < on_pixel_centre(all.uv).sum().item<int64_t>());
-  CHECK(s.area.sum().item<double>() == Approx(all.area.sum().item<double>()).epsilon(1e-4));
-  CHECK_THROWS_WITH(
-      config_from_json<SamplerOptions>(nlohmann::json{{"edge_supports", true}, {"edge_band_at", "near"}}, "test"),
-      Catch::Contains("edge_band > 0"));
+  // The represented area is still the surface's, once, as without a band.
+  SamplerOptions edges_only = o;
+  edges_only.edge_band = 0;
+  const Supports e = sample_supports(depth, ones(), K(), image(), edges_only, 2);
+  CHECK(s.area.sum().item<double>() == Approx(e.area.sum().item<double>()).epsilon(1e-4));
   // The recipe's combination: hidden surface and the shift act on the near band's edge column as without a band.
-  o.edge_band_at = "near";
   o.edge_behind = 3;
   o.edge_shift = 0.5;
   SamplerOptions no_band = o;
   no_band.edge_band = 0;
-  no_band.edge_band_at = "all";
   const Supports b = sample_supports(depth, ones(), K(), image(), o, 2);
   const Supports nb = sample_supports(depth, ones(), K(), image(), no_band, 2);
   REQUIRE(b.behind > 0);
@@ -474,7 +468,7 @@ TEST_CASE("sampler: edge_band_at = near widens only the near side of depth edges
   CHECK(((bu - 30.5).abs().lt(1e-4) & inner).sum().item<int64_t>() == kH - 2);
   CHECK_NOTHROW(config_from_json<SamplerOptions>(
       nlohmann::json{
-          {"edge_supports", true}, {"edge_band", 2}, {"edge_band_at", "near"}, {"edge_behind", 3}, {"edge_shift", 0.5}},
+          {"edge_supports", true}, {"edge_band", 2}, {"edge_behind", 3}, {"edge_shift", 0.5}},
       "test"));
 }
 

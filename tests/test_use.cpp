@@ -167,17 +167,11 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
                                            std::to_string(g.count()) + " decoded"));
   CHECK_THAT(merge_report, Catch::Contains(std::to_string(g.count() - merged.count()) + " merged into neighbours"));
   CHECK_THAT(merge_report, Catch::Contains("groups refused:"));
-  // A second level merges the merged cells again.
-  const std::string merge_twice = predict_photo +
-                                  "--merge-cell 4 --merge-levels 2 --merge-split --merge-color 1 --merge-flatness 1 " +
-                                  "--merge-normal-cos 0 --out " + out + "/merged2.ply > " + out + "/merged2.txt 2>&1";
-  REQUIRE(std::system(merge_twice.c_str()) == 0);
-  CHECK(read_ply(out + "/merged2.ply").count() < merged.count());
   // A merge flag outside the schema's bounds fails, naming the key.
-  const std::string bad_merge = predict_photo + "--merge-cell 4 --merge-level-color 2 --out " + out +
+  const std::string bad_merge = predict_photo + "--merge-cell 4 --merge-flatness 2 --out " + out +
                                 "/bad_merge.ply > " + out + "/bad_merge.txt 2>&1";
   CHECK(std::system(bad_merge.c_str()) != 0);
-  CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("level_color"));
+  CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("max_flatness"));
   CHECK_FALSE(fs::exists(out + "/bad_merge.ply"));
   // --fill-holes gives the photo's invalid depth (its sky, near the skyline) supports, so the scene changes; a
   // negative distance fails, naming the key.

@@ -61,8 +61,8 @@ class GaussianTask final : public TrainTask {
       auto t0 = Clock::now();
       const Camera cams{batch.target_K[b], batch.target_T[b], W, H};
       RenderOptions render_options = config_.render;
-      render_options.normals = false;                          // no loss reads the normal map
-      render_options.depth_map = config_.loss.depth_grad > 0;  // nor the depth map, but this term
+      render_options.normals = false;    // no loss reads the normal map
+      render_options.depth_map = false;  // nor the depth map
       RenderOutput out = render(p.gaussians, cams, render_options);
       stats.timings_ms["render_fwd"] += ms_since(t0);
       if (train) time_render_backward(out, p.gaussians, stats);
@@ -76,11 +76,6 @@ class GaussianTask final : public TrainTask {
       oi.depth =
           transform_points(batch.context_T[b].to(p.gaussians.means.scalar_type()), p.gaussians.means).select(1, 2);
       oi.support_uv = p.supports.uv;
-      if (config_.loss.depth_grad > 0) {
-        oi.render_depth = out.depth, oi.render_alpha = out.alpha;
-        oi.target_depth = batch.target_depth[b], oi.target_valid = batch.target_valid[b];
-      }
-      if (config_.loss.opacity > 0) oi.opacity_unclamped = unclamped_opacity(p.delta);
       if (views) views->push_back({oi.render.detach(), oi.mask.squeeze(1)});
       for (auto& [k, v] : objective_.terms(oi)) acc[k] = acc[k] + v;
       stats.timings_ms["losses"] += ms_since(t0);

@@ -547,14 +547,14 @@ Scene build_hall(uint64_t seed) {
   return s;
 }
 
-Scene build_clutter(uint64_t seed, bool near_objects) {
+Scene build_clutter(uint64_t seed) {
   // Domain randomization: primitives of random shape, size, pose and material (some floating, some tilted) over
   // a ground plane, enclosed by walls or open to the sky, at a scene scale drawn from a desk's to a street's. No
   // layout repeats, so a depth net cannot learn "rooms look like this"; it has to read shading, texture
   // gradients, occlusion and size.
   Rng rng(seed);
   Scene s;
-  s.style = near_objects ? "clutter_near" : "clutter";
+  s.style = "clutter";
   const double S = std::exp(rng.uniform(std::log(0.4), std::log(6.0)));  // scene scale: 1 = a room
   const double W = 12.0 * S, D = 24.0 * S;
   const std::vector<Pattern> all = {Pattern::Solid, Pattern::Checker, Pattern::Stripes, Pattern::Noise, Pattern::Bricks,
@@ -623,25 +623,6 @@ Scene build_clutter(uint64_t seed, bool near_objects) {
   s.ambient = Vec3::Constant(rng.uniform(0.06, 0.25));
   s.focus_a = Vec3(rng.uniform(-W / 4, W / 4), D * rng.uniform(0.4, 0.9), rng.uniform(0.0, 1.5 * S));
   s.focus_b = Vec3(rng.uniform(-W / 3, W / 3), D * rng.uniform(0.2, 0.5), rng.uniform(0.0, 1.0 * S));
-  if (near_objects) {
-    // Large objects just ahead of the walk box, at camera height or resting below it: the near field that the
-    // other styles rarely show (a room's furniture stands along its walls) fills part of most frames. Drawn
-    // after everything else, so the rest of the scene is the `clutter` scene of the same seed.
-    for (int k = 0, n = rng.integer(2, 4); k < n; ++k) {
-      const double size = S * rng.uniform(0.3, 1.0);
-      const Vec3 c(rng.uniform(-W / 4, W / 4), s.walk_max.y() + rng.uniform(0.3, 2.5) * S,
-                   rng.chance(0.5) ? 0.0 : rng.uniform(0.5, 1.5) * s.walk_min.z());
-      const int m = random_material(size);
-      if (rng.chance(0.5)) {
-        Primitive b = box(Vec3::Zero(), size * Vec3(rng.uniform(0.4, 1), rng.uniform(0.4, 1), rng.uniform(0.5, 1.5)),
-                          rng.uniform(0, kPi), m);
-        b.p0 = c + Vec3(0, 0, (b.R.cwiseAbs() * b.half).z());
-        place(b);
-      } else {
-        place(sphere(c + Vec3(0, 0, size), size, m));
-      }
-    }
-  }
   s.build();
   return s;
 }
@@ -654,8 +635,7 @@ Scene build_scene(const std::string& style, uint64_t seed) {
   if (style == "street") return build_street(seed);
   if (style == "hall") return build_hall(seed);
   if (style == "clutter") return build_clutter(seed);
-  if (style == "clutter_near") return build_clutter(seed, true);
-  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street | hall | clutter | clutter_near)");
+  fail("unknown scene style '", style, "' (room | courtyard | atrium | desk | street | hall | clutter)");
 }
 
 Mat3 look_rotation(const Vec3& center, const Vec3& target) {

@@ -13,9 +13,8 @@ Scene build_courtyard(uint64_t seed);  // outdoor yard: facades, arcades, trees,
 Scene build_atrium(uint64_t seed);     // tall hall: marble, balconies with railings, columns, skylight
 Scene build_desk(uint64_t seed);       // a tabletop from close by: 0.3-3 m, small and thin objects
 Scene build_street(uint64_t seed);     // an urban street canyon: facades, cars, poles, sky; 2 m to beyond 60 m
-// Domain randomization: random primitives at a random scale, 0.3 m to 150 m. near_objects ("clutter_near") adds
-// 2-4 large ones just ahead of the cameras to the same scene.
-Scene build_clutter(uint64_t seed, bool near_objects = false);
+// Domain randomization: random primitives at a random scale, 0.3 m to 150 m.
+Scene build_clutter(uint64_t seed);
 Scene build_scene(const std::string& style, uint64_t seed);
 
 struct CameraPose {

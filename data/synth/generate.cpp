@@ -39,10 +39,9 @@ void GenerateOptions::visit(ConfigVisitor& v) {
   v.field("frames", frames, "frames per training trajectory", Range::at_least(2));
   v.field(
       "train_styles", train_styles,
-      "styles of the Hypersim-layout scenes, cycled: room | desk | street | hall | clutter | clutter_near (clutter: "
-      "random primitives at a random scale, for domain randomization; clutter_near adds large objects just "
-      "ahead of the cameras; courtyard and atrium are the evaluation styles, and training on them would not be "
-      "cross-style)");
+      "styles of the Hypersim-layout scenes, cycled: room | desk | street | hall | clutter (clutter: random "
+      "primitives at a random scale, for domain randomization; courtyard and atrium are the evaluation styles, and "
+      "training on them would not be cross-style)");
   v.field("hfov_deg", hfov_deg,
           "[min, max] horizontal field of view of Hypersim-layout cameras in degrees, drawn per scene "
           "(Hypersim: 60)",

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/parse.h"
+#include "core/retired_keys.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -384,6 +385,11 @@ class JsonReader final : public ConfigVisitor {
       }
       std::string known;
       for (const auto& k : frame.known) known += (known.empty() ? "" : ", ") + k;
+      for (const RetiredKey& k : retired_keys())  // a key of an older config: say why it went
+        if (k.path == full || (k.path.size() > full.size() && k.path.compare(k.path.size() - full.size() - 1,
+                                                                             std::string::npos, "." + full) == 0))
+          fail(doc_.source_of(full), ": '", full, "' was retired: its study (", k.study,
+               ") did not adopt it, and its remaining behaviour is now the only one; delete the key");
       fail(doc_.source_of(full), ": unknown key '", full, "'",
            best.empty() ? "" : cat(" (did you mean '", frame.prefix.empty() ? best : frame.prefix + "." + best, "'?)"),
            "; keys allowed ", frame.prefix.empty() ? "at the top level" : "in '" + frame.prefix + "'", ": ", known);

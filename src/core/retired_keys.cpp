@@ -16,9 +16,14 @@ const std::vector<RetiredKey>& retired_keys() {
       {"model.sampler.placement", "random", "lab/2026-11-25-crack-placement, lab/2026-11-25-cracks-edges"},
       {"model.decoder.behind", "shared", "lab/2026-11-28-behind-decoder"},
       {"model.sampler.edge_behind_start", 0, "lab/2026-11-28-behind"},
+      {"model.sampler.edge_band_at", "near", "lab/2026-11-28-behind-band", "edge_band"},
+      {"model.training_sampler", nlohmann::json::array(), "lab/2026-11-28-seeds"},
       {"model.prior.floor_rule", "best", "lab/2026-11-25-prior-scale"},
       {"model.prior.learned_backbone_lr", 0.0, "lab/2026-11-26-prior-tuned"},
       {"model.prior.learned_input_width", 0, "lab/2026-11-26-prior-tuned"},
+      {"loss.depth_grad", 0.0, "lab/2026-11-25-cracks-edges"},
+      {"loss.depth_grad_edge", nullptr, "lab/2026-11-25-cracks-edges"},
+      {"loss.opacity", 0.0, "lab/2026-11-25-opacity-sparsity"},
       {"train.depth_error",
        {{"scale_sigma", 0.0}, {"warp_sigma", 0.0}, {"blur_px", 0.0}},
        "lab/2026-11-26-depth-error"},
@@ -58,7 +63,9 @@ void strip(nlohmann::json& root, const std::string& prefix, const std::string& s
     const std::string name = rest.substr(from);
     auto it = section->find(name);
     if (it == section->end()) continue;
-    const bool kept = k.kept.is_null() || same(*it, k.kept);
+    const auto sibling = k.inert_when_zero.empty() ? section->end() : section->find(k.inert_when_zero);
+    const bool inert = sibling != section->end() && sibling->is_number() && sibling->get<double>() == 0.0;
+    const bool kept = k.kept.is_null() || inert || same(*it, k.kept);
     if (!kept)
       fail(source, ": ", k.path, " = ", it->dump(), " was retired (its study, ", k.study, ", did not adopt it); only ",
            k.kept.dump(),

@@ -13,6 +13,8 @@ struct RetiredKey {
   // with another retired key).
   nlohmann::json kept;
   std::string study;  // the lab study that measured it and did not adopt it
+  // A sibling key: where the stored section holds it at 0, the retired key acted on nothing, so any value loads.
+  std::string inert_when_zero;
 };
 
 // Every retired key, in the order of its section.

@@ -23,19 +23,6 @@ void LossOptions::visit(ConfigVisitor& v) {
           "weight of neighbour normal coherence inside L_reg: flat neighbours' shortest axes agree (not in the "
           "paper; 0 = off)",
           Range::at_least(0));
-  v.field("depth_grad", depth_grad,
-          "weight of the rendered-depth gradient term: in each target, neighbour log-depth differences match the "
-          "reference depth's where that is smooth (aimed at cracks, which it did not lower at weights 1-50: "
-          "docs/results/2026-11-25-cracks-edges.md; needs target depth; not in the paper; 0 = off)",
-          Range::at_least(0));
-  v.field("depth_grad_edge", depth_grad_edge,
-          "depth_grad skips neighbour pairs whose reference depth changes by this share or more (depth edges)",
-          Range::above(0));
-  v.field("opacity", opacity,
-          "weight of the mean decoded opacity, read before the composer's [0.01, 0.99] clamp: a sparsity term meant "
-          "to let pruning drop what the targets do not need; at 0.01-0.05 it fades every Gaussian a little instead "
-          "and pruning gains nothing (docs/results/2026-11-25-opacity-sparsity.md; not in the paper; 0 = off)",
-          Range::at_least(0));
   v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)",
           Range::at_least(0));
   v.field("scale_bounds", scale_bounds, "hinge bounds [lo, hi] on log(scale / depth) (paper: [-8, -3])");
@@ -142,39 +129,6 @@ torch::Tensor normal_coherence_loss(const torch::Tensor& scales, const torch::Te
   auto dot = (normal.unsqueeze(1) * normal.index_select(0, flat_idx).view({N, k, 3})).sum(-1);
   auto pair_w = flat.unsqueeze(1) * flat.index_select(0, flat_idx).view({N, k});
   return (pair_w * (1 - dot * dot)).mean();
-}
-
-torch::Tensor depth_gradient_loss(const torch::Tensor& depth_sum, const torch::Tensor& alpha,
-                                  const torch::Tensor& ref_depth, const torch::Tensor& ref_valid,
-                                  const torch::Tensor& mask, double edge) {
-  ISPLAT_CHECK(depth_sum.dim() == 4 && depth_sum.size(1) == 1, "depth_gradient_loss: depth must be [T,1,H,W], got ",
-               depth_sum.sizes());
-  ISPLAT_CHECK(alpha.sizes() == depth_sum.sizes() && mask.sizes() == depth_sum.sizes(), "depth_gradient_loss: alpha ",
-               alpha.sizes(), " and mask ", mask.sizes(), " must match depth ", depth_sum.sizes());
-  ISPLAT_CHECK(ref_depth.dim() == 3 && ref_depth.sizes() == ref_valid.sizes() &&
-                   ref_depth.size(1) == depth_sum.size(2) && ref_depth.size(2) == depth_sum.size(3),
-               "depth_gradient_loss: reference depth ", ref_depth.sizes(), " and valid ", ref_valid.sizes(),
-               " must be [T,H,W] like the render ", depth_sum.sizes());
-  const auto a = alpha.squeeze(1);
-  const auto r = ref_depth.to(depth_sum.scalar_type());
-  const auto usable = (mask.squeeze(1) > 0.5) & (ref_valid > 0.5) & (r > 0) & (a.detach() >= 0.5);
-  const auto log_z = torch::log(torch::clamp_min(depth_sum.squeeze(1) / torch::clamp_min(a, 0.5), 1e-6));
-  const auto log_r = torch::log(torch::clamp_min(r, 1e-6));
-  torch::Tensor sum = torch::zeros({}, depth_sum.options());
-  torch::Tensor count = torch::zeros({}, depth_sum.options());
-  for (const int64_t dim : {1, 2}) {  // down, right
-    const int64_t n = log_z.size(dim) - 1;
-    if (n <= 0) continue;
-    auto lo = [&](const torch::Tensor& t) { return t.narrow(dim, 0, n); };
-    auto hi = [&](const torch::Tensor& t) { return t.narrow(dim, 1, n); };
-    const auto smooth = (hi(r) - lo(r)).abs() < edge * 0.5 * (hi(r) + lo(r));
-    const auto pair = (lo(usable) & hi(usable) & smooth).to(depth_sum.scalar_type());
-    // where(), not a product: a non-finite value outside the pairs must not reach the sum or its gradient.
-    const auto diff = ((hi(log_z) - lo(log_z)) - (hi(log_r) - lo(log_r))).abs();
-    sum = sum + torch::where(pair > 0, diff, torch::zeros_like(diff)).sum();
-    count = count + pair.sum();
-  }
-  return sum / torch::clamp_min(count, 1.0);
 }
 
 }  // namespace isplat

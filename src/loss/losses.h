@@ -22,9 +22,6 @@ struct LossOptions {
   double scale = 0.1;
   double smooth = 0.1;
   double smooth_normal = 0.0;     // weight of neighbour normal coherence inside L_reg (not in the paper)
-  double depth_grad = 0.0;        // weight of rendered log-depth gradients matching the target's (not in the paper)
-  double depth_grad_edge = 0.05;  // ... on neighbour pairs whose target depth changes by less than this (relative)
-  double opacity = 0.0;           // weight of the mean opacity, a sparsity term for pruning (not in the paper)
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;
@@ -66,14 +63,5 @@ torch::Tensor smoothness_loss(const torch::Tensor& scales, const torch::Tensor& 
 // normal, so only flat ones are asked to agree. Gradient reaches quats [N,4] (unnormalized, wxyz) only.
 torch::Tensor normal_coherence_loss(const torch::Tensor& scales, const torch::Tensor& quats,
                                     const torch::Tensor& neighbours);
-
-// Mean over target neighbour pairs (right and down) of |Δ log z - Δ log r|, with z = depth_sum / alpha the rendered
-// depth and r the reference depth, on pairs where both pixels are in the mask, valid, no hole (alpha ≥ 0.5, no
-// gradient through this choice) and the reference changes by less than edge·r (no depth edge). It asks the
-// rendered surface to be as smooth as the true one, where the crack measure looks. depth_sum, alpha, mask
-// [T,1,H,W]; ref_depth, ref_valid [T,H,W]. 0 when no pair qualifies.
-torch::Tensor depth_gradient_loss(const torch::Tensor& depth_sum, const torch::Tensor& alpha,
-                                  const torch::Tensor& ref_depth, const torch::Tensor& ref_valid,
-                                  const torch::Tensor& mask, double edge);
 
 }  // namespace isplat

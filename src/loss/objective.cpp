@@ -18,8 +18,7 @@ std::string GaussianObjective::describe() const {
 
 LossTerms GaussianObjective::zero_terms() {
   auto zero = torch::zeros({});
-  return {{"l1", zero},     {"perceptual", zero}, {"scale", zero},  {"smooth", zero},
-          {"normal", zero}, {"depth_grad", zero}, {"opacity", zero}};
+  return {{"l1", zero}, {"perceptual", zero}, {"scale", zero}, {"smooth", zero}, {"normal", zero}};
 }
 
 LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
@@ -37,25 +36,13 @@ LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
     if (o.smooth > 0) t["smooth"] = smoothness_loss(in.gaussians.scales, in.gaussians.opacities, nb);
     if (o.smooth_normal > 0) t["normal"] = normal_coherence_loss(in.gaussians.scales, in.gaussians.quats, nb);
   }
-  if (o.depth_grad > 0) {
-    ISPLAT_CHECK(in.render_depth.defined() && in.target_depth.defined(),
-                 "loss.depth_grad > 0 needs the rendered depth and the targets' reference depth");
-    t["depth_grad"] = depth_gradient_loss(in.render_depth, in.render_alpha, in.target_depth, in.target_valid, mask,
-                                          o.depth_grad_edge);
-  }
-  if (o.opacity > 0) {
-    // The clamped opacities have no gradient where the clamp saturates them, which is most of them.
-    ISPLAT_CHECK(in.opacity_unclamped.defined(), "loss.opacity > 0 needs the opacities before the composer's clamp");
-    t["opacity"] = in.opacity_unclamped.mean();
-  }
   return t;
 }
 
 void GaussianObjective::add_total(LossTerms& t) const {
   const auto& o = options_;
   t["total"] = o.rgb * t.at("l1") + o.perceptual * t.at("perceptual") +
-               o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth") + o.smooth_normal * t.at("normal")) +
-               o.depth_grad * t.at("depth_grad") + o.opacity * t.at("opacity");
+               o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth") + o.smooth_normal * t.at("normal"));
 }
 
 LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid,

@@ -22,22 +22,17 @@ struct ObjectiveInput {
   Gaussians gaussians;       // any frame (scales and opacities are frame-free)
   torch::Tensor depth;       // [N] camera-space z of the means in the source view
   torch::Tensor support_uv;  // [N,2] source-image positions of the supports (for neighbours)
-  // For loss.depth_grad only (may stay undefined otherwise): the render's depth sum and alpha [T,1,H,W], and
-  // the targets' reference depth and validity [T,H,W].
-  torch::Tensor render_depth, render_alpha, target_depth, target_valid;
-  // For loss.opacity only: the opacities before the composer's clamp [N] (unclamped_opacity of the updates).
-  torch::Tensor opacity_unclamped;
 };
 
 class GaussianObjective {
  public:
   explicit GaussianObjective(const LossOptions& options);
   std::string describe() const;  // e.g. "perceptual squeezenet1_1 (...)" or "perceptual off"
-  // Unweighted terms l1, perceptual, scale, smooth, normal, depth_grad, opacity for one view. Pixels outside the mask
+  // Unweighted terms l1, perceptual, scale, smooth, normal for one view. Pixels outside the mask
   // take the target's value, so no term sees them.
   LossTerms terms(const ObjectiveInput& in) const;
-  // Adds "total" = rgb*l1 + perceptual*perceptual + reg*(scale*scale + smooth*smooth + smooth_normal*normal)
-  // + depth_grad*depth_grad + opacity*opacity to `terms`.
+  // Adds "total" = rgb*l1 + perceptual*perceptual + reg*(scale*scale + smooth*smooth + smooth_normal*normal) to
+  // `terms`.
   void add_total(LossTerms& terms) const;
   static LossTerms zero_terms();
 

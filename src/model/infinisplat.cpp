@@ -23,7 +23,6 @@ ModelOptions::ModelOptions() {
   sampler.image_share = 0.5;
   sampler.pixel_floor = 1.0;
   sampler.edge_band = 2;
-  sampler.edge_band_at = "near";
   sampler.edge_shift = 0.5;
   sampler.edge_behind = 3;
   composer.orientation = "surface";
@@ -34,27 +33,12 @@ void ModelOptions::visit(ConfigVisitor& v) {
           {"rgb", "lidar"});
   v.section("prior", "the frozen depth prior", prior);
   v.section("sampler", "geometry-guided support sampling", sampler);
-  v.field("training_sampler", training_sampler,
-          "sampler settings for training passes only, as key=value over model.sampler (e.g. edge_band=0); "
-          "validation, evaluation and predict use model.sampler. Empty: train as predicted");
   v.section("encoder", "the dual-branch encoder", encoder);
   v.section("decoder", "the implicit decoder", decoder);
   v.section("composer", "bounded Gaussian updates", composer);
 }
 
-SamplerOptions resolve_training_sampler(const ModelOptions& o) {
-  if (o.training_sampler.empty()) return o.sampler;
-  ConfigDocument doc;
-  doc.json = config_to_json(o.sampler);
-  try {
-    apply_overrides(doc, o.training_sampler);
-    return config_from_json<SamplerOptions>(doc.json, "model.training_sampler");
-  } catch (const Error& e) {
-    fail("model.training_sampler: ", e.what());
-  }
-}
-
-InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o), sampler_in_training(resolve_training_sampler(o)) {
+InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o) {
   encoder = register_module("encoder", DualEncoder(o.encoder));
   const int64_t dd = encoder->dino_dim(), cd = o.encoder.cnn ? o.encoder.cnn_options.out_channels : 0;
   if (o.decoder.mode == "implicit") decoder = register_module("decoder", ImplicitDecoder(o.decoder, dd, cd));
@@ -71,8 +55,7 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
                " must match the image ", H, "x", W);
   Prediction p;
   auto t0 = std::chrono::steady_clock::now();
-  const SamplerOptions& sampler = is_training() ? sampler_in_training : options.sampler;
-  p.supports = sample_supports(depth, valid, K, image, sampler, seed, options.composer.orientation == "surface");
+  p.supports = sample_supports(depth, valid, K, image, options.sampler, seed, options.composer.orientation == "surface");
   p.base = make_base_gaussians(p.supports);
   p.timings_ms["sampler"] = ms_since(t0);
   const int64_t N = p.supports.count();

@@ -29,8 +29,6 @@ struct ModelOptions {
   std::string variant = "rgb";  // rgb | lidar: which prior family the checkpoint was trained with
   PriorOptions prior;
   SamplerOptions sampler;
-  // Sampler settings for training passes only, as key=value over `sampler` (validation and inference use `sampler`).
-  std::vector<std::string> training_sampler;
   EncoderOptions encoder;
   DecoderOptions decoder;
   ComposerOptions composer;
@@ -52,8 +50,7 @@ struct InfiniSplatImpl : torch::nn::Module {
   // network weights (supports and base Gaussians are fixed functions of the prior).
   Prediction forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
-  // Inference: no autograd, decoder chunks bound memory. forward() samples with `sampler_in_training` in training mode
-  // and with options.sampler otherwise, so predict() and validation always see the inference settings.
+  // Inference: no autograd, decoder chunks bound memory.
   Prediction predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
   // Updates [N,14] at supports uv of a W x H image from its encoder features: the implicit decoder, or
@@ -61,16 +58,11 @@ struct InfiniSplatImpl : torch::nn::Module {
   torch::Tensor decode(const EncoderFeatures& features, const torch::Tensor& uv, int64_t width, int64_t height);
 
   ModelOptions options;
-  SamplerOptions
-      sampler_in_training;  // options.sampler with options.training_sampler applied: what training passes use
   DualEncoder encoder{nullptr};
   ImplicitDecoder decoder{nullptr};
   DenseHead dense{nullptr};
 };
 TORCH_MODULE(InfiniSplat);
-
-// options.sampler with the key=value entries of options.training_sampler applied; a bad entry throws Error naming it.
-SamplerOptions resolve_training_sampler(const ModelOptions& options);
 
 // Prior + model: the whole path from one photograph (and optional depth/prompts) to Gaussians.
 class Pipeline {

@@ -36,7 +36,6 @@ ModelOptions model_defaults(int config_version) {
   o.sampler.edge_behind = 0;
   o.sampler.edge_shift = 0.0;
   o.sampler.edge_band = 0;
-  o.sampler.edge_band_at = "all";
   o.composer.orientation = "camera";
   return o;
 }

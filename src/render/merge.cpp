@@ -11,7 +11,6 @@
 
 #include "core/config.h"
 #include "core/error.h"
-#include "geometry/color.h"
 
 namespace isplat {
 
@@ -21,14 +20,8 @@ void MergeOptions::visit(ConfigVisitor& v) {
           "with their mean and covariance, when they are flat and of one colour (0 = off)",
           Range::at_least(0.0));
   v.field("max_color", max_color,
-          "merge a cell only when every member's colour is within this of the cell's mean (in color_space, any "
-          "channel)",
+          "merge a cell only when every member's colour (as stored) is within this of the cell's mean (any channel)",
           Range::unit());
-  v.field("color_space", color_space,
-          "where max_color is measured: linear (the colours as stored; with composer.linear_rgb a fixed step is "
-          "coarse in the dark and fine in the light) or srgb (after the sRGB transfer, the space the metrics and the "
-          "eye compare in)",
-          {"linear", "srgb"});
   v.field("max_flatness", max_flatness,
           "merge a cell only when the merged Gaussian's thickness is at most this fraction of its narrower in-plane "
           "width, so a cell across a depth edge stays apart",
@@ -40,14 +33,6 @@ void MergeOptions::visit(ConfigVisitor& v) {
           "a cell that cannot merge whole is split by colour: around its heaviest remaining member, the members "
           "within max_color of it (then of their weighted mean) try to merge on their own, so one odd pixel no longer "
           "keeps its whole cell apart");
-  v.field("levels", levels,
-          "merge passes with cells of cell_px, 2 cell_px, 4 cell_px, ...: the merged Gaussians of a plain wall merge "
-          "again into larger ones, under the same tests (max_color times level_color at each further level)",
-          Range::between(1, 6));
-  v.field("level_color", level_color,
-          "each level after the first multiplies max_color by this, so larger merged Gaussians must be plainer "
-          "(1 = the same colour test at every level)",
-          Range::unit());
 }
 
 namespace {
@@ -64,8 +49,8 @@ Eigen::Matrix3d rotation_of(const double* q) {
 
 enum class Outcome { merged, invalid, color, shape, normal };
 
-// One pass over cells of `o.cell_px` source pixels; adds its counts to `r` (`alone` on the first pass only).
-Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, bool first, MergeCounts& r) {
+// One pass over cells of `o.cell_px` source pixels; adds its counts to `r`.
+Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOptions& o, MergeCounts& r) {
   const double cell_px = o.cell_px;
   const int64_t n = g.count();
   const auto dtype = g.means.scalar_type();
@@ -79,9 +64,6 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
   const double *means = means_t.data_ptr<double>(), *scales = scales_t.data_ptr<double>(),
                *quats = quats_t.data_ptr<double>(), *colors = colors_t.data_ptr<double>(),
                *opac = opac_t.data_ptr<double>();
-  // The colours the max_color test compares (the merged colour itself is always the weighted mean of the stored ones).
-  const torch::Tensor tested_t = o.color_space == "srgb" ? linear_to_srgb(colors_t).contiguous() : colors_t;
-  const double* tested = tested_t.data_ptr<double>();
   const torch::Tensor K = source.K.to(torch::kFloat64).contiguous(), T = source.T_cw.to(torch::kFloat64).contiguous();
   const auto k = K.accessor<double, 2>();
   const auto t = T.accessor<double, 2>();
@@ -114,7 +96,6 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     out_opac.push_back(opac[i]);
   };
   auto color_of = [&](int64_t i) { return Eigen::Vector3d(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]); };
-  auto tested_of = [&](int64_t i) { return Eigen::Vector3d(tested[3 * i], tested[3 * i + 1], tested[3 * i + 2]); };
   // A member's local axes by size (ties in axis order) and its weight: opacity x footprint area (the two larger).
   auto axes_by_size = [&](int64_t i, int axes[3]) {
     const double* s = scales + 3 * i;
@@ -138,8 +119,7 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
   auto merge = [&](const std::vector<int64_t>& members) {
     group.clear();
     double weight_sum = 0, opacity = 0;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero(),
-                    tested_mean = Eigen::Vector3d::Zero();
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
     for (const int64_t i : members) {
       int axes[3];
       const double w = axes_by_size(i, axes);
@@ -150,14 +130,13 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       weight_sum += w;
       mean += w * group.back().mean;
       color += w * color_of(i);
-      tested_mean += w * tested_of(i);
       opacity += w * opac[i];
     }
-    mean /= weight_sum, color /= weight_sum, tested_mean /= weight_sum, opacity /= weight_sum;
+    mean /= weight_sum, color /= weight_sum, opacity /= weight_sum;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (size_t j = 0; j < members.size(); ++j) {
       const int64_t i = members[j];
-      if ((tested_of(i) - tested_mean).cwiseAbs().maxCoeff() > o.max_color) return Outcome::color;
+      if ((color_of(i) - color).cwiseAbs().maxCoeff() > o.max_color) return Outcome::color;
       const Member& m = group[j];
       const Eigen::Vector3d s2(scales[3 * i] * scales[3 * i], scales[3 * i + 1] * scales[3 * i + 1],
                                scales[3 * i + 2] * scales[3 * i + 2]);
@@ -196,11 +175,11 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     r.refused_shape += outcome == Outcome::shape;
     r.refused_normal += outcome == Outcome::normal;
   };
-  // The members within max_color of `centre` (any channel of the tested colours).
+  // The members within max_color of `centre` (any channel).
   auto near_color = [&](const std::vector<int64_t>& from, const Eigen::Vector3d& centre) {
     std::vector<int64_t> near;
     for (const int64_t i : from)
-      if ((tested_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
+      if ((color_of(i) - centre).cwiseAbs().maxCoeff() <= o.max_color) near.push_back(i);
     return near;
   };
   // Splits a cell refused whole: around its heaviest remaining member, the members within max_color of it, then
@@ -211,10 +190,10 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
     while (rest.size() > 1) {
       const int64_t seed = *std::max_element(rest.begin(), rest.end(),
                                              [&](int64_t a, int64_t b) { return weight_of(a) < weight_of(b); });
-      std::vector<int64_t> part = near_color(rest, tested_of(seed));
+      std::vector<int64_t> part = near_color(rest, color_of(seed));
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       double w = 0;
-      for (const int64_t i : part) centre += weight_of(i) * tested_of(i), w += weight_of(i);
+      for (const int64_t i : part) centre += weight_of(i) * color_of(i), w += weight_of(i);
       if (w > 0) part = near_color(rest, centre / w);
       if (std::find(part.begin(), part.end(), seed) == part.end()) part.push_back(seed);
       if (part.size() == whole) break;
@@ -236,7 +215,7 @@ Gaussians merge_pass(const Gaussians& g, const Camera& source, const MergeOption
       while (end < n && keyed[end].first == keyed[begin].first) ++end;
     cell.clear();
     for (int64_t j = begin; j < end; ++j) cell.push_back(keyed[j].second);
-    if (first && cell.size() == 1) r.alone += 1;
+    if (cell.size() == 1) r.alone += 1;
     const Outcome outcome = cell.size() > 1 ? merge(cell) : Outcome::invalid;
     if (outcome != Outcome::merged) {
       count_refusal(outcome);
@@ -271,14 +250,7 @@ MergeResult merge_gaussians(const Gaussians& g, const Camera& source, const Merg
   r.before = g.count();
   r.merged = g;
   if (o.cell_px <= 0) return r;
-  ISPLAT_CHECK(o.color_space == "linear" || o.color_space == "srgb",
-               "merge_gaussians: color_space must be linear or srgb, got ", o.color_space);
-  MergeOptions level = o;
-  for (int64_t l = 0; l < o.levels && r.merged.count() >= 2; ++l) {
-    r.merged = merge_pass(r.merged, source, level, l == 0, r);
-    level.cell_px *= 2;
-    level.max_color *= o.level_color;
-  }
+  if (r.merged.count() >= 2) r.merged = merge_pass(r.merged, source, o, r);
   return r;
 }
 

@@ -29,7 +29,7 @@ class AreaStrategy final : public SupportStrategy {
     Behind behind;
     if (options.edge_supports) {
       const std::vector<int64_t> edges =
-          edge_band_pixels(g, area, options.edge_band, options.edge_band_at == "near", n / 2);
+          edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       const std::vector<int64_t> chosen = spread(edges, ne);
       write_pixel_supports(g, o, chosen, ne);

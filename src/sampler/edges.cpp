@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "geometry/pixel_mask.h"
 #include "sampler/normals.h"
 
 namespace isplat {
@@ -70,19 +69,12 @@ std::vector<uint8_t> near_band(const Grid& g, const std::vector<int64_t>& edges,
 
 }  // namespace
 
-std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, bool near_only,
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band,
                                       int64_t max_pixels) {
   const std::vector<int64_t> edges = edge_pixels(g, area);
   if (band <= 0) return edges;
   const int64_t H = g.H, W = g.W, Wq = W - 1;
-  std::vector<uint8_t> in;
-  if (near_only) {
-    in = near_band(g, edges, band);
-  } else {
-    std::vector<uint8_t> edge(static_cast<size_t>(H * W), 0);
-    for (int64_t p : edges) edge[p] = 1;
-    in = dilate_square(edge, H, W, band);
-  }
+  const std::vector<uint8_t> in = near_band(g, edges, band);
   std::vector<int64_t> out;
   for (int64_t p = 0; p < H * W; ++p)
     if (in[p] && g.valid[p] != 0.0f) out.push_back(p);

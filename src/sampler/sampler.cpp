@@ -49,17 +49,12 @@ void SamplerOptions::visit(ConfigVisitor& v) {
           "area mode: also one support per valid pixel at a depth edge, hole or image border (where no accepted "
           "triangle surrounds it and faces leave a half-pixel gap), taken from the budget");
   v.field("edge_band", edge_band,
-          "area mode with edge_supports: pixels within this many pixels of a depth edge, hole or border get a "
-          "pixel-centre support too and triangles wholly inside the band get none (silhouettes on pixel rays, "
-          "area sampling elsewhere); 0 = the edge pixels only",
+          "area mode with edge_supports: pixels up to this many steps into the near side of a depth edge, over "
+          "their own surface, get a pixel-centre support too and triangles wholly inside the band get none "
+          "(silhouettes on pixel rays, area sampling elsewhere; far sides, holes and the border keep faces up to "
+          "their edge supports); 0 = the edge pixels only",
           Range::between(0, 16));
   v.require("edge_band", edge_band == 0 || edge_supports, "needs sampler.edge_supports = true");
-  v.field("edge_band_at", edge_band_at,
-          "with edge_band: widen every edge pixel (all: depth edges, holes, the border) or only the near side of "
-          "depth edges, over its own surface (near: the silhouettes whose footprints can spill onto a background; "
-          "far sides, holes and the border keep faces up to their edge supports)",
-          {"all", "near"});
-  v.require("edge_band_at", edge_band_at == "all" || edge_band > 0, "near needs sampler.edge_band > 0");
   v.field("edge_shift", edge_shift,
           "area mode with edge_supports, or pixel mode: move each support at a depth edge's near side (area: the "
           "edge supports) this many pixels away from the farther surface, keeping its depth, colour and footprint, "

@@ -34,14 +34,11 @@ struct SamplerOptions {
   // area mode: one support at the centre of every valid pixel that no accepted triangle surrounds (depth
   // edges, holes, the image border), taken from the budget; faces get the rest.
   bool edge_supports = false;
-  // With edge_supports: valid pixels within this many pixels (Chebyshev) of an edge pixel get a pixel-centre
-  // support too, and triangles wholly inside that band get none, so silhouettes sit on pixel rays as in pixel
-  // mode while surfaces keep area sampling. 0 = only the edge pixels themselves.
+  // With edge_supports: valid pixels up to this many steps into the near side of a depth edge, over their own surface
+  // (steps that cross no discontinuity), get a pixel-centre support too, and triangles wholly inside that band get
+  // none, so silhouettes sit on pixel rays as in pixel mode while surfaces keep area sampling; far sides, holes and
+  // the border keep faces up to their edge supports (lab/2026-11-28-behind-band). 0 = only the edge pixels.
   int64_t edge_band = 0;
-  // all | near: the band widens every edge pixel (depth edges, holes, the border), or only the near side of depth
-  // edges, and then only over its own surface (steps that cross no discontinuity), so far sides, holes and the border
-  // keep faces up to their edge supports.
-  std::string edge_band_at = "all";
   // With edge_supports (or in pixel mode): supports on the near side of a depth edge sit this many pixels from their
   // pixel centre, away from the farther neighbours (same depth, colour and footprint). 0 = at the centre.
   double edge_shift = 0.0;
