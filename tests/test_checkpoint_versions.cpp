@@ -84,7 +84,7 @@ TEST_CASE("checkpoint versions: a v1 checkpoint predicts the Gaussians it predic
   // The same checkpoint as one from before the sampler's edge keys and the composer's orientation existed.
   auto json = nlohmann::json::parse(ck.config_json());
   for (const char* key : {"budget_mode", "density", "edge_supports", "image_share", "pixel_floor", "edge_behind",
-                          "edge_shift", "edge_band"})
+                          "edge_shift", "edge_band", "edge_band_at"})
     REQUIRE(json["model"]["sampler"].erase(key) == 1);
   REQUIRE(json["model"]["composer"].erase("orientation") == 1);
   ck.metadata["config"] = json.dump();

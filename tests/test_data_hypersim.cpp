@@ -188,4 +188,3 @@ TEST_CASE("hypersim: clutter scenes span scales from a desk to a street and read
   const auto c = test::depth_consistency(load_frame(index.sequences[0], 0), load_frame(index.sequences[0], 2), 0.02, 1);
   CHECK(c.agree > 0.8);
 }
-

@@ -194,13 +194,13 @@ TEST_CASE("experiment: two rows trained, scored and reported end to end, then re
   CHECK(test::read_bytes(c.out + "/runs/full_s0/train_log.jsonl") == log);
   // A run trained under another recipe is never reused silently: training and scoring name the key.
   ExperimentConfig changed = c;
-  changed.train_set = {"loss.smooth_normal=1"};
+  changed.train_set = {"loss.smooth=0.2"};
   const ExperimentRun pixel_run = again.runs(c.rows[1]).at(0);
   CHECK(again.config_drift(pixel_run).empty());
-  CHECK_THAT(Experiment(changed).config_drift(pixel_run), Catch::Contains("loss.smooth_normal = 0"));
+  CHECK_THAT(Experiment(changed).config_drift(pixel_run), Catch::Contains("loss.smooth = 0.1"));
   CHECK_THROWS_WITH(Experiment(changed).train({"pixel_supports"}),
-                    Catch::Contains("was trained with another configuration") && Catch::Contains("loss.smooth_normal"));
-  CHECK_THROWS_WITH(Experiment(changed).evaluate({"pixel_supports"}), Catch::Contains("loss.smooth_normal"));
+                    Catch::Contains("was trained with another configuration") && Catch::Contains("loss.smooth"));
+  CHECK_THROWS_WITH(Experiment(changed).evaluate({"pixel_supports"}), Catch::Contains("loss.smooth"));
   // A longer recipe is no drift: the run resumes to the new step count instead of being skipped.
   ExperimentConfig longer = c;
   longer.train_set = {"train.steps=4"};

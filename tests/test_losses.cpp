@@ -53,26 +53,6 @@ TEST_CASE("losses: smoothness penalizes neighbours that differ", "[loss]") {
   CHECK(smoothness_loss(s, a, nb).item<double>() == Approx(4 * 3.4 / 8));
 }
 
-TEST_CASE("losses: normal coherence asks flat neighbours to share a normal, and ignores round ones", "[loss]") {
-  // Four flat Gaussians (shortest axis z in their own frame); 0 and 1 unrotated, 2 and 3 turned 90 degrees
-  // about x, so their normal is the y axis. Neighbours: 0-1, 2-3 (agree), and 0-2, 1-3 (orthogonal).
-  auto s = torch::tensor({{0.1, 0.1, 0.01}, {0.1, 0.1, 0.01}, {0.1, 0.1, 0.01}, {0.1, 0.1, 0.01}});
-  const double h = std::sqrt(0.5);
-  auto q = torch::tensor({{1.0, 0.0, 0.0, 0.0}, {-2.0, 0.0, 0.0, 0.0}, {h, h, 0.0, 0.0}, {h, h, 0.0, 0.0}})
-               .requires_grad_(true);
-  auto nb = torch::tensor({{1, 2}, {0, 3}, {3, 0}, {2, 1}});
-  auto loss = normal_coherence_loss(s, q, nb);
-  // Half the 8 pairs are orthogonal (1 - 0) at flatness weight 0.9 * 0.9; q's sign and norm do not matter.
-  CHECK(loss.item<double>() == Approx(4 * 0.81 / 8).epsilon(1e-5));
-  loss.backward();
-  CHECK(q.grad().abs().sum().item<double>() > 0);
-  CHECK(s.grad().defined() == false);
-  // Equal normals cost nothing; round Gaussians cost nothing however they are turned.
-  auto same = torch::tensor({{1.0, 0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}});
-  CHECK(normal_coherence_loss(s, same, nb).item<double>() == Approx(0.0).margin(1e-7));
-  CHECK(normal_coherence_loss(torch::full({4, 3}, 0.1), q.detach(), nb).item<double>() == Approx(0.0).margin(1e-7));
-}
-
 TEST_CASE("losses: Gram matrix normalization", "[loss]") {
   auto f = torch::ones({1, 2, 3, 4});
   f[0][1].mul_(2.0);
@@ -172,7 +152,7 @@ TEST_CASE("losses: the objective's total is the paper's weighted sum of its term
   GaussianObjective objective(o);
   auto t = objective.terms(in);
   objective.add_total(t);
-  CHECK(t.size() == 6);  // l1, perceptual, scale, smooth, normal and the total
+  CHECK(t.size() == 5);  // l1, perceptual, scale, smooth and the total
   CHECK(t.at("l1").item<double>() == Approx(0.25).epsilon(1e-5));
   CHECK(t.at("scale").item<double>() > 0);
   CHECK(t.at("perceptual").item<double>() == 0.0);

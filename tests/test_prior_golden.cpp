@@ -65,9 +65,8 @@ constexpr int64_t kLevels = 1;
 constexpr double kFloor = 2.4408301370512273, kAlignedMean = 4.6670279502868652, kPlainMean = 4.664738655090332,
                  kSparseMean = 4.6768579483032227;
 
-}  // namespace prior_golden
-
-using namespace prior_golden;
+// The test cases live in the namespace too: a using-directive would leak its names into the next file of a
+// unity batch.
 
 TEST_CASE("prior golden: the priors, the alignment and the floor fit are those taken before the split",
           "[prior][golden]") {
@@ -123,3 +122,5 @@ TEST_CASE("prior golden: the priors, the alignment and the floor fit are those t
     CHECK(fnv1a(sparse.valid) == kSparseValid);
   }
 }
+
+}  // namespace prior_golden

@@ -1255,4 +1255,3 @@ TEST_CASE("merge: a plain plane keeps a quarter of its Gaussians and renders the
   CHECK(pr.merge.removed() == plain.count() - plain.count() / 4);
   CHECK(pr.after() == pr.kept.count());
 }
-

@@ -203,9 +203,8 @@ const std::string kCapability = "avx512";
 constexpr int64_t kGoldenDetail = 1352, kGoldenDetailFilled = 1373, kGoldenSolid = 2255;
 constexpr uint64_t kGoldenWeights = 0x704d01ed1676fdd3ull;
 
-}  // namespace sampler_golden
-
-using namespace sampler_golden;
+// The test cases live in the namespace too: a using-directive would leak its names into the next file of a
+// unity batch.
 
 TEST_CASE("sampler golden: supports are bit-identical to those taken before the split", "[sampler][golden]") {
   const bool print = std::getenv("ISPLAT_PRINT_GOLDEN") != nullptr;
@@ -267,3 +266,5 @@ TEST_CASE("sampler golden: budgets and detail weights are those taken before the
   CHECK(weights == kGoldenWeights);
   CHECK(solid == kGoldenSolid);
 }
+
+}  // namespace sampler_golden

@@ -168,8 +168,8 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   CHECK_THAT(merge_report, Catch::Contains(std::to_string(g.count() - merged.count()) + " merged into neighbours"));
   CHECK_THAT(merge_report, Catch::Contains("groups refused:"));
   // A merge flag outside the schema's bounds fails, naming the key.
-  const std::string bad_merge = predict_photo + "--merge-cell 4 --merge-flatness 2 --out " + out +
-                                "/bad_merge.ply > " + out + "/bad_merge.txt 2>&1";
+  const std::string bad_merge = predict_photo + "--merge-cell 4 --merge-flatness 2 --out " + out + "/bad_merge.ply > " +
+                                out + "/bad_merge.txt 2>&1";
   CHECK(std::system(bad_merge.c_str()) != 0);
   CHECK_THAT(test::read_bytes(out + "/bad_merge.txt"), Catch::Contains("max_flatness"));
   CHECK_FALSE(fs::exists(out + "/bad_merge.ply"));

@@ -1,6 +1,7 @@
 // Config keys retired after their studies (issue 70): the behaviour each kept, so stored configs still load.
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +9,11 @@
 namespace isplat {
 
 struct RetiredKey {
+  RetiredKey(std::string path, nlohmann::json kept, std::string study, std::string inert_when_zero = "")
+      : path(std::move(path)),
+        kept(std::move(kept)),
+        study(std::move(study)),
+        inert_when_zero(std::move(inert_when_zero)) {}
   std::string path;  // from the config's root, e.g. "model.sampler.fill_mode"
   // The value whose behaviour remains (a section: the values of the keys it lists); null: any value (it acted only
   // with another retired key).

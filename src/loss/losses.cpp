@@ -19,10 +19,6 @@ void LossOptions::visit(ConfigVisitor& v) {
   v.field("reg", reg, "weight of L_reg = scale * L_scale + smooth * L_smooth (paper: 0.1)", Range::at_least(0));
   v.field("scale", scale, "weight of the scale-range hinge inside L_reg (paper: 0.1)", Range::at_least(0));
   v.field("smooth", smooth, "weight of neighbour smoothness inside L_reg (paper: 0.1)", Range::at_least(0));
-  v.field("smooth_normal", smooth_normal,
-          "weight of neighbour normal coherence inside L_reg: flat neighbours' shortest axes agree (not in the "
-          "paper; 0 = off)",
-          Range::at_least(0));
   v.field("gram_gamma", gram_gamma, "weight of the Gram term inside the perceptual loss (paper: 10)",
           Range::at_least(0));
   v.field("scale_bounds", scale_bounds, "hinge bounds [lo, hi] on log(scale / depth) (paper: [-8, -3])");
@@ -111,24 +107,6 @@ torch::Tensor smoothness_loss(const torch::Tensor& scales, const torch::Tensor& 
   auto ds = (log_s.unsqueeze(1) - log_s.index_select(0, flat).view({N, k, 3})).abs().sum(-1);
   auto da = (opacities.unsqueeze(1) - opacities.index_select(0, flat).view({N, k})).abs();
   return (ds + da).mean();
-}
-
-torch::Tensor normal_coherence_loss(const torch::Tensor& scales, const torch::Tensor& quats, const torch::Tensor& nb) {
-  const int64_t N = scales.size(0), k = nb.size(1);
-  auto q = quats / torch::clamp_min(quats.norm(2, -1, true), 1e-12);
-  auto w = q.select(1, 0), x = q.select(1, 1), y = q.select(1, 2), z = q.select(1, 3);
-  // Columns of R(q): the Gaussian's axes.
-  auto c0 = torch::stack({1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)}, -1);
-  auto c1 = torch::stack({2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)}, -1);
-  auto c2 = torch::stack({2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}, -1);
-  auto axes = torch::stack({c0, c1, c2}, 1);  // [N,3 axes,3]
-  const auto [sorted, order] = torch::sort(scales.detach(), -1);
-  auto flat = 1 - sorted.select(1, 0) / torch::clamp_min(sorted.select(1, 1), 1e-12);
-  auto normal = axes.gather(1, order.narrow(1, 0, 1).unsqueeze(2).expand({N, 1, 3})).squeeze(1);  // shortest axis
-  auto flat_idx = nb.reshape({-1});
-  auto dot = (normal.unsqueeze(1) * normal.index_select(0, flat_idx).view({N, k, 3})).sum(-1);
-  auto pair_w = flat.unsqueeze(1) * flat.index_select(0, flat_idx).view({N, k});
-  return (pair_w * (1 - dot * dot)).mean();
 }
 
 }  // namespace isplat

@@ -21,7 +21,6 @@ struct LossOptions {
   double reg = 0.1;         // weight of L_reg = scale * L_scale + smooth * L_smooth
   double scale = 0.1;
   double smooth = 0.1;
-  double smooth_normal = 0.0;     // weight of neighbour normal coherence inside L_reg (not in the paper)
   double gram_gamma = 10.0;
   std::vector<double> scale_bounds = {-8.0, -3.0};  // bounds on log(scale / depth)
   int64_t knn = 8;
@@ -58,10 +57,5 @@ torch::Tensor scale_range_loss(const torch::Tensor& scales, const torch::Tensor&
 // Mean over i and its k neighbours of |log s_i - log s_j|_1 + |alpha_i - alpha_j|; neighbours [N,k].
 torch::Tensor smoothness_loss(const torch::Tensor& scales, const torch::Tensor& opacities,
                               const torch::Tensor& neighbours);
-// Mean over i and its k neighbours of w_i w_j (1 - (n_i . n_j)^2), n the shortest axis of the rotated
-// Gaussian (sign-free) and w = 1 - s_min / s_mid its flatness (no gradient): isotropic Gaussians have no
-// normal, so only flat ones are asked to agree. Gradient reaches quats [N,4] (unnormalized, wxyz) only.
-torch::Tensor normal_coherence_loss(const torch::Tensor& scales, const torch::Tensor& quats,
-                                    const torch::Tensor& neighbours);
 
 }  // namespace isplat

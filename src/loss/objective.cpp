@@ -18,7 +18,7 @@ std::string GaussianObjective::describe() const {
 
 LossTerms GaussianObjective::zero_terms() {
   auto zero = torch::zeros({});
-  return {{"l1", zero}, {"perceptual", zero}, {"scale", zero}, {"smooth", zero}, {"normal", zero}};
+  return {{"l1", zero}, {"perceptual", zero}, {"scale", zero}, {"smooth", zero}};
 }
 
 LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
@@ -31,18 +31,15 @@ LossTerms GaussianObjective::terms(const ObjectiveInput& in) const {
     t["perceptual"] = (*perceptual_)(composite, in.target);
   }
   t["scale"] = scale_range_loss(in.gaussians.scales, in.depth, o.scale_bounds.at(0), o.scale_bounds.at(1));
-  if (o.smooth > 0 || o.smooth_normal > 0) {
-    const auto nb = knn_2d(in.support_uv, o.knn);
-    if (o.smooth > 0) t["smooth"] = smoothness_loss(in.gaussians.scales, in.gaussians.opacities, nb);
-    if (o.smooth_normal > 0) t["normal"] = normal_coherence_loss(in.gaussians.scales, in.gaussians.quats, nb);
-  }
+  if (o.smooth > 0)
+    t["smooth"] = smoothness_loss(in.gaussians.scales, in.gaussians.opacities, knn_2d(in.support_uv, o.knn));
   return t;
 }
 
 void GaussianObjective::add_total(LossTerms& t) const {
   const auto& o = options_;
   t["total"] = o.rgb * t.at("l1") + o.perceptual * t.at("perceptual") +
-               o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth") + o.smooth_normal * t.at("normal"));
+               o.reg * (o.scale * t.at("scale") + o.smooth * t.at("smooth"));
 }
 
 LossTerms depth_log_losses(const torch::Tensor& pred_log, const torch::Tensor& depth, const torch::Tensor& valid,

@@ -28,11 +28,10 @@ class GaussianObjective {
  public:
   explicit GaussianObjective(const LossOptions& options);
   std::string describe() const;  // e.g. "perceptual squeezenet1_1 (...)" or "perceptual off"
-  // Unweighted terms l1, perceptual, scale, smooth, normal for one view. Pixels outside the mask
+  // Unweighted terms l1, perceptual, scale, smooth for one view. Pixels outside the mask
   // take the target's value, so no term sees them.
   LossTerms terms(const ObjectiveInput& in) const;
-  // Adds "total" = rgb*l1 + perceptual*perceptual + reg*(scale*scale + smooth*smooth + smooth_normal*normal) to
-  // `terms`.
+  // Adds "total" = rgb*l1 + perceptual*perceptual + reg*(scale*scale + smooth*smooth) to `terms`.
   void add_total(LossTerms& terms) const;
   static LossTerms zero_terms();
 
