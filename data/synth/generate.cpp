@@ -37,11 +37,10 @@ void GenerateOptions::visit(ConfigVisitor& v) {
   v.field("test_scenes", test_scenes, "held-out test scenes (split 'test')", Range::at_least(0));
   v.field("cameras_per_scene", cameras_per_scene, "camera trajectories per training scene", Range::between(1, 9));
   v.field("frames", frames, "frames per training trajectory", Range::at_least(2));
-  v.field(
-      "train_styles", train_styles,
-      "styles of the Hypersim-layout scenes, cycled: room | desk | street | hall | clutter (clutter: random "
-      "primitives at a random scale, for domain randomization; courtyard and atrium are the evaluation styles, and "
-      "training on them would not be cross-style)");
+  v.field("train_styles", train_styles,
+          "styles of the Hypersim-layout scenes, cycled: room | desk | street | hall | clutter (clutter: random "
+          "primitives at a random scale, for domain randomization; courtyard and atrium are the evaluation styles, and "
+          "training on them would not be cross-style)");
   v.field("hfov_deg", hfov_deg,
           "[min, max] horizontal field of view of Hypersim-layout cameras in degrees, drawn per scene "
           "(Hypersim: 60)",

@@ -55,7 +55,8 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
                " must match the image ", H, "x", W);
   Prediction p;
   auto t0 = std::chrono::steady_clock::now();
-  p.supports = sample_supports(depth, valid, K, image, options.sampler, seed, options.composer.orientation == "surface");
+  p.supports =
+      sample_supports(depth, valid, K, image, options.sampler, seed, options.composer.orientation == "surface");
   p.base = make_base_gaussians(p.supports);
   p.timings_ms["sampler"] = ms_since(t0);
   const int64_t N = p.supports.count();

@@ -14,7 +14,7 @@ namespace isplat {
 class ConfigVisitor;
 
 struct MergeOptions {
-  double cell_px = 0;                  // grouping cell in source pixels (0 = off)
+  double cell_px = 0;           // grouping cell in source pixels (0 = off)
   double max_color = 0.03;      // largest per-channel distance of a member's colour (as stored) from the group's mean
   double max_flatness = 0.25;   // largest thickness / narrower width of the merged Gaussian (keeps depth edges apart)
   double min_normal_cos = 0.9;  // flat members' normals must agree with the merged normal this well

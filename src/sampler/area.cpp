@@ -28,8 +28,7 @@ class AreaStrategy final : public SupportStrategy {
     for (float a : area) total += a;  // the whole surface, before a band takes triangles from the faces
     Behind behind;
     if (options.edge_supports) {
-      const std::vector<int64_t> edges =
-          edge_band_pixels(g, area, options.edge_band, n / 2);
+      const std::vector<int64_t> edges = edge_band_pixels(g, area, options.edge_band, n / 2);
       ne = std::min<int64_t>(static_cast<int64_t>(edges.size()), n / 2);  // faces keep at least half
       const std::vector<int64_t> chosen = spread(edges, ne);
       write_pixel_supports(g, o, chosen, ne);

@@ -69,8 +69,7 @@ std::vector<uint8_t> near_band(const Grid& g, const std::vector<int64_t>& edges,
 
 }  // namespace
 
-std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band,
-                                      int64_t max_pixels) {
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, int64_t max_pixels) {
   const std::vector<int64_t> edges = edge_pixels(g, area);
   if (band <= 0) return edges;
   const int64_t H = g.H, W = g.W, Wq = W - 1;

@@ -11,11 +11,11 @@ namespace isplat {
 namespace sampling {
 
 // The edge pixels widened by `band` pixels over valid pixels, row-major: the near side of depth edges, over its own
-// surface (far sides, holes and the border keep faces up to their edge pixels). The triangles whose three vertices all lie in the band get
-// area 0, so faces leave the band to its pixel supports. A band of more than `max_pixels` would leave band pixels
-// with neither kind of support, so the edge pixels alone are returned then. `area`: triangle_areas(g).
-std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band,
-                                      int64_t max_pixels);
+// surface (far sides, holes and the border keep faces up to their edge pixels). The triangles whose three vertices all
+// lie in the band get area 0, so faces leave the band to its pixel supports. A band of more than `max_pixels` would
+// leave band pixels with neither kind of support, so the edge pixels alone are returned then. `area`:
+// triangle_areas(g).
+std::vector<int64_t> edge_band_pixels(const Grid& g, std::vector<float>& area, int64_t band, int64_t max_pixels);
 
 // Supports 0..pixels.size()-1, at those pixels' centres, on the near side of a depth edge move `shift` pixels away
 // from the farther neighbours, into their own surface, keeping their depth, colour and footprint.
