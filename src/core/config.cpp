@@ -386,8 +386,8 @@ class JsonReader final : public ConfigVisitor {
       std::string known;
       for (const auto& k : frame.known) known += (known.empty() ? "" : ", ") + k;
       for (const RetiredKey& k : retired_keys())  // a key of an older config: say why it went
-        if (k.path == full || (k.path.size() > full.size() && k.path.compare(k.path.size() - full.size() - 1,
-                                                                             std::string::npos, "." + full) == 0))
+        if (k.path == full || (k.path.size() > full.size() &&
+                               k.path.compare(k.path.size() - full.size() - 1, std::string::npos, "." + full) == 0))
           fail(doc_.source_of(full), ": '", full, "' was retired: its study (", k.study,
                ") did not adopt it, and its remaining behaviour is now the only one; delete the key");
       fail(doc_.source_of(full), ": unknown key '", full, "'",
