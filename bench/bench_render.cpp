@@ -134,13 +134,13 @@ void run(const Case& cs) {
     *t = t->clone().requires_grad_(true);
   const auto target = torch::full({3, cs.H, cs.W}, 0.5f);
   auto forward_backward = [&](bool rgb_only) {
-    RenderOptions training;
+    RenderMaps training;
     training.normals = false;
     training.depth_map = !rgb_only;
     for (torch::Tensor* t : {&p.means, &p.scales, &p.quats, &p.colors, &p.opacities})
       t->mutable_grad() = torch::Tensor();
     const double t0 = now_ms();
-    const RenderOutput out = render(p, cam, training);
+    const RenderOutput out = render(p, cam, {}, training);
     auto loss = (out.rgb - target).abs().mean();
     if (!rgb_only) loss = loss + 0.01 * out.depth.mean() + 0.1 * out.alpha.mean();
     loss.backward();
@@ -191,11 +191,11 @@ void run(const Case& cs) {
   // Forward through the public API (no autograd state), and in alternate runs with the median depth (the evaluator's
   // render under scoring.crack_depth = median).
   std::vector<double> fwd, fwd_median;
-  RenderOptions with_median;
+  RenderMaps with_median;
   with_median.median_depth = true;
   for (int r = 0; r < 2 * cs.fwd_runs; ++r) {
     const double t0 = now_ms();
-    const RenderOutput out = render(g, cam, r % 2 == 1 ? with_median : RenderOptions{});
+    const RenderOutput out = render(g, cam, {}, r % 2 == 1 ? with_median : RenderMaps{});
     (r % 2 == 1 ? fwd_median : fwd).push_back(now_ms() - t0);
   }
   const double peak_fwd = peak_memory_mb();

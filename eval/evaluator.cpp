@@ -303,10 +303,10 @@ static torch::Tensor crack_depth_sum(const MethodOutput& o, const std::string& c
   return o.median_depth * o.alpha;
 }
 
-RenderOptions Evaluator::scoring_render() const {
-  RenderOptions r = config_.scoring.render;
-  r.median_depth = config_.scoring.crack_depth == "median";
-  return r;
+RenderMaps Evaluator::scoring_maps() const {
+  RenderMaps maps;
+  maps.median_depth = config_.scoring.crack_depth == "median";
+  return maps;
 }
 
 StabilityOptions Evaluator::crack_options() const {
@@ -389,7 +389,7 @@ std::vector<PairResult> Evaluator::score(size_t d, const std::vector<Sequence>& 
   for (int64_t i : pairs)
     if (!log.done().count(i)) todo.push_back(i);
   if (!todo.empty()) {
-    auto method = make_method(mo, scoring_render());
+    auto method = make_method(mo, config_.scoring.render, scoring_maps());
     if (!has_depth && method->needs_source_depth(!points.empty())) {
       notes_.push_back(cat(ds.name, " / ", mo.label(),
                            ": not scored; the method needs the source depth and the dataset "
@@ -470,7 +470,7 @@ void Evaluator::write_gallery(size_t d, const std::vector<Sequence>& sequences, 
   std::unique_ptr<Method> method;
   for (const auto& [path, i] : wanted) {
     if (fs::exists(path)) continue;
-    if (!method) method = make_method(mo, scoring_render());
+    if (!method) method = make_method(mo, config_.scoring.render, scoring_maps());
     const ScoredPair sp = score_pair(d, sequences, m, i, mo, *method, points, has_depth);
     const auto& o = sp.output;
     const int64_t H = sp.mask.size(0), W = sp.mask.size(1);

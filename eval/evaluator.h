@@ -71,8 +71,8 @@ class Evaluator {
   // The crack measure's options from scoring (crack_edge_margin, crack_holes, crack_side, crack_min_error,
   // crack_edge_side).
   StabilityOptions crack_options() const;
-  // scoring.render, asking for the median depth when scoring.crack_depth = median.
-  RenderOptions scoring_render() const;
+  // The maps the scores read: the median depth too when scoring.crack_depth = median.
+  RenderMaps scoring_maps() const;
   // The failure gallery (scoring.gallery): the worst pairs by PSNR, by hole rate and by crack rate, re-rendered into
   // <dataset>/gallery/ as source, target, prediction, error, rendered normals, alpha and (where the target has
   // depth) the crack map. Existing panels are kept.

@@ -45,7 +45,8 @@ class WorkMemory {
 
 class ModelMethod final : public Method {
  public:
-  ModelMethod(const MethodOptions& o, const RenderOptions& r) : options_(o), render_(r) {
+  ModelMethod(const MethodOptions& o, const RenderOptions& r, const RenderMaps& maps)
+      : options_(o), render_(r), maps_(maps) {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
   }
@@ -74,7 +75,7 @@ class ModelMethod final : public Method {
     if (options_.prune.enabled) out.stage_ms["prune"] = ms_since(tp), out.prune_counts = prune_counts(pr);
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();
-    const RenderOutput r = render(pr.kept, target, render_);
+    const RenderOutput r = render(pr.kept, target, render_, maps_);
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
     out.gaussians = pr.kept.count();
@@ -92,13 +93,14 @@ class ModelMethod final : public Method {
  private:
   MethodOptions options_;
   RenderOptions render_;
+  RenderMaps maps_;
   std::unique_ptr<Pipeline> pipeline_;
 };
 
 // The source image lifted on its (dataset) depth: one base Gaussian per pixel, no learning.
 class LiftMethod final : public Method {
  public:
-  explicit LiftMethod(const RenderOptions& r) : render_(r) {}
+  LiftMethod(const RenderOptions& r, const RenderMaps& maps) : render_(r), maps_(maps) {}
   MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
     torch::NoGradGuard g;
     const WorkMemory work;
@@ -112,7 +114,7 @@ class LiftMethod final : public Method {
     MethodOutput out;
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();
-    const RenderOutput r = render(gs, target, render_);
+    const RenderOutput r = render(gs, target, render_, maps_);
     out.render_ms = ms_since(t0);
     out.image = to_srgb(r.rgb, true);
     out.gaussians = out.decoded = gs.count();
@@ -125,6 +127,7 @@ class LiftMethod final : public Method {
 
  private:
   RenderOptions render_;
+  RenderMaps maps_;
 };
 
 class IdentityMethod final : public Method {
@@ -150,9 +153,9 @@ void require_finished_run(const std::string& method, const std::string& checkpoi
                "); score it once the run has finished, or copy the checkpoint elsewhere to score it as it is");
 }
 
-std::unique_ptr<Method> make_method(const MethodOptions& o, const RenderOptions& r) {
-  if (o.type == "model") return std::make_unique<ModelMethod>(o, r);
-  if (o.type == "lift") return std::make_unique<LiftMethod>(r);
+std::unique_ptr<Method> make_method(const MethodOptions& o, const RenderOptions& r, const RenderMaps& maps) {
+  if (o.type == "model") return std::make_unique<ModelMethod>(o, r, maps);
+  if (o.type == "lift") return std::make_unique<LiftMethod>(r, maps);
   if (o.type == "identity") return std::make_unique<IdentityMethod>();
   fail("method '", o.name, "': unknown type '", o.type, "'");
 }

@@ -23,7 +23,7 @@ struct MethodOutput {
   // CPU tensor memory predict + render needed beyond what was live before (core/tensor_memory; NaN when not counted)
   double work_mb = std::numeric_limits<double>::quiet_NaN();
   torch::Tensor alpha, depth, normal;  // the render's other outputs (RenderOutput), where the method renders
-  torch::Tensor median_depth;          // RenderOutput::median_depth, when the render options ask for it
+  torch::Tensor median_depth;          // RenderOutput::median_depth, when the method's RenderMaps ask for it
 };
 
 class Method {
@@ -39,7 +39,8 @@ class Method {
   virtual bool needs_source_depth(bool have_prompts) const { return false; }
 };
 
-std::unique_ptr<Method> make_method(const MethodOptions& options, const RenderOptions& render);
+// `render` and `maps` are how the method renders the target view (maps: what the scores read).
+std::unique_ptr<Method> make_method(const MethodOptions& options, const RenderOptions& render, const RenderMaps& maps);
 
 // Refuses (Error naming the method, the checkpoint and the pid) a checkpoint inside a run folder
 // (<run>/checkpoints/<file>) that a trainer still holds locked: its scores would be of an unfinished run, and

@@ -107,9 +107,9 @@ const char* kNames[] = {"means", "scales", "quats", "colors", "opacities"};
 
 // Renders, back-propagates the weighted loss and returns rgb, alpha, depth, normal, then every gradient.
 std::vector<Tensor> outputs_and_grads(const Gaussians& scene, const Camera& cam, const Weights& w,
-                                      const RenderOptions& opt = {}) {
+                                      const RenderOptions& opt = {}, const RenderMaps& maps = {}) {
   const Gaussians a = with_grad(scene);
-  const RenderOutput out = render(a, cam, opt);
+  const RenderOutput out = render(a, cam, opt, maps);
   weighted_loss(out, w).backward();
   std::vector<Tensor> r = {out.rgb, out.alpha, out.depth, out.normal};
   for (const Tensor& g : grads_of(a)) r.push_back(g);
@@ -498,6 +498,7 @@ TEST_CASE("render: options read and write through the config schema", "[render]"
   CHECK(json["antialiased"] == false);
   CHECK(json["near"] == 0.01);
   CHECK(json["dilation"] == 0.3);
+  CHECK(json.size() == 5);  // config keys only: which maps to composite is RenderMaps, per call
   const auto o = config_from_json<RenderOptions>({{"background", {1, 1, 1}}, {"antialiased", true}}, "test");
   CHECK(o.antialiased);
   CHECK(o.background == std::vector<double>{1, 1, 1});
@@ -780,9 +781,9 @@ TEST_CASE("render: leaving the normal map out changes nothing else", "[render]")
       const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, dtype);
       const Gaussians scene = random_scene(800, cam, 21).to(dtype);
       const Weights w = random_weights(80, 96, 22, dtype);
-      RenderOptions without;
+      RenderMaps without;
       without.normals = false;
-      const auto full = outputs_and_grads(scene, cam, w), lean = outputs_and_grads(scene, cam, w, without);
+      const auto full = outputs_and_grads(scene, cam, w), lean = outputs_and_grads(scene, cam, w, {}, without);
       splat::set_simd_level(before);
       CHECK(full[3].sizes() == torch::IntArrayRef({3, 80, 96}));
       CHECK(max_abs(full[3]) > 0.5);
@@ -836,12 +837,12 @@ TEST_CASE("render: a colour-only loss without the depth map gets the same images
       const Camera cam = make_camera(96, 80, 80.0, 80.0, 0.3, true, dtype);
       const Gaussians scene = random_scene(800, cam, 23).to(dtype);
       const Weights w = random_weights(80, 96, 24, dtype);
-      RenderOptions options;
-      options.normals = false;
-      RenderOptions lean_options = options;
-      lean_options.depth_map = false;
+      RenderMaps maps;
+      maps.normals = false;
+      RenderMaps lean_maps = maps;
+      lean_maps.depth_map = false;
       const Gaussians a = with_grad(scene), b = with_grad(scene);
-      const RenderOutput full = render(a, cam, options), lean = render(b, cam, lean_options);
+      const RenderOutput full = render(a, cam, {}, maps), lean = render(b, cam, {}, lean_maps);
       ((full.rgb * w.rgb).sum() + 0.0 * full.depth.sum() + 0.0 * full.alpha.sum()).backward();
       (lean.rgb * w.rgb).sum().backward();
       splat::set_simd_level(before);
@@ -912,12 +913,12 @@ TEST_CASE("render: plane depth follows a slanted surface that mean depths leave 
 
 TEST_CASE("render: median depth is the surface a pixel shows, not the blend of what it sees", "[render]") {
   const Camera cam = centred_camera(48, 32, 100.0);
-  RenderOptions opt;
-  opt.median_depth = true;
+  RenderMaps median;
+  median.median_depth = true;
   // A half-transparent near Gaussian (z = 2, opacity 0.6, σ = 2 px) over an opaque far one (z = 4, σ = 5 px).
   const Gaussians g = head_on(
       {{0.0, 0.0, 2.0, 0.04, 0.04, 0.04, 0.6, 1.0, 0.0, 0.0}, {0.0, 0.0, 4.0, 0.2, 0.2, 0.2, 1.0, 0.0, 1.0, 0.0}});
-  const RenderOutput out = render(g, cam, opt);
+  const RenderOutput out = render(g, cam, {}, median);
   REQUIRE(out.median_depth.sizes() == torch::IntArrayRef({1, 32, 48}));
   // Centre: T = 0.4 after the near one, so it shows z = 2; the mean depth blends 0.6·2 + 0.4·0.99·4.
   CHECK(out.median_depth[0][16][24].item<double>() == 2.0);
@@ -937,24 +938,24 @@ TEST_CASE("render: median depth is the surface a pixel shows, not the blend of w
   // float32, with 1 and 2 threads; every pixel with alpha >= 0.5 has one, every other pixel none.
   const Camera wide = make_camera(70, 45, 55.0, 58.0, 0.8, true);
   const Gaussians scene = concat({random_scene(300, wide, 7), random_scene(60, wide, 9, 0.3, 3.0, 8.0, 0.9, 1.0)});
-  const RenderOutput ref = test::reference_render(scene, wide, opt);
-  const RenderOutput ours = render(scene, wide, opt);
+  const RenderOutput ref = test::reference_render(scene, wide, {}, median);
+  const RenderOutput ours = render(scene, wide, {}, median);
   CHECK(max_abs(ours.median_depth - ref.median_depth) < 1e-12);
   CHECK(torch::equal(ours.median_depth > 0, ours.alpha >= 0.5));
   CHECK((ours.median_depth > 0).sum().item<int64_t>() > 45 * 70 / 4);
-  const RenderOutput f32 = render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), opt);
+  const RenderOutput f32 = render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), {}, median);
   // Float rounding may move a crossing that sits on 0.5 to the next Gaussian: at most a handful of pixels.
   CHECK(((f32.median_depth.to(kF64) - ref.median_depth).abs() > 1e-4).sum().item<int64_t>() <= 45 * 70 / 200);
   CHECK(torch::equal(f32.median_depth > 0,
                      f32.alpha >= 0.5f));  // the probe's float loop crosses where the SIMD's alpha does
   // Every SIMD level's probe gives the portable loop's depths bit for bit (AVX-512 has its own), mean and plane.
   for (const std::string depth : {"center", "plane"}) {
-    RenderOptions o = opt;
+    RenderOptions o;
     o.depth = depth;
     std::vector<Tensor> medians;
     for (splat::Simd level : simd_levels()) {
       const splat::Simd before = splat::set_simd_level(level);
-      medians.push_back(render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), o).median_depth);
+      medians.push_back(render(scene.to(torch::kFloat32), wide.to(torch::kFloat32), o, median).median_depth);
       splat::set_simd_level(before);
     }
     for (size_t k = 1; k < medians.size(); ++k) {
@@ -964,20 +965,20 @@ TEST_CASE("render: median depth is the surface a pixel shows, not the blend of w
   }
   const int threads = at::get_num_threads();
   at::set_num_threads(1);
-  const Tensor one = render(scene, wide, opt).median_depth;
+  const Tensor one = render(scene, wide, {}, median).median_depth;
   at::set_num_threads(2);
-  CHECK(torch::equal(one, render(scene, wide, opt).median_depth));
+  CHECK(torch::equal(one, render(scene, wide, {}, median).median_depth));
   at::set_num_threads(threads);
   // Plane depth: on a slanted plane the median is the plane's depth along each pixel's ray, as the mean is.
   const Camera slant = make_camera(96, 72, 80.0, 80.0, 0.3, true);
-  RenderOptions plane = opt;
+  RenderOptions plane;
   plane.depth = "plane";
-  const RenderOutput sp = render(slanted_plane(slant), slant, plane);
+  const RenderOutput sp = render(slanted_plane(slant), slant, plane, median);
   const Tensor opaque = sp.alpha > 0.99;
   REQUIRE(opaque.sum().item<int64_t>() > 72 * 96 * 9 / 10);
   CHECK(max_abs((sp.median_depth - sp.depth / sp.alpha) * opaque) < 1e-9);
   // Batched: one per camera.
-  const RenderOutput two = render(g, stack_cameras({cam, cam}), opt);
+  const RenderOutput two = render(g, stack_cameras({cam, cam}), {}, median);
   CHECK(two.median_depth.sizes() == torch::IntArrayRef({2, 1, 32, 48}));
   CHECK(torch::equal(two.median_depth[1], out.median_depth));
 }

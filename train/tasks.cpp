@@ -60,10 +60,8 @@ class GaussianTask final : public TrainTask {
 
       auto t0 = Clock::now();
       const Camera cams{batch.target_K[b], batch.target_T[b], W, H};
-      RenderOptions render_options = config_.render;
-      render_options.normals = false;    // no loss reads the normal map
-      render_options.depth_map = false;  // nor the depth map
-      RenderOutput out = render(p.gaussians, cams, render_options);
+      // No loss reads the normal map or the depth map.
+      RenderOutput out = render(p.gaussians, cams, config_.render, RenderMaps::colour_only());
       stats.timings_ms["render_fwd"] += ms_since(t0);
       if (train) time_render_backward(out, p.gaussians, stats);
       t0 = Clock::now();

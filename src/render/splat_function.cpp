@@ -1,4 +1,4 @@
-// The autograd Function around the render kernels, plus input validation, batching and RenderOptions.
+// The autograd Function around the render kernels, plus input validation, batching and RenderOptions' config keys.
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -79,7 +79,7 @@ Settings settings_from(AutogradContext* ctx) {
 struct SplatFunction : torch::autograd::Function<SplatFunction> {
   static variable_list forward(AutogradContext* ctx, const Tensor& means, const Tensor& scales, const Tensor& quats,
                                const Tensor& colors, const Tensor& opacities, const Tensor& K, const Tensor& T_cw,
-                               int64_t width, int64_t height, const RenderOptions& options) {
+                               int64_t width, int64_t height, const RenderOptions& options, const RenderMaps& maps) {
     const CameraParams cam = camera_params(K, T_cw, width, height);
     const ProjectSettings ps{options.near, options.dilation, options.antialiased};
     const Projection proj = project_fwd(means, scales, quats, colors, opacities, cam, ps);
@@ -91,7 +91,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const bool backward = means.requires_grad() || scales.requires_grad() || quats.requires_grad() ||
                           colors.requires_grad() || opacities.requires_grad();
     RasterOutput out = rasterize_fwd(proj.packed, bins, cam, options.background.data(),
-                                     {options.normals, plane, backward, options.depth_map});
+                                     {maps.normals, plane, backward, maps.depth_map});
     // Outputs no loss reads get undefined gradients, so a colour-only loss runs the backward's colour-only loops.
     ctx->set_materialize_grads(false);
     ctx->save_for_backward({means, scales, quats, opacities, K, T_cw, proj.packed, bins.tile_offsets, bins.isect_ids,
@@ -103,8 +103,8 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     ctx->saved_data["antialiased"] = options.antialiased;
     ctx->saved_data["background"] = options.background;
     ctx->saved_data["plane_depth"] = plane;
-    const Tensor median = options.median_depth ? rasterize_median_depth(proj.packed, bins, cam, plane)
-                                               : torch::empty({0}, means.options());
+    const Tensor median =
+        maps.median_depth ? rasterize_median_depth(proj.packed, bins, cam, plane) : torch::empty({0}, means.options());
     if (plane || out.depth.numel() == 0)
       ctx->mark_non_differentiable({out.normal, out.depth, median});
     else
@@ -122,7 +122,7 @@ struct SplatFunction : torch::autograd::Function<SplatFunction> {
     const Tensor grad_depth = ctx->saved_data["plane_depth"].toBool() ? Tensor() : grads[2];  // plane depth: none
     const Tensor grad2d = rasterize_bwd(saved[6], bins, cam, s.background, saved[9], saved[10], grads[0], grads[1],
                                         grad_depth, saved[11]);
-    variable_list out(10);
+    variable_list out(11);  // one per forward input: 7 tensors, width, height, options, maps
     if (ctx->needs_input_grad(3)) out[3] = grad2d.narrow(1, 6, 3).contiguous();  // colours: columns r, g, b
     if (ctx->needs_input_grad(0) || ctx->needs_input_grad(1) || ctx->needs_input_grad(2) || ctx->needs_input_grad(4)) {
       ProjectGrads g = project_bwd(means, scales, quats, opacities, cam, s.project, grad2d);
@@ -143,7 +143,7 @@ Tensor checked(const Tensor& t, const char* name, int64_t n, int64_t cols, torch
   return (cols == 0 ? t.reshape({n}) : t).contiguous();
 }
 
-RenderOutput render_one(const Gaussians& g, const Camera& cam, const RenderOptions& options) {
+RenderOutput render_one(const Gaussians& g, const Camera& cam, const RenderOptions& options, const RenderMaps& maps) {
   ISPLAT_CHECK(g.means.defined() && g.means.dim() == 2 && g.means.size(1) == 3, "render: means must be [N, 3], got ",
                g.means.defined() ? g.means.sizes() : c10::IntArrayRef{});
   const auto dtype = g.means.scalar_type();
@@ -159,15 +159,16 @@ RenderOutput render_one(const Gaussians& g, const Camera& cam, const RenderOptio
   ISPLAT_CHECK(cam.T_cw.defined() && cam.T_cw.dim() == 2 && cam.T_cw.size(0) == 4 && cam.T_cw.size(1) == 4,
                "render: camera T_cw must be [4, 4]");
   camera_params(cam.K, cam.T_cw, cam.width, cam.height, /*validate=*/true);
-  const auto outs =
-      SplatFunction::apply(means, scales, quats, colors, opacities, cam.K, cam.T_cw, cam.width, cam.height, options);
-  return {outs[0], outs[1], outs[2], outs[3], options.median_depth ? outs[4] : Tensor()};
+  const auto outs = SplatFunction::apply(means, scales, quats, colors, opacities, cam.K, cam.T_cw, cam.width,
+                                         cam.height, options, maps);
+  return {outs[0], outs[1], outs[2], outs[3], maps.median_depth ? outs[4] : Tensor()};
 }
 
 }  // namespace
 }  // namespace splat
 
-RenderOutput render(const Gaussians& gaussians, const Camera& camera, const RenderOptions& options) {
+RenderOutput render(const Gaussians& gaussians, const Camera& camera, const RenderOptions& options,
+                    const RenderMaps& maps) {
   ISPLAT_CHECK(options.background.size() == 3, "render: background must have 3 values, got ",
                options.background.size());
   for (double b : options.background) ISPLAT_CHECK(std::isfinite(b), "render: background is not finite");
@@ -181,7 +182,7 @@ RenderOutput render(const Gaussians& gaussians, const Camera& camera, const Rend
   ISPLAT_CHECK(gaussians.means.defined(), "render: means is undefined");
   const bool set_batched = gaussians.batched();
   const int64_t cam_batch = camera.batch();
-  if (!set_batched && cam_batch == 0) return splat::render_one(gaussians, camera, options);
+  if (!set_batched && cam_batch == 0) return splat::render_one(gaussians, camera, options, maps);
   ISPLAT_CHECK(!set_batched || cam_batch == 0 || gaussians.batch() == cam_batch, "render: ", gaussians.batch(),
                " Gaussian sets but ", cam_batch, " cameras");
   ISPLAT_CHECK(camera.K.dim() == camera.T_cw.dim(), "render: camera K and T_cw must both be batched or both not");
@@ -189,12 +190,12 @@ RenderOutput render(const Gaussians& gaussians, const Camera& camera, const Rend
   std::vector<torch::Tensor> rgb, alpha, depth, normal, median;
   for (int64_t b = 0; b < B; ++b) {
     const RenderOutput o = splat::render_one(set_batched ? gaussians.select(b) : gaussians,
-                                             cam_batch > 0 ? camera.select(b) : camera, options);
+                                             cam_batch > 0 ? camera.select(b) : camera, options, maps);
     rgb.push_back(o.rgb), alpha.push_back(o.alpha), depth.push_back(o.depth), normal.push_back(o.normal);
-    if (options.median_depth) median.push_back(o.median_depth);
+    if (maps.median_depth) median.push_back(o.median_depth);
   }
   return {torch::stack(rgb), torch::stack(alpha), torch::stack(depth), torch::stack(normal),
-          options.median_depth ? torch::stack(median) : torch::Tensor()};
+          maps.median_depth ? torch::stack(median) : torch::Tensor()};
 }
 
 }  // namespace isplat

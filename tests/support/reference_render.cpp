@@ -63,7 +63,8 @@ Projected project(const Gaussians& g, const Camera& cam, const RenderOptions& op
 
 }  // namespace
 
-RenderOutput reference_render(const Gaussians& gaussians, const Camera& camera, const RenderOptions& options) {
+RenderOutput reference_render(const Gaussians& gaussians, const Camera& camera, const RenderOptions& options,
+                              const RenderMaps& maps) {
   // Decide validity without gradients, then recompute on the valid subset only (so no NaN can leak into
   // the gradients through masked-out branches).
   Tensor keep;
@@ -105,7 +106,7 @@ RenderOutput reference_render(const Gaussians& gaussians, const Camera& camera, 
   out.alpha = (1 - T_final).reshape({1, H, W});
   out.depth = torch::matmul(wts, z).reshape({1, H, W});
   out.normal = torch::matmul(wts.detach(), normal).t().reshape({3, H, W});
-  if (options.median_depth) {  // the first composited Gaussian that leaves T at 0.5 or below
+  if (maps.median_depth) {  // the first composited Gaussian that leaves T at 0.5 or below
     torch::NoGradGuard no_grad;
     const Tensor crossed = ((torch::cumprod(1 - alpha * contrib, 1) <= 0.5) & (wts > 0)).to(torch::kInt64);
     const Tensor first = crossed * (torch::cumsum(crossed, 1) == 1);
