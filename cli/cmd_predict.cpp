@@ -31,6 +31,7 @@
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "io/tensor_image.h"
+#include "metrics/display.h"
 #include "model/model_io.h"
 #include "render/prune.h"
 #include "sampler/sampler.h"
@@ -39,8 +40,17 @@ namespace isplat::cli {
 namespace fs = std::filesystem;
 
 namespace {
-// The working size: the training resolution's area at the photo's aspect, in multiples of 16.
-std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, int64_t override_w, int64_t override_h) {
+// The working size: the training resolution's area at the photo's aspect, in multiples of 16 (the size the model
+// was trained at); with photo_size, the photo's own size in multiples of 16.
+std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, int64_t override_w, int64_t override_h,
+                                 bool photo_size) {
+  auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
+  if (photo_size) {
+    const int w = r16(width), h = r16(height);
+    ISPLAT_CHECK(w <= max_image_pixels() / h, "predict: --photo-size ", w, "x", h,
+                 " is above runtime.max_image_pixels = ", max_image_pixels(), " (give --width and --height)");
+    return {w, h};
+  }
   if (override_w > 0 && override_h > 0) {
     ISPLAT_CHECK(override_w <= max_image_pixels() / override_h, "predict: --width x --height = ", override_w, "x",
                  override_h, " is above runtime.max_image_pixels");
@@ -55,7 +65,6 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
   }
   if (tw < 16 || th < 16 || tw > max_image_pixels() / th) tw = 256, th = 192;
   const double area = static_cast<double>(tw) * th, aspect = static_cast<double>(width) / height;
-  auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
   return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
 }
 enum class InputKind { Image, Folder, List, Video };
@@ -153,7 +162,7 @@ int run_predict(int argc, char** argv) {
   double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
   MergeOptions merge;  // off unless --merge-cell
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
-  bool keep_outside = false;
+  bool keep_outside = false, photo_size = false;
   std::vector<std::string> sets;
   int64_t max_gaussians = 0, every = 1;
   ArgParser args("infinisplat predict",
@@ -190,8 +199,14 @@ int run_predict(int argc, char** argv) {
               "fill invalid depth within this many pixels of valid depth before sampling, so small holes in --depth "
               "get Gaussians (0 = off; -1, the default: the checkpoint's sampler.fill_px)",
               "N");
-  args.option("--width", width, "working width (default: the training resolution's area at the photo's aspect)");
+  args.option("--width", width,
+              "working width (default: the training resolution's area at the photo's aspect, in multiples of 16: "
+              "the size the model was trained at, fastest and best scored; a viewer far above it sees gaps, which "
+              "predict reports at 4x)");
   args.option("--height", height, "working height");
+  args.flag("--photo-size", photo_size,
+            "predict at the photo's own resolution (in multiples of 16) instead of the working size: more Gaussians, "
+            "fewer gaps in large views, slower");
   args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)");
   args.option("--prune-contribution", prune_contribution,
               "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
@@ -268,7 +283,7 @@ int run_predict(int argc, char** argv) {
         k_source = cat("estimated from a ", fov, " degree field of view");
       }
     }
-    const auto [Wm, Hm] = working_size(ck, W0, H0, width, height);
+    const auto [Wm, Hm] = working_size(ck, W0, H0, width, height, photo_size);
     cv::Mat image = resize_image(photo, Wm, Hm);
     const Intrinsics work = intr.resized(Wm, Hm);
     View view{work, Pose::Identity()};
@@ -340,6 +355,7 @@ int run_predict(int argc, char** argv) {
             << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
             << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
     ply.comments.push_back(pruning.str());
+    ply.comments.push_back(cat("working_size ", Wm, "x", Hm, " (photo ", W0, "x", H0, ")"));
     {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
       AtomicPath ply_file(ply_out), camera_file(camera_sidecar_path(ply_out));
       write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
@@ -362,6 +378,12 @@ int run_predict(int argc, char** argv) {
               << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
               << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
               << pruned.merge.removed() << " merged into neighbours)\n";
+    if (const Camera source = to_camera(view); source.width * 4 <= max_image_pixels() / (source.height * 4))
+      std::cout << "display      " << std::setprecision(2) << std::fixed
+                << 100.0 * upscaled_hole_share(g, source, 4.0, RenderOptions{})
+                << "% of the source view's centre shows gaps at 4x the working size (" << 4 * Wm << "x" << 4 * Hm
+                << "; alpha < 0.5)\n"
+                << std::defaultfloat;
     if (merge.cell_px > 0)
       std::cout << "merging      groups refused: " << pruned.merge.refused_color << " by colour, "
                 << pruned.merge.refused_shape << " by flatness, " << pruned.merge.refused_normal << " by normals; "

@@ -194,6 +194,10 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "drawn background breaks where one over nothing does not) or median (the depth of the Gaussian at which "
           "the pixel's transmittance falls to 0.5: the surface it shows, as the reference's point sample does)",
           {"mean", "median"});
+  v.field("display_factors", display_factors,
+          "also render each target at these multiples of its size (e.g. [2, 4]) and score PSNR and holes against "
+          "the target image and mask resized to match: what a viewer above the working size sees (empty = off)",
+          Range::between(1.0, 8.0));
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

@@ -64,6 +64,7 @@ struct ScoringOptions {
   std::string crack_edge_side = "any";  // cracks count only breaks whose deviant pixel lies there: any | near | far
   std::string crack_depth = "mean";     // the rendered depth cracks compare: mean (Σwz / Σw) | median (surface shown)
   std::string reference;                // method the others are compared with, pair by pair (empty = none)
+  std::vector<double> display_factors;  // also score each target at these multiples of its size (empty = off)
   RenderOptions render;
   void visit(ConfigVisitor& v);
 };

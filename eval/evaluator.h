@@ -65,6 +65,9 @@ class Evaluator {
 
  private:
   // Loads, (perturbs,) predicts and scores manifest pair i.
+  // One pair's target rendered again at `factor` times its size, scored against the target and mask resized to match.
+  DisplayScore score_display(const MethodOutput& output, const ViewTensors& target, const torch::Tensor& mask,
+                             double factor) const;
   ScoredPair score_pair(size_t d, const std::vector<Sequence>& sequences, const Manifest& m, int64_t i,
                         const MethodOptions& mo, Method& method, const std::vector<ColmapModel>& points,
                         bool has_depth);

@@ -25,11 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-torch::Tensor to_srgb(const torch::Tensor& rgb, bool linear) {
-  auto c = torch::clamp(rgb, 0.0, 1.0);
-  return linear ? torch::clamp(linear_to_srgb(c), 0.0, 1.0) : c;
-}
-
 // The tensor memory a prediction and its render need: the peak of live CPU tensor bytes above those live at the start.
 class WorkMemory {
  public:
@@ -77,7 +72,9 @@ class ModelMethod final : public Method {
     t0 = Clock::now();
     const RenderOutput r = render(pr.kept, target, render_, maps_);
     out.render_ms = ms_since(t0);
-    out.image = to_srgb(r.rgb, pipeline_->model()->options.composer.linear_rgb);
+    out.linear_rgb = pipeline_->model()->options.composer.linear_rgb;
+    out.image = rendered_srgb(r.rgb, out.linear_rgb);
+    out.scene = pr.kept;
     out.gaussians = pr.kept.count();
     out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     if (peak) out.peak_mb = peak_memory_mb();
@@ -116,7 +113,8 @@ class LiftMethod final : public Method {
     t0 = Clock::now();
     const RenderOutput r = render(gs, target, render_, maps_);
     out.render_ms = ms_since(t0);
-    out.image = to_srgb(r.rgb, true);
+    out.image = rendered_srgb(r.rgb, true);
+    out.scene = gs;
     out.gaussians = out.decoded = gs.count();
     out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     out.work_mb = work.mb();
@@ -143,6 +141,11 @@ class IdentityMethod final : public Method {
 };
 
 }  // namespace
+
+torch::Tensor rendered_srgb(const torch::Tensor& rgb, bool linear) {
+  auto c = torch::clamp(rgb, 0.0, 1.0);
+  return linear ? torch::clamp(linear_to_srgb(c), 0.0, 1.0) : c;
+}
 
 void require_finished_run(const std::string& method, const std::string& checkpoint) {
   const std::filesystem::path folder = std::filesystem::path(checkpoint).parent_path();

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "core/gaussians.h"
 #include "data/tuples.h"
 #include "eval/eval_config.h"
 
@@ -24,7 +25,14 @@ struct MethodOutput {
   double work_mb = std::numeric_limits<double>::quiet_NaN();
   torch::Tensor alpha, depth, normal;  // the render's other outputs (RenderOutput), where the method renders
   torch::Tensor median_depth;          // RenderOutput::median_depth, when the method's RenderMaps ask for it
+  // The Gaussians the method rendered (world frame) and whether their colours are linear, so the evaluator can render
+  // them from other cameras (scoring.display_factors); scene.means undefined where the method has none (identity).
+  Gaussians scene;
+  bool linear_rgb = true;
 };
+
+// A render's colours [3,H,W] as the metrics compare them: clamped, and through the sRGB transfer when linear.
+torch::Tensor rendered_srgb(const torch::Tensor& rgb, bool linear);
 
 class Method {
  public:

@@ -89,12 +89,21 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
     std::map<std::string, double> lp;
     std::map<std::string, int64_t> lp_n;
     int64_t psnr_n = 0;
+    std::map<double, DisplayScore> display_sum;
+    std::map<double, std::pair<int64_t, int64_t>> display_n;  // pairs with a finite PSNR, with a hole rate
     for (const auto& x : results) {
       if (bin >= 0 && x.bin != bin) continue;
       ++r.pairs;
       if (std::isfinite(x.psnr)) p += x.psnr, ++psnr_n;
       s += x.ssim, inf += x.infer_ms, ren += x.render_ms, g += x.gaussians, dec += x.decoded;
       for (const auto& [k, v] : x.stage_ms) stage[k] += v;
+      for (const DisplayScore& d : x.display) {
+        DisplayScore& sum = display_sum[d.factor];
+        auto& [np, nh] = display_n[d.factor];
+        if (np == 0 && nh == 0) sum = {d.factor, 0.0, 0.0};
+        if (std::isfinite(d.psnr)) sum.psnr += d.psnr, ++np;
+        if (std::isfinite(d.hole_rate)) sum.hole_rate += d.hole_rate, ++nh;
+      }
       for (const auto& [k, v] : x.prune_counts) pruned[k] += double(v);
       pruned_n += x.prune_counts.empty() ? 0 : 1;
       const double measures[3] = {x.hole_rate, x.crack_rate, x.normal_deg};
@@ -120,6 +129,10 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
     double* outs[3] = {&r.hole_rate, &r.crack_rate, &r.normal_deg};
     for (int k = 0; k < 3; ++k) *outs[k] = stab_n[k] ? stab[k] / static_cast<double>(stab_n[k]) : nan;
     for (const auto& net : lpips_nets) r.lpips[net] = lp_n[net] ? lp[net] / lp_n[net] : nan;
+    for (const auto& [factor, sum] : display_sum) {
+      const auto [np, nh] = display_n[factor];
+      r.display[factor] = {factor, np ? sum.psnr / np : nan, nh ? sum.hole_rate / nh : nan};
+    }
     rows.push_back(r);
   };
   int64_t total_req = 0;

@@ -12,6 +12,13 @@
 
 namespace isplat {
 
+// A pair scored again at `factor` times the target's size (scoring.display_factors).
+struct DisplayScore {
+  double factor = 0;
+  double psnr = std::numeric_limits<double>::quiet_NaN();
+  double hole_rate = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct PairResult {
   int64_t index = 0;  // position in the manifest
   int bin = 0;
@@ -31,8 +38,9 @@ struct PairResult {
   double crack_rate = std::numeric_limits<double>::quiet_NaN();
   double normal_deg = std::numeric_limits<double>::quiet_NaN();
   double rotation_deg = std::numeric_limits<double>::quiet_NaN();  // between optical axes
-  std::string motion;  // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
-  MethodId method;     // who scored it (results log fields; a log that predates them is its file's method)
+  std::string motion;                 // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
+  std::vector<DisplayScore> display;  // at scoring.display_factors, for the methods that render Gaussians
+  MethodId method;  // who scored it (results log fields; a log that predates them is its file's method)
 };
 
 struct ReportRow {
@@ -48,6 +56,7 @@ struct ReportRow {
   double work_mb = 0;                                    // largest over pairs (NaN when not measured)
   double hole_rate = 0, crack_rate = 0, normal_deg = 0;  // means over the pairs where measured (else NaN)
   std::map<std::string, double> prune_counts;            // means over the pairs that pruned (render/prune_counts)
+  std::map<double, DisplayScore> display;                // by factor: means over the pairs scored there
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".

@@ -28,6 +28,8 @@ nlohmann::json result_json(const PairResult& r) {
                       {"normal_deg", num(r.normal_deg)},
                       {"rotation_deg", num(r.rotation_deg)}};
   if (!r.motion.empty()) j["motion"] = r.motion;
+  for (const DisplayScore& d : r.display)
+    j["display"].push_back({{"factor", d.factor}, {"psnr", num(d.psnr)}, {"hole_rate", num(d.hole_rate)}});
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
   if (!r.prune_counts.empty()) j["prune"] = r.prune_counts;
@@ -89,6 +91,16 @@ PairResult result_from_json(const nlohmann::json& j) {
     ISPLAT_CHECK(r.motion == "lateral" || r.motion == "forward" || r.motion == "rotation", "'motion' = '", r.motion,
                  "' is not lateral, forward or rotation");
   }
+  if (j.contains("display"))
+    for (const auto& d : j.at("display")) {
+      DisplayScore s;
+      s.factor = d.at("factor").get<double>();
+      check_range("display.factor", s.factor, 1, 8);
+      if (!d.at("psnr").is_null()) s.psnr = d.at("psnr").get<double>(), check_range("display.psnr", s.psnr, 0, 1000);
+      if (!d.at("hole_rate").is_null())
+        s.hole_rate = d.at("hole_rate").get<double>(), check_range("display.hole_rate", s.hole_rate, 0, 1);
+      r.display.push_back(s);
+    }
   if (j.contains("stage_ms"))
     for (auto it = j.at("stage_ms").begin(); it != j.at("stage_ms").end(); ++it) {
       r.stage_ms[it.key()] = it.value().get<double>();

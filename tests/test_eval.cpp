@@ -202,6 +202,55 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
              Catch::Contains("is from a run that has not finished"));
 }
 
+TEST_CASE("eval: display factors score each target again at k times its size, for the methods that render",
+          "[eval][display]") {
+  test::QuietLogs quiet;
+  const auto g = test::make_tiny_dataset("eval_display", 16);
+  EvalConfig c;
+  c.datasets = {colmap_set(g)};
+  c.protocol.pairs_per_bin = 2;
+  c.scoring.out = test::temp_dir("eval_display_out");
+  c.scoring.lpips = {};
+  c.scoring.examples = 0;
+  c.scoring.display_factors = {2, 4};
+  const auto rows = Evaluator(c).run();
+  const auto all = [&](const std::string& method) {
+    for (const auto& r : rows)
+      if (r.method.label() == method && r.bin == "all") return r;
+    FAIL("no row for " << method);
+    return ReportRow{};
+  };
+  // lift renders one Gaussian per source pixel: a pixel's footprint covers its pixel at the working size, and gaps
+  // open between them at 4x, more than at 2x; identity has no scene to render again.
+  const ReportRow lift = all("lift"), identity = all("identity");
+  REQUIRE(lift.display.size() == 2);
+  const DisplayScore x2 = lift.display.at(2.0), x4 = lift.display.at(4.0);
+  CHECK(std::isfinite(x2.psnr));
+  CHECK(std::isfinite(x4.psnr));
+  CHECK(x4.hole_rate > x2.hole_rate);
+  CHECK(x2.hole_rate >= lift.hole_rate);
+  CHECK(identity.display.empty());
+  // Each record carries its factors; the report has the table; the stamp holds the factors, so other factors
+  // never resume these scores.
+  const std::string log = test::read_bytes(c.scoring.out + "/courtyard/results_lift.jsonl");
+  const auto first = nlohmann::json::parse(log.substr(0, log.find('\n')));
+  REQUIRE(first.at("display").size() == 2);
+  CHECK(first.at("display")[1].at("factor") == 4.0);
+  CHECK(result_from_json(first).display.at(1).hole_rate == first.at("display")[1].at("hole_rate").get<double>());
+  CHECK_THAT(test::read_bytes(c.scoring.out + "/report.md"),
+             Catch::Contains("At display resolution") && Catch::Contains("holes % at 4x"));
+  EvalConfig other = c;
+  other.scoring.display_factors = {3};
+  CHECK_THROWS_WITH(Evaluator(other).run(), Catch::Contains("was scored with other options"));
+  other.scoring.display_factors = {9};
+  CHECK_THROWS_WITH(config_from_json<EvalConfig>(config_to_json(other), "eval.json"),
+                    Catch::Contains("display_factors"));
+  // A damaged factor in the log is named.
+  auto bad = first;
+  bad["display"][0]["factor"] = 0.5;
+  CHECK_THROWS_WITH(result_from_json(bad), Catch::Contains("display.factor"));
+}
+
 TEST_CASE("eval: budget sweeps expand into one method per budget, and bad budgets name themselves", "[eval]") {
   MethodOptions m = named_method("full", "model", "ck.safetensors", {"prior.type=dataset"});
   m.budgets = {"px:0.5", "n:50000", "detail:1"};

@@ -143,6 +143,19 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
     return std::string();
   };
   CHECK_THAT(pruning_comment(out + "/scene.ply"), Catch::EndsWith(", kept " + std::to_string(g.count())));
+  // The PLY records the size it was predicted at, and predict reports what a viewer at 4x that size sees through the
+  // surface; --photo-size predicts at the photo's own size (here already a multiple of 16).
+  auto size_comment = [](const std::string& ply) {
+    for (const std::string& c : read_ply_comments(ply))
+      if (c.rfind("working_size ", 0) == 0) return c;
+    return std::string();
+  };
+  CHECK_THAT(size_comment(out + "/scene.ply"), Catch::EndsWith(" (photo 64x48)"));
+  CHECK_THAT(report, Catch::Contains("of the source view's centre shows gaps at 4x the working size"));
+  const std::string full_size = predict_photo + "--photo-size --out " + out + "/full.ply > " + out + "/full.txt 2>&1";
+  REQUIRE(std::system(full_size.c_str()) == 0);
+  CHECK(size_comment(out + "/full.ply") == "working_size 64x48 (photo 64x48)");
+  CHECK_THAT(test::read_bytes(out + "/full.txt"), Catch::Contains("working size 64x48"));
   // Pruning by contribution drops what stays faint over the source and 2 nearby views; the printed count, the PLY's
   // comment and the Gaussians written agree (the run is the same as above up to that rule).
   const std::string prune = predict_photo + "--prune-contribution 0.05 --prune-views 2 --out " + out +
