@@ -220,6 +220,41 @@ TEST_CASE("composer: zero updates reproduce the base Gaussians exactly", "[compo
   CHECK(da2.grad()[1][13].item<double>() > 0.0);
 }
 
+TEST_CASE("composer: scale_floor_px widens Gaussians narrower than a share of a source pixel", "[composer]") {
+  BaseGaussians b;
+  b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}});
+  b.depth_factor = 0.5;                      // metres = normalized / 0.5
+  b.z_n = torch::tensor({1.0f, 2.5f});       // 2 m and 5 m
+  b.scale_n = torch::tensor({1e-4f, 0.5f});  // 0.2 mm: far below a pixel at 2 m; 1 m: far above one at 5 m
+  b.color = torch::full({2, 3}, 0.5f);
+  b.opacity = torch::full({2}, 0.5f);
+  const auto K = make_K(50, 50, 32, 24, torch::kFloat64);
+  const auto d = torch::zeros({2, 14}, torch::kFloat64);
+  ComposerOptions o;
+  const Gaussians plain = compose_camera(b, d, K, o);
+  o.scale_floor_px = 0.5;
+  const Gaussians floored = compose_camera(b, d, K, o);
+  // The tiny one becomes half a pixel wide at its depth (0.5 * 2 m / 50 = 2 cm) on every axis; the large one barely
+  // changes (sqrt(1 + 0.05^2)); opacities, means and rotations stay.
+  const double floor0 = 0.5 * 2.0 / 50.0, s0 = 2e-4;
+  for (int64_t axis = 0; axis < 3; ++axis) {
+    CHECK(floored.scales[0][axis].item<double>() == Approx(std::hypot(s0, floor0)).epsilon(1e-5));
+    CHECK(floored.scales[1][axis].item<double>() == Approx(std::hypot(1.0, 0.05)).epsilon(1e-5));
+  }
+  CHECK(torch::equal(floored.opacities, plain.opacities));
+  CHECK(torch::equal(floored.means, plain.means));
+  CHECK(torch::equal(floored.quats, plain.quats));
+  // Finite gradients reach the scale updates even where the multiplier saturates at 0 (the floor alone is left).
+  o.scale_min = 0.0;
+  auto da = d.clone();
+  da.select(1, 3).fill_(-1e3);
+  da.requires_grad_(true);
+  compose_camera(b, da, K, o).scales.sum().backward();
+  CHECK(torch::isfinite(da.grad()).all().item<bool>());
+  // 0 is off: exactly the unfloored Gaussians.
+  CHECK(torch::equal(compose_camera(b, d, K, ComposerOptions{}).scales, plain.scales));
+}
+
 TEST_CASE("composer: orientation = surface turns each Gaussian's local z onto its support's normal", "[composer]") {
   BaseGaussians b;
   b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}, {3.0f, 4.0f}});

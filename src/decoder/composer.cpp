@@ -27,6 +27,11 @@ void ComposerOptions::visit(ConfigVisitor& v) {
           "frame of the rotation update: camera (release, identity base) or surface (local z on the depth "
           "surface's normal at the support)",
           {"camera", "surface"});
+  v.field("scale_floor_px", scale_floor_px,
+          "every Gaussian's variance on each axis gets (scale_floor_px * z / f)^2 added, z its depth and f the "
+          "source camera's focal length: none is narrower than that share of a source pixel at its depth, so "
+          "views above the working size see no gaps between them (0 = off)",
+          Range::between(0.0, 4.0));
 }
 
 namespace {
@@ -99,6 +104,14 @@ Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, 
   c = torch::clamp(c, 0.01, 0.99);
   if (o.linear_rgb) c = srgb_to_linear(c);
   auto opacity = torch::clamp(unclamped_opacity(delta), 0.01, 0.99);
+  if (o.scale_floor_px > 0) {
+    // Gaussians narrower than the source's sampling interval at their depth leave gaps between them in any view
+    // larger than the source: a floor on every axis closes them. Unlike Mip-Splatting's 3D filter the opacity is
+    // kept, since scaling it down by the footprints' ratio reopens the same gaps (lab/2026-12-06-display-holes).
+    const auto Kd = K.to(dt);
+    const auto floor_n = o.scale_floor_px * z2_n / torch::sqrt(Kd[0][0] * Kd[1][1]);  // [N], normalized units
+    scales_n = torch::sqrt(scales_n.pow(2) + floor_n.pow(2).unsqueeze(1));
+  }
   // Back to metres.
   const double inv_df = 1.0 / base.depth_factor;
   return {means_n * inv_df, scales_n * inv_df, quats, c, opacity};

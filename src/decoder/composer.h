@@ -23,6 +23,9 @@ struct ComposerOptions {
   // The frame the rotation update dq acts in: "camera" (release: the identity) or "surface" (the Gaussian's local
   // z axis starts on the support's surface normal, so a Gaussian flattened along z lies in the surface).
   std::string orientation = "camera";  // the release's; the model's default is surface (ModelOptions)
+  // (scale_floor_px · z / f)² added to every axis's variance (z the depth, f the source focal length): no Gaussian
+  // narrower than that share of a source pixel, so larger views see no gaps. 0 = off.
+  double scale_floor_px = 0.0;
   void visit(ConfigVisitor& v);
 };
 
@@ -34,8 +37,7 @@ Gaussians compose(const BaseGaussians& base, const torch::Tensor& delta, const t
                   const torch::Tensor& T_cw, const ComposerOptions& options);
 Gaussians camera_to_world(const Gaussians& g, const torch::Tensor& T_cw);
 
-// The opacities [N] the updates give (sigmoid of dalpha, base 0.5), before compose's clamp to [0.01, 0.99]. The clamp
-// has no gradient, so a term that should reach Gaussians it has saturated (loss.opacity) reads these instead.
+// The opacities [N] the updates give (sigmoid of dalpha, base 0.5), before compose's clamp to [0.01, 0.99].
 torch::Tensor unclamped_opacity(const torch::Tensor& delta);
 
 // The shortest-arc rotation [N,4] (wxyz) that takes the local z axis onto the line of each normal [N,3]: onto n or
