@@ -201,12 +201,11 @@ std::vector<DiffRow> paired_differences(const std::string& dataset, const std::s
         ga += static_cast<double>(r.gaussians), gb += static_cast<double>(q.gaussians);
       }
       if (a.empty()) continue;
-      DiffRow d{dataset,
-                method,
-                reference,
-                paired_bootstrap(a, b, resamples),
-                paired_bootstrap(la, lb, resamples),
-                gb > 0 ? ga / gb : nan};
+      DiffRow d;
+      d.dataset = dataset, d.method = method, d.reference = reference;
+      d.psnr = paired_bootstrap(a, b, resamples);
+      d.lpips = paired_bootstrap(la, lb, resamples);
+      d.gaussians = gb > 0 ? ga / gb : nan;
       d.bin = bin < 0 ? "all" : bin_labels[static_cast<size_t>(bin)];
       d.holes = paired_bootstrap(ha, hb, resamples);
       d.cracks = paired_bootstrap(ca, cb, resamples);
