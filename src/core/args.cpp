@@ -1,37 +1,52 @@
 // Command-line parsing with typed options and generated help.
 #include "core/args.h"
 
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "core/error.h"
 #include "core/parse.h"
+#include "core/runtime.h"
 
 namespace isplat {
 
 ArgParser::ArgParser(std::string program, std::string summary)
     : program_(std::move(program)), summary_(std::move(summary)) {}
 
-void ArgParser::option(const std::string& name, std::string& target, const std::string& help,
-                       const std::string& metavar) {
+ArgParser& ArgParser::option(const std::string& name, std::string& target, const std::string& help,
+                             const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target](const std::string& v) { target = v; }});
+  return *this;
 }
 
-void ArgParser::option(const std::string& name, int64_t& target, const std::string& help, const std::string& metavar) {
+ArgParser& ArgParser::option(const std::string& name, int64_t& target, const std::string& help,
+                             const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target, name](const std::string& v) {
                       const auto parsed = parse_int(v);
                       if (!parsed) fail(name, ": expected an integer, got '", v, "'");
                       target = *parsed;
                     }});
+  return *this;
 }
 
-void ArgParser::option(const std::string& name, double& target, const std::string& help, const std::string& metavar) {
+ArgParser& ArgParser::option(const std::string& name, double& target, const std::string& help,
+                             const std::string& metavar) {
   specs_.push_back({name, help, metavar, true, [&target, name](const std::string& v) {
                       const auto parsed = parse_double(v);
                       if (!parsed) fail(name, ": expected a number, got '", v, "'");
                       target = *parsed;
                     }});
+  return *this;
+}
+
+ArgParser& ArgParser::range(double lo, double hi, const std::string& why) {
+  ISPLAT_CHECK(!specs_.empty() && specs_.back().takes_value, program_, ": range() follows a numeric option");
+  Spec& s = specs_.back();
+  s.bounded = true;
+  s.lo = lo, s.hi = hi, s.why = why;
+  return *this;
 }
 
 void ArgParser::flag(const std::string& name, bool& target, const std::string& help) {
@@ -82,6 +97,12 @@ bool ArgParser::parse(int argc, char** argv, int first) {
         fail(program_, ": option ", name, " takes no value");
       }
       spec->set(value);
+      if (spec->bounded) {  // the value as given: "nan" or "1e999" is out of every range
+        const auto x = parse_double(value);
+        if (!x || !std::isfinite(*x) || *x < spec->lo || *x > spec->hi)
+          fail(program_, ": ", name, " ", value, " is outside its range [", spec->lo, ", ", spec->hi, "]",
+               spec->why.empty() ? "" : " (" + spec->why + ")");
+      }
       continue;
     }
     if (next_positional >= positionals_.size()) fail(program_, ": unexpected argument '", arg, "' (see --help)");
@@ -106,7 +127,9 @@ std::string ArgParser::help() const {
     std::string left = s.name + (s.takes_value ? " " + s.metavar : "");
     os << "  " << std::left << std::setw(28) << left;
     if (left.size() >= 28) os << "\n  " << std::string(28, ' ');
-    os << s.help << "\n";
+    os << s.help;
+    if (s.bounded) os << " [" << s.lo << ", " << s.hi << "]";
+    os << "\n";
   }
   os << "  " << std::left << std::setw(28) << "--help"
      << "show this help\n";
@@ -122,7 +145,8 @@ void CommonArgs::add_to(ArgParser& parser, bool with_config) {
                   "KEY=VALUE");
   parser.flag("--print-config", print_config, "print the merged configuration as JSON and exit");
   parser.flag("--help-config", help_config, "list every config key with its type, default and meaning, and exit");
-  parser.option("--threads", threads, "intra-op threads (0 = all cores; default: config runtime.threads)");
+  parser.option("--threads", threads, "intra-op threads (0 = all cores; default: config runtime.threads)")
+      .range(0, kMaxThreads, "0 = all cores");
 }
 
 }  // namespace isplat

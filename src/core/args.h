@@ -11,10 +11,14 @@ class ArgParser {
  public:
   ArgParser(std::string program, std::string summary);
 
-  void option(const std::string& name, std::string& target, const std::string& help,
-              const std::string& metavar = "VALUE");
-  void option(const std::string& name, int64_t& target, const std::string& help, const std::string& metavar = "N");
-  void option(const std::string& name, double& target, const std::string& help, const std::string& metavar = "X");
+  ArgParser& option(const std::string& name, std::string& target, const std::string& help,
+                    const std::string& metavar = "VALUE");
+  ArgParser& option(const std::string& name, int64_t& target, const std::string& help,
+                    const std::string& metavar = "N");
+  ArgParser& option(const std::string& name, double& target, const std::string& help, const std::string& metavar = "X");
+  // Bounds of the numeric option added last: a given value outside [lo, hi] (or not finite) is an error naming the
+  // option and its range. `why` says what the range protects ("degrees", "photo pixels"); defaults are not checked.
+  ArgParser& range(double lo, double hi, const std::string& why = "");
   void flag(const std::string& name, bool& target, const std::string& help);
   void repeated(const std::string& name, std::vector<std::string>& target, const std::string& help,
                 const std::string& metavar = "VALUE");
@@ -31,6 +35,9 @@ class ArgParser {
     std::string name, help, metavar;
     bool takes_value = true;
     std::function<void(const std::string&)> set;
+    bool bounded = false;
+    double lo = 0, hi = 0;
+    std::string why{};  // what the range protects, for the message
   };
   struct Positional {
     std::string name, help;

@@ -47,8 +47,8 @@ void set_max_image_pixels(int64_t pixels) {
 }
 
 int configure_threads(int64_t requested) {
-  ISPLAT_CHECK(requested <= kMaxThreads, "threads: ", requested, " is more than ", kMaxThreads,
-               " (runtime.threads / --threads)");
+  ISPLAT_CHECK(requested >= 0 && requested <= kMaxThreads, "threads: ", requested, " is outside [0, ", kMaxThreads,
+               "] (runtime.threads / --threads; 0 = all cores)");
   int n = requested > 0 ? static_cast<int>(requested) : static_cast<int>(std::thread::hardware_concurrency());
   if (n <= 0) n = 1;
   at::set_num_threads(n);
