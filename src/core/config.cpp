@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/parse.h"
+#include "core/paths.h"
 #include "core/retired_keys.h"
 
 namespace isplat {
@@ -83,8 +84,8 @@ json parse_json(const std::string& text, const std::string& source) {
 }
 
 json read_json_file(const std::string& path) {
+  require_regular_file(path, "JSON file");  // /dev/zero never ends, a FIFO blocks: refused before opening
   std::error_code ec;
-  if (fs::is_directory(path, ec)) fail(path, ": is a folder, not a JSON file");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, fs::exists(path, ec) ? ": cannot open (permission denied)" : ": no such file");
   std::ostringstream text;

@@ -13,4 +13,9 @@ std::string resolve_shipped_path(const std::string& path);
 // and '_' stay, anything else (separators, dots, "..") becomes '_'. Outputs never land outside their folder.
 std::string safe_name(const std::string& name);
 
+// Fails, naming `path`, unless it is a regular file (after following links): a folder, a device such as /dev/zero
+// (which never ends), a FIFO (which blocks), a socket, a symbolic link loop or a missing file. `kind` names what
+// was expected in the message ("file", "JSON file").
+void require_regular_file(const std::string& path, const char* kind = "file");
+
 }  // namespace isplat

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/paths.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -235,9 +236,7 @@ void refuse_output_over_input(const std::string& command, const NamedPath& outpu
 }
 
 std::string read_file_bytes(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, ": no such file");
-  if (fs::is_directory(path, ec)) fail(path, ": is a folder, not a file");
+  require_regular_file(path);  // a device or FIFO given as an input would never end or block
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, ": cannot open: ", std::strerror(errno));
   std::ostringstream ss;
