@@ -254,6 +254,7 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   ISPLAT_CHECK(i >= 0 && i < static_cast<int64_t>(m.pairs.size()), "eval: pair ", i, " is not in the manifest of ",
                ds.name);
   const Pair& p = m.pairs[static_cast<size_t>(i)];
+  ErrorContext context("scoring method '", mo.name, "' on pair ", i, " of dataset '", ds.name, "'");
   ISPLAT_CHECK(p.sequence_index < sequences.size(), "eval: manifest pair ", i, " names sequence ", p.sequence_index,
                " but the dataset has ", sequences.size(), " (re-draw the manifest)");
   const Sequence& seq = sequences[p.sequence_index];

@@ -399,6 +399,7 @@ int Trainer::run() {
   std::map<std::string, double> time_sum;
   int64_t timed = 0;
   while (step_ < config_.train.steps) {
+    ErrorContext context("training step ", step_ + 1, " into ", config_.train.out);
     const StepStats s = train_step();
     if (writer() && (step_ % config_.train.log_every == 0 || step_ == config_.train.steps)) write_log(s);
     for (const auto& [k, v] : s.timings_ms) time_sum[k] += v;

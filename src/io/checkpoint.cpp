@@ -101,6 +101,7 @@ void save_checkpoint(const std::string& path, const Checkpoint& ck) {
 }
 
 Checkpoint load_checkpoint(const std::string& path) {
+  ErrorContext context("loading the checkpoint ", path);
   SafeTensors st = read_safetensors(path);
   auto it = st.metadata.find("format");
   if (it == st.metadata.end() || it->second != kCheckpointFormat)

@@ -78,6 +78,7 @@ void check_model_size(const Checkpoint& ck, const ModelOptions& options, const s
 
 std::unique_ptr<Pipeline> load_pipeline(const Checkpoint& ck, const std::string& path,
                                         const std::vector<std::string>& overrides) {
+  ErrorContext context("building the model of the checkpoint ", path);
   ModelOptions options = model_options_from_checkpoint(ck, path, overrides);
   check_model_size(ck, options, path);
   options.encoder.vit.weights.clear();  // the checkpoint already holds the ViT weights
