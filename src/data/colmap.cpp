@@ -6,7 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -66,6 +66,36 @@ std::vector<std::string> read_lines(const std::string& path) {
   return lines;
 }
 
+// Where each id and image name was first seen ("line 3", "entry 0"): a second definition is a contradiction the
+// model cannot settle (which pose is right?), so it is an error naming both places, never a silent overwrite.
+class FirstSeen {
+ public:
+  FirstSeen(std::string file, const char* what) : file_(std::move(file)), what_(what) {}
+  template <class Key>
+  void add(const Key& key, const std::string& where, std::map<Key, std::string>& seen) const {
+    const auto [it, fresh] = seen.emplace(key, where);
+    if (!fresh) fail(file_, ": ", what_, " ", key, " is defined twice (", it->second, " and ", where, ")");
+  }
+
+ private:
+  std::string file_;
+  const char* what_;
+};
+
+// The NAME field of an images.txt line: everything after the ninth field, as written (COLMAP keeps inner spaces,
+// repeated or not); trailing blanks are an editor's, not the name's.
+std::string rest_after_fields(const std::string& line, int fields) {
+  size_t p = 0;
+  for (int f = 0; f < fields; ++f) {
+    p = line.find_first_not_of(" \t", p);
+    p = line.find_first_of(" \t", p);
+    if (p == std::string::npos) return "";
+  }
+  p = line.find_first_not_of(" \t", p);
+  if (p == std::string::npos) return "";
+  return line.substr(p, line.find_last_not_of(" \t") - p + 1);
+}
+
 bool is_comment_or_blank(const std::string& line) {
   const auto p = line.find_first_not_of(" \t");
   return p == std::string::npos || line[p] == '#';
@@ -121,11 +151,6 @@ class BinReader {
   size_t pos_ = 0;
 };
 
-template <class T>
-void put(std::ostream& os, T v) {
-  os.write(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-
 std::string model_dir_file(const std::string& dir, const std::string& name) {
   return (fs::path(dir) / name).string();
 }
@@ -155,6 +180,7 @@ ColmapModel read_colmap_text(const std::string& dir) {
   ColmapModel m;
   {
     const std::string path = model_dir_file(dir, "cameras.txt");
+    std::map<int64_t, std::string> camera_lines;
     const auto lines = read_lines(path);
     for (size_t i = 0; i < lines.size(); ++i) {
       if (is_comment_or_blank(lines[i])) continue;
@@ -170,11 +196,14 @@ ColmapModel read_colmap_text(const std::string& dir) {
       c.height = to_int(t[3], where);
       for (size_t k = 4; k < t.size(); ++k) c.params.push_back(to_double(t[k], where));
       check_params(c, where);
+      FirstSeen(path, "camera id").add(c.id, cat("line ", i + 1), camera_lines);
       m.cameras[c.id] = c;
     }
   }
   {
     const std::string path = model_dir_file(dir, "images.txt");
+    std::map<int64_t, std::string> id_lines;
+    std::map<std::string, std::string> name_lines;
     const auto lines = read_lines(path);
     for (size_t i = 0; i < lines.size(); ++i) {
       if (is_comment_or_blank(lines[i])) continue;
@@ -186,8 +215,7 @@ ColmapModel read_colmap_text(const std::string& dir) {
       for (int k = 0; k < 4; ++k) img.qvec[k] = to_double(t[1 + k], where);
       for (int k = 0; k < 3; ++k) img.tvec[k] = to_double(t[5 + k], where);
       img.camera_id = to_int(t[8], where);
-      img.name = t[9];
-      for (size_t k = 10; k < t.size(); ++k) img.name += " " + t[k];  // names may contain spaces
+      img.name = rest_after_fields(lines[i], 9);  // names may contain spaces, repeated ones too
       // The next line (possibly empty) lists X Y POINT3D_ID triples.
       if (i + 1 < lines.size()) {
         const auto p = split_ws(lines[++i]);
@@ -197,11 +225,15 @@ ColmapModel read_colmap_text(const std::string& dir) {
           img.point3D_ids.push_back(to_int(p[k + 2], where));
         }
       }
+      const std::string line_no = cat("line ", where.substr(path.size() + 1));  // the image's line, not its points'
+      FirstSeen(path, "image id").add(img.id, line_no, id_lines);
+      FirstSeen(path, "image name").add(cat("'", img.name, "'"), line_no, name_lines);
       m.images[img.id] = img;
     }
   }
   {
     const std::string path = model_dir_file(dir, "points3D.txt");
+    std::map<int64_t, std::string> point_lines;
     if (fs::exists(path)) {
       const auto lines = read_lines(path);
       for (size_t i = 0; i < lines.size(); ++i) {
@@ -215,6 +247,7 @@ ColmapModel read_colmap_text(const std::string& dir) {
         for (int k = 0; k < 3; ++k) p.rgb[k] = static_cast<uint8_t>(to_int(t[4 + k], where));
         p.error = to_double(t[7], where);
         for (size_t k = 8; k < t.size(); k += 2) p.track.emplace_back(to_int(t[k], where), to_int(t[k + 1], where));
+        FirstSeen(path, "point id").add(p.id, cat("line ", i + 1), point_lines);
         m.points[p.id] = p;
       }
     }
@@ -229,6 +262,7 @@ ColmapModel read_colmap_binary(const std::string& dir) {
     BinReader r(model_dir_file(dir, "cameras.bin"));
     const uint64_t n = r.get<uint64_t>();
     r.check_count(n, 24);
+    std::map<int64_t, std::string> seen;
     for (uint64_t i = 0; i < n; ++i) {
       ColmapCamera c;
       c.id = r.get<uint32_t>();
@@ -239,6 +273,7 @@ ColmapModel read_colmap_binary(const std::string& dir) {
       if (!info) fail(r.path(), ": camera ", c.id, " has unknown model id ", c.model_id);
       for (int k = 0; k < info->num_params; ++k) c.params.push_back(r.get<double>());
       check_params(c, r.path());
+      FirstSeen(r.path(), "camera id").add(c.id, cat("entry ", i), seen);
       m.cameras[c.id] = c;
     }
     if (!r.done()) fail(r.path(), ": trailing bytes after ", n, " cameras");
@@ -247,6 +282,8 @@ ColmapModel read_colmap_binary(const std::string& dir) {
     BinReader r(model_dir_file(dir, "images.bin"));
     const uint64_t n = r.get<uint64_t>();
     r.check_count(n, 64);
+    std::map<int64_t, std::string> ids;
+    std::map<std::string, std::string> names;
     for (uint64_t i = 0; i < n; ++i) {
       ColmapImage img;
       img.id = r.get<uint32_t>();
@@ -261,6 +298,8 @@ ColmapModel read_colmap_binary(const std::string& dir) {
         img.xys.emplace_back(x, y);
         img.point3D_ids.push_back(r.get<int64_t>());
       }
+      FirstSeen(r.path(), "image id").add(img.id, cat("entry ", i), ids);
+      FirstSeen(r.path(), "image name").add(cat("'", img.name, "'"), cat("entry ", i), names);
       m.images[img.id] = img;
     }
     if (!r.done()) fail(r.path(), ": trailing bytes after ", n, " images");
@@ -270,6 +309,7 @@ ColmapModel read_colmap_binary(const std::string& dir) {
     BinReader r(ppath);
     const uint64_t n = r.get<uint64_t>();
     r.check_count(n, 43);
+    std::map<int64_t, std::string> seen;
     for (uint64_t i = 0; i < n; ++i) {
       ColmapPoint p;
       p.id = static_cast<int64_t>(r.get<uint64_t>());
@@ -282,6 +322,7 @@ ColmapModel read_colmap_binary(const std::string& dir) {
         const int64_t image_id = r.get<uint32_t>();
         p.track.emplace_back(image_id, r.get<uint32_t>());
       }
+      FirstSeen(r.path(), "point id").add(p.id, cat("entry ", i), seen);
       m.points[p.id] = p;
     }
     if (!r.done()) fail(r.path(), ": trailing bytes after ", n, " points");
@@ -294,90 +335,6 @@ ColmapModel read_colmap(const std::string& dir) {
   if (fs::exists(fs::path(dir) / "cameras.bin")) return read_colmap_binary(dir);
   if (fs::exists(fs::path(dir) / "cameras.txt")) return read_colmap_text(dir);
   fail(dir, ": no COLMAP model (cameras.bin or cameras.txt) in this folder");
-}
-
-void write_colmap_text(const std::string& dir, const ColmapModel& m) {
-  write_file_atomic(model_dir_file(dir, "cameras.txt"), [&](std::ostream& os) {
-    os << std::setprecision(17);
-    os << "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n";
-    os << "# Number of cameras: " << m.cameras.size() << "\n";
-    for (const auto& [id, c] : m.cameras) {
-      os << id << " " << colmap_model_by_id(c.model_id)->name << " " << c.width << " " << c.height;
-      for (double p : c.params) os << " " << p;
-      os << "\n";
-    }
-  });
-  write_file_atomic(model_dir_file(dir, "images.txt"), [&](std::ostream& os) {
-    os << std::setprecision(17);
-    os << "# Image list with two lines of data per image:\n"
-          "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
-          "#   POINTS2D[] as (X, Y, POINT3D_ID)\n";
-    os << "# Number of images: " << m.images.size() << "\n";
-    for (const auto& [id, img] : m.images) {
-      os << id;
-      for (int k = 0; k < 4; ++k) os << " " << img.qvec[k];
-      for (int k = 0; k < 3; ++k) os << " " << img.tvec[k];
-      os << " " << img.camera_id << " " << img.name << "\n";
-      for (size_t k = 0; k < img.xys.size(); ++k)
-        os << (k ? " " : "") << img.xys[k].x() << " " << img.xys[k].y() << " " << img.point3D_ids[k];
-      os << "\n";
-    }
-  });
-  write_file_atomic(model_dir_file(dir, "points3D.txt"), [&](std::ostream& os) {
-    os << std::setprecision(17);
-    os << "# 3D point list with one line of data per point:\n"
-          "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n";
-    os << "# Number of points: " << m.points.size() << "\n";
-    for (const auto& [id, p] : m.points) {
-      os << id << " " << p.xyz.x() << " " << p.xyz.y() << " " << p.xyz.z() << " " << int(p.rgb[0]) << " "
-         << int(p.rgb[1]) << " " << int(p.rgb[2]) << " " << p.error;
-      for (const auto& t : p.track) os << " " << t.first << " " << t.second;
-      os << "\n";
-    }
-  });
-}
-
-void write_colmap_binary(const std::string& dir, const ColmapModel& m) {
-  write_file_atomic(model_dir_file(dir, "cameras.bin"), [&](std::ostream& os) {
-    put<uint64_t>(os, m.cameras.size());
-    for (const auto& [id, c] : m.cameras) {
-      put<uint32_t>(os, static_cast<uint32_t>(id));
-      put<int32_t>(os, c.model_id);
-      put<uint64_t>(os, static_cast<uint64_t>(c.width));
-      put<uint64_t>(os, static_cast<uint64_t>(c.height));
-      for (double p : c.params) put<double>(os, p);
-    }
-  });
-  write_file_atomic(model_dir_file(dir, "images.bin"), [&](std::ostream& os) {
-    put<uint64_t>(os, m.images.size());
-    for (const auto& [id, img] : m.images) {
-      put<uint32_t>(os, static_cast<uint32_t>(id));
-      for (int k = 0; k < 4; ++k) put<double>(os, img.qvec[k]);
-      for (int k = 0; k < 3; ++k) put<double>(os, img.tvec[k]);
-      put<uint32_t>(os, static_cast<uint32_t>(img.camera_id));
-      os.write(img.name.c_str(), static_cast<std::streamsize>(img.name.size() + 1));
-      put<uint64_t>(os, img.xys.size());
-      for (size_t k = 0; k < img.xys.size(); ++k) {
-        put<double>(os, img.xys[k].x());
-        put<double>(os, img.xys[k].y());
-        put<int64_t>(os, img.point3D_ids[k]);
-      }
-    }
-  });
-  write_file_atomic(model_dir_file(dir, "points3D.bin"), [&](std::ostream& os) {
-    put<uint64_t>(os, m.points.size());
-    for (const auto& [id, p] : m.points) {
-      put<uint64_t>(os, static_cast<uint64_t>(id));
-      for (int k = 0; k < 3; ++k) put<double>(os, p.xyz[k]);
-      for (int k = 0; k < 3; ++k) put<uint8_t>(os, p.rgb[k]);
-      put<double>(os, p.error);
-      put<uint64_t>(os, p.track.size());
-      for (const auto& t : p.track) {
-        put<uint32_t>(os, static_cast<uint32_t>(t.first));
-        put<uint32_t>(os, static_cast<uint32_t>(t.second));
-      }
-    }
-  });
 }
 
 Intrinsics colmap_intrinsics(const ColmapCamera& c, std::vector<double>& distortion) {
