@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -40,6 +41,19 @@ Eigen::Matrix4d matrix(const json& j, int rows, const std::string& where, const 
   // A singular rotation part maps every camera onto a plane or a point: "0 pairs" and no error otherwise.
   if (!(std::fabs(M.topLeftCorner<3, 3>().determinant()) > 1e-12)) fail(where, ": '", key, "' is singular");
   return M;
+}
+
+// A camera-to-world rotation must be rigid: orthonormal columns and no mirror. A scaled or sheared one would be read
+// as a different camera than the one that took the photo, silently. 1e-3 admits float32 writers' rounding.
+void check_rigid(const Eigen::Matrix4d& c2w, const std::string& where) {
+  const Eigen::Matrix3d R = c2w.topLeftCorner<3, 3>();
+  const double off = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  const double bottom = (c2w.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff();
+  if (bottom > 1e-6) fail(where, ": the last row of 'transform_matrix' is not 0 0 0 1; not a rigid camera pose");
+  if (off > 1e-3 || R.determinant() < 0)
+    fail(where, ": the rotation part of 'transform_matrix' (after undoing 'applied_transform') is not a rotation (",
+         R.determinant() < 0 ? "it mirrors" : cat("columns off orthonormal by ", off),
+         "); the file contradicts itself, re-export the poses");
 }
 
 // Intrinsics from an object holding fl_x/fl_y/cx/cy/w/h (frame keys override the global ones), or, in the
@@ -115,6 +129,15 @@ Sequence read_sequence(const json& j, const std::string& scene_dir, const std::s
   for (size_t i = 0; i < frames.size(); ++i)
     if (!frames[i].is_object() || !frames[i].contains("file_path") || !frames[i]["file_path"].is_string())
       fail(path, ": frame ", i, " has no 'file_path'");
+  {  // Two frames of one image (however spelled: "./a.png", "a.png") give it two poses: which is right?
+    std::map<std::string, size_t> first;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      const std::string key = fs::path(frames[i]["file_path"].get<std::string>()).lexically_normal().string();
+      const auto [it, fresh] = first.emplace(key, i);
+      if (!fresh)
+        fail(path, ": frames ", it->second, " and ", i, " both name the image '", key, "' (a duplicated frame)");
+    }
+  }
   std::sort(frames.begin(), frames.end(), [](const json& a, const json& b) {
     return a["file_path"].get<std::string>() < b["file_path"].get<std::string>();
   });
@@ -143,6 +166,7 @@ Sequence read_sequence(const json& j, const std::string& scene_dir, const std::s
     };
     if (!fr.contains("transform_matrix")) fail(where, ": missing 'transform_matrix'");
     const Eigen::Matrix4d c2w = undo * matrix(fr["transform_matrix"], 4, where, "transform_matrix");
+    check_rigid(c2w, where);
     f.view.T_cw = pose_from_opengl_c2w(c2w);
     f.view.intr = intrinsics(j, fr, where, f.distortion, image_size);
     f.rescale_to_image = true;
