@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/color.h"
 #include "io/atomic_file.h"
 
@@ -67,6 +68,28 @@ double read_value(const char* p, PlyType t) {
   return 0;
 }
 
+// Largest log-scale whose exponential is finite in float (exp(88.72) = FLT_MAX).
+constexpr float kMaxLogScale = 88.7f;
+
+// Where the header ends: the first line that is exactly "end_header" (a comment may contain the word), and where
+// the binary data starts after it.
+struct PlyHeader {
+  size_t end = 0, data = 0;
+};
+
+PlyHeader find_header(const std::string& bytes, const std::string& path) {
+  if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
+    fail(path, ": not a PLY file (no ply/end_header)");
+  for (size_t line = 0; line < bytes.size();) {
+    const size_t eol = bytes.find('\n', line);
+    if (eol == std::string::npos) break;
+    const size_t len = eol - line - (eol > line && bytes[eol - 1] == '\r' ? 1 : 0);
+    if (bytes.compare(line, len, "end_header") == 0 && len == 10) return {line, eol + 1};
+    line = eol + 1;
+  }
+  fail(path, ": not a PLY file (no ply/end_header)");
+}
+
 }  // namespace
 
 void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linear, const PlyOptions& options) {
@@ -77,6 +100,9 @@ void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linea
   const int64_t N = g.count();
   const int64_t rest = 3 * ((options.sh_degree + 1) * (options.sh_degree + 1) - 1);
   auto colors = colors_linear ? linear_to_srgb(g.colors) : g.colors;
+  // What the reader refuses is never written: a zero quaternion has no rotation.
+  const int64_t zero_quats = (g.quats.norm(2, 1) < 1e-10).sum().item<int64_t>();
+  ISPLAT_CHECK(zero_quats == 0, path, ": ", zero_quats, " Gaussians have a zero quaternion; not written");
   auto quats = g.quats / torch::clamp_min(g.quats.norm(2, 1, true), 1e-12);
   auto opac = torch::clamp(g.opacities, 1e-6, 1 - 1e-6);
   auto cols =
@@ -106,9 +132,10 @@ void write_ply(const std::string& path, const Gaussians& g_in, bool colors_linea
 }
 
 Gaussians read_ply(const std::string& path, bool want_linear) {
+  ErrorContext context("reading the PLY ", path);
   const std::string bytes = read_file_bytes(path);
-  const auto end = bytes.find("end_header\n");
-  if (bytes.compare(0, 4, "ply\n") != 0 || end == std::string::npos) fail(path, ": not a PLY file (no ply/end_header)");
+  const PlyHeader header = find_header(bytes, path);
+  const size_t end = header.end;
   std::istringstream hs(bytes.substr(0, end));
   std::string line, format;
   int64_t n = -1;
@@ -153,11 +180,16 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
   }
   for (int k = 0; k < 17; ++k)
     if (col[k] < 0 && (k < 3 || k > 5)) fail(path, ": missing property '", kProps[k], "' (3DGS layout)");
-  const size_t data = end + std::strlen("end_header\n");
+  const size_t data = header.data;
   // Divide rather than multiply: a declared count such as 2^62 must not wrap around the size check.
   if (static_cast<uint64_t>(n) > (bytes.size() - data) / stride)
     fail(path, ": truncated: ", n, " vertices of ", stride, " bytes each do not fit in the ", bytes.size() - data,
          " bytes after the header (at byte ", data, ")");
+  // Data after the declared vertices: another writer's element, or a count that lost vertices. Not an error (the
+  // declared ones read whole), but said, with the size, so a cut-down scene is never taken for the whole one.
+  if (const size_t extra = bytes.size() - data - static_cast<size_t>(n) * stride; extra > 0)
+    log_warn(path, ": ", extra, " bytes (", extra / stride, " vertices' worth) after the ", n,
+             " declared vertices are ignored");
   auto out = torch::empty({n, 17});
   float* o = out.data_ptr<float>();
   for (int64_t v = 0; v < n; ++v) {
@@ -168,8 +200,15 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
       if (!std::isfinite(x))
         fail(path, ": vertex ", v, " property '", kProps[k], "' is not finite (at byte ",
              data + v * stride + offset[col[k]], ")");
+      // Log-scales: exp() above ~88.7 is infinite in float, a Gaussian covering all space.
+      if (k >= 10 && k <= 12 && x > kMaxLogScale)
+        fail(path, ": vertex ", v, " property '", kProps[k], "' = ", x, " is a log-scale whose exponential overflows",
+             " (largest ", kMaxLogScale, ")");
       o[v * 17 + k] = x;
     }
+    const float* q = o + v * 17 + 13;  // a zero quaternion has no rotation to normalize to
+    if (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] < 1e-20f)
+      fail(path, ": vertex ", v, " has a zero rotation quaternion (rot_0..rot_3)");
   }
   Gaussians g;
   g.means = out.narrow(1, 0, 3).contiguous();
@@ -182,16 +221,15 @@ Gaussians read_ply(const std::string& path, bool want_linear) {
 }
 
 std::vector<std::string> read_ply_comments(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, ": cannot open PLY file");
-  std::string line;
-  if (!std::getline(in, line) || line != "ply") fail(path, ": not a PLY file (no ply/end_header)");
+  const std::string bytes = read_file_bytes(path);
+  std::istringstream hs(bytes.substr(0, find_header(bytes, path).end));
   std::vector<std::string> comments;
-  while (std::getline(in, line)) {
-    if (line == "end_header") return comments;
+  std::string line;
+  while (std::getline(hs, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.rfind("comment ", 0) == 0) comments.push_back(line.substr(8));
   }
-  fail(path, ": not a PLY file (no ply/end_header)");
+  return comments;
 }
 
 }  // namespace isplat
