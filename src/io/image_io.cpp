@@ -81,6 +81,24 @@ void jpeg_message(j_common_ptr cinfo, int level) {
   if (level < 0) jpeg_fail(cinfo);  // a warning: corrupt data, premature end, extraneous bytes
 }
 
+// Naive CMYK -> RGB without a colour profile, as other readers (OpenCV, Pillow) do: R = (1 - C)(1 - K). With
+// `inverted` (Adobe's convention) the stored values are already 1 - C and 1 - K.
+cv::Mat cmyk_to_bgr(const cv::Mat& cmyk, bool inverted) {
+  cv::Mat bgr(cmyk.rows, cmyk.cols, CV_8UC3);
+  for (int i = 0; i < cmyk.rows; ++i) {
+    const unsigned char* in = cmyk.ptr<unsigned char>(i);
+    unsigned char* o = bgr.ptr<unsigned char>(i);
+    for (int j = 0; j < cmyk.cols; ++j, in += 4, o += 3) {
+      const int k = inverted ? in[3] : 255 - in[3];
+      for (int c = 0; c < 3; ++c) {  // C, M, Y -> R, G, B, stored B, G, R
+        const int ink_free = inverted ? in[c] : 255 - in[c];
+        o[2 - c] = static_cast<unsigned char>((ink_free * k + 127) / 255);
+      }
+    }
+  }
+  return bgr;
+}
+
 // Decodes into `out` (8-bit BGR or grey, as cv::imdecode gives). Returns "" or the decoder's complaint.
 // No object with a destructor lives between setjmp and the libjpeg calls that may longjmp back.
 std::string decode_jpeg(const std::string& bytes, cv::Mat& out) {
@@ -105,15 +123,22 @@ std::string decode_jpeg(const std::string& bytes, cv::Mat& out) {
     }
   }
   const bool grey = cinfo.num_components == 1;
-  cinfo.out_color_space = grey ? JCS_GRAYSCALE : JCS_EXT_BGR;
+  // Print workflows save CMYK (or YCCK) JPEGs; libjpeg decodes them to CMYK only, converted to BGR below.
+  const bool cmyk = cinfo.jpeg_color_space == JCS_CMYK || cinfo.jpeg_color_space == JCS_YCCK;
+  const bool inverted = cmyk && cinfo.saw_Adobe_marker;  // Adobe's writers store CMYK inverted (255 = no ink)
+  cinfo.out_color_space = grey ? JCS_GRAYSCALE : cmyk ? JCS_CMYK : JCS_EXT_BGR;
   jpeg_start_decompress(&cinfo);
-  out.create(static_cast<int>(cinfo.output_height), static_cast<int>(cinfo.output_width), grey ? CV_8UC1 : CV_8UC3);
+  out.create(static_cast<int>(cinfo.output_height), static_cast<int>(cinfo.output_width),
+             grey   ? CV_8UC1
+             : cmyk ? CV_8UC4
+                    : CV_8UC3);
   while (cinfo.output_scanline < cinfo.output_height) {
     JSAMPROW row = out.ptr<unsigned char>(static_cast<int>(cinfo.output_scanline));
     jpeg_read_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_decompress(&cinfo);
   jpeg_destroy_decompress(&cinfo);
+  if (cmyk) out = cmyk_to_bgr(out, inverted);
   return "";
 }
 
@@ -135,6 +160,7 @@ void check_png_header(const std::string& path, const std::string& bytes) {
 }
 
 cv::Mat decode(const std::string& path, int flags) {
+  ErrorContext context("decoding the image ", path);
   const std::string bytes = read_file_bytes(path);
   check_container(path, bytes);
   cv::Mat img;
