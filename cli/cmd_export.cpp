@@ -45,7 +45,8 @@ int run_export(int argc, char** argv) {
   args.option("--format", format, "splat | spz | ply-sh3 | html", "NAME");
   args.option("--out", out, "output file (html: must end in .html)", "FILE");
   args.option("--camera", camera_json, "html: the source camera (default: <ply>.camera.json when it exists)", "FILE");
-  args.option("--fov", fov, "html: field of view along the longer side, degrees, when there is no camera JSON");
+  args.option("--fov", fov, "html: field of view along the longer side, degrees, when there is no camera JSON")
+      .range(1, 179, "degrees");
   args.epilog(
       "Coordinates stay in the source camera's OpenCV frame (x right, y down, z forward) for splat and "
       "ply-sh3; spz stores them as its RUB convention asks (y and z negated); the html page opens at the "
@@ -57,6 +58,7 @@ int run_export(int argc, char** argv) {
       "export", {"--out", out},
       {{"--ply", ply}, {"--camera", camera_json.empty() ? camera_sidecar_path(ply) : camera_json}});
   remove_temporaries_on_signal();  // SIGINT/SIGTERM leave no temporary of the output behind
+  ErrorContext context("exporting ", ply, " as ", format, " to ", out);
   // Colours stay sRGB from file to file: no trip through linear RGB.
   const Gaussians g = read_ply(ply, /*want_linear=*/false);
   if (format == "splat") {

@@ -26,14 +26,18 @@ int run_export_onnx(int argc, char** argv) {
                  "Weights are initializers; the graph passes onnx::checker.");
   args.option("--checkpoint", checkpoint, "trained checkpoint", "FILE");
   args.option("--out", out, "output .onnx file", "FILE");
-  args.option("--width", width, "image width the graph takes (multiple of 16)");
-  args.option("--height", height, "image height the graph takes (multiple of 16)");
-  args.option("--opset", opset, "ONNX opset (>= 17)");
+  args.option("--width", width, "image width the graph takes (multiple of 16)").range(16, 65536, "pixels");
+  args.option("--height", height, "image height the graph takes (multiple of 16)").range(16, 65536, "pixels");
+  args.option("--opset", opset, "ONNX opset (>= 17)").range(17, 100);
   args.flag("--verify", verify, "run the graph in ONNX Runtime (onnxruntime-node) and compare with LibTorch");
-  args.option("--threads", threads, "threads (0 = all cores)");
+  args.option("--threads", threads, "threads (0 = all cores)").range(0, kMaxThreads);
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!checkpoint.empty() && !out.empty(), "export-onnx: --checkpoint and --out are required (see --help)");
+  ISPLAT_CHECK(width % 16 == 0 && height % 16 == 0 && width <= max_image_pixels() / height, "export-onnx: --width ",
+               width, " x --height ", height, " must be multiples of 16 within runtime.max_image_pixels (",
+               max_image_pixels(), ")");
   configure_threads(threads);
+  ErrorContext context("exporting ", checkpoint, " to ONNX at ", width, "x", height);
   auto pipeline = load_pipeline(checkpoint);
   auto& model = pipeline->model();
   const onnx::ModelProto mp = export_onnx(model, {width, height, opset});

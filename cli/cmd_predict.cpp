@@ -1,6 +1,7 @@
 // `infinisplat predict`: one photograph -> Gaussians in a standard 3DGS PLY.
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -67,6 +68,26 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
   const double area = static_cast<double>(tw) * th, aspect = static_cast<double>(width) / height;
   return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
 }
+// The CLI's bounds on intrinsics and sizes: a focal length of 1e-3 or 1e9 pixels is a typo, not a lens.
+constexpr double kMinFocal = 1e-2, kMaxFocal = 1e7, kMaxSide = 65536;
+
+// Options that only mean something together: a value given without its partner would be ignored in silence.
+void check_intrinsics_options(double fx, double fy, double cx, double cy, int64_t width, int64_t height) {
+  ISPLAT_CHECK(fx > 0 || (fy <= 0 && cx < 0 && cy < 0), "predict: --fy, --cx and --cy refine --fx; give --fx too ",
+               "(without --fx the intrinsics come from EXIF or --hfov, which they would not change)");
+  ISPLAT_CHECK((width > 0) == (height > 0), "predict: give --width and --height together (got ", width, "x", height,
+               ")");
+  ISPLAT_CHECK(width % 16 == 0 && height % 16 == 0, "predict: --width ", width, " and --height ", height,
+               " must be multiples of 16 (the encoder's patch)");
+}
+
+// A depth map must show the photo's view: a resized copy is fine, another aspect is another framing.
+void check_depth_aspect(const std::string& depth_path, int dw, int dh, const std::string& photo, int w, int h) {
+  const double ratio = (static_cast<double>(dw) / dh) / (static_cast<double>(w) / h);
+  ISPLAT_CHECK(std::fabs(ratio - 1.0) <= 0.01, "predict: --depth ", depth_path, " is ", dw, "x", dh,
+               ", not a resized copy of the photo ", photo, " (", w, "x", h, "): the aspects differ");
+}
+
 enum class InputKind { Image, Folder, List, Video };
 
 std::string lower_extension(const fs::path& p) {
@@ -186,32 +207,37 @@ int run_predict(int argc, char** argv) {
               "more supports, it places exactly this many instead (sampler.budget_mode = fixed; pixel mode becomes "
               "area), before decoding; the decoded set is never cut",
               "N");
-  args.option("--every", every, "video: predict every N-th frame", "N");
+  args.option("--every", every, "video: predict every N-th frame", "N").range(1, 1e9);
   args.option("--depth-model", depth_model, "TorchScript depth model instead of the checkpoint's prior", "FILE");
   args.option("--depth", depth_path, "metric depth (EXR, planar metres) instead of a prior", "FILE");
   args.option("--prompts", prompts_path, "sparse depth prompts, CSV with columns u,v,z (photo pixels, metres)", "FILE");
-  args.option("--fx", fx, "focal length in photo pixels (fy = fx unless --fy)");
-  args.option("--fy", fy, "vertical focal length in photo pixels");
-  args.option("--cx", cx, "principal point x in photo pixels (default: centre)");
-  args.option("--cy", cy, "principal point y in photo pixels (default: centre)");
-  args.option("--hfov", hfov, "horizontal field of view in degrees when neither --fx nor EXIF is available");
+  args.option("--fx", fx, "focal length in photo pixels (fy = fx unless --fy)").range(kMinFocal, kMaxFocal, "pixels");
+  args.option("--fy", fy, "vertical focal length in photo pixels (with --fx)").range(kMinFocal, kMaxFocal, "pixels");
+  args.option("--cx", cx, "principal point x in photo pixels (default: centre; with --fx; inside the photo)")
+      .range(0, kMaxSide, "pixels");
+  args.option("--cy", cy, "principal point y in photo pixels (default: centre; with --fx; inside the photo)")
+      .range(0, kMaxSide, "pixels");
+  args.option("--hfov", hfov, "horizontal field of view in degrees when neither --fx nor EXIF is available")
+      .range(1, 179, "degrees");
   args.option("--fill-holes", fill_px,
               "fill invalid depth within this many pixels of valid depth before sampling, so small holes in --depth "
               "get Gaussians (0 = off; -1, the default: the checkpoint's sampler.fill_px)",
-              "N");
+              "N");  // the config schema's bounds on sampler.fill_px check it, naming the key
   args.option("--width", width,
-              "working width (default: the training resolution's area at the photo's aspect, in multiples of 16: "
-              "the size the model was trained at, fastest and best scored; a viewer far above it sees gaps, which "
-              "predict reports at 4x)");
-  args.option("--height", height, "working height");
+              "working width, a multiple of 16, with --height (default: the training resolution's area at the "
+              "photo's aspect, in multiples of 16: the size the model was trained at, fastest and best scored; a "
+              "viewer far above it sees gaps, which predict reports at 4x)")
+      .range(16, kMaxSide, "pixels");
+  args.option("--height", height, "working height, a multiple of 16, with --width").range(16, kMaxSide, "pixels");
   args.flag("--photo-size", photo_size,
             "predict at the photo's own resolution (in multiples of 16) instead of the working size: more Gaussians, "
             "fewer gaps in large views, slower");
-  args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)");
+  args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)").range(0, 1);
   args.option("--prune-contribution", prune_contribution,
               "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
-              "--prune-views nearby views stays below this (0 = off; 0.01 is a good start)");
-  args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6");
+              "--prune-views nearby views stays below this (0 = off; 0.01 is a good start)")
+      .range(0, 1);
+  args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6").range(0, 6);
   args.option("--merge-cell", merge.cell_px,
               "merge the flat, single-coloured Gaussians of each cell of this many pixels into one (0 = off)");
   args.option("--merge-color", merge.max_color, "largest colour difference within a merged cell (stored colours)");
@@ -222,8 +248,8 @@ int run_predict(int argc, char** argv) {
   args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");
-  args.option("--seed", seed, "sampler seed");
-  args.option("--threads", threads, "threads (0 = all cores)");
+  args.option("--seed", seed, "sampler seed").range(0, 9.2e18);
+  args.option("--threads", threads, "threads (0 = all cores)").range(0, kMaxThreads);
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!checkpoint.empty() && !image_path.empty() && !out.empty(),
                "predict: --checkpoint, --image and --out are required (see --help)");
@@ -231,7 +257,7 @@ int run_predict(int argc, char** argv) {
                "predict: give at most one of --depth-model, --depth, --prompts");
   ISPLAT_CHECK(max_gaussians >= 0 && max_gaussians <= kMaxSupports, "predict: --max-gaussians ", max_gaussians,
                " is outside [0, ", kMaxSupports, "] (0 = no limit)");
-  ISPLAT_CHECK(every >= 1, "predict: --every ", every, " must be at least 1");
+  check_intrinsics_options(fx, fy, cx, cy, width, height);
   const InputKind kind = input_kind(image_path);
   const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},
                                          {"--image", image_path},
@@ -266,6 +292,11 @@ int run_predict(int argc, char** argv) {
   const auto predict_one = [&](const cv::Mat& photo, const std::string& exif_from, const std::string& label,
                                const std::string& ply_out, bool verbose) {
     const int W0 = photo.cols, H0 = photo.rows;
+    ErrorContext context("predicting ", label);
+    ISPLAT_CHECK(cx <= W0, "predict: --cx ", cx, " lies outside the photo ", label, " (", W0, "x", H0,
+                 "): the principal point's x is in [0, ", W0, "]");
+    ISPLAT_CHECK(cy <= H0, "predict: --cy ", cy, " lies outside the photo ", label, " (", W0, "x", H0,
+                 "): the principal point's y is in [0, ", H0, "]");
     Intrinsics intr;
     std::string k_source;
     if (fx > 0) {
@@ -293,16 +324,22 @@ int run_predict(int argc, char** argv) {
     in.seed = static_cast<uint64_t>(seed);
     if (!depth_path.empty()) {
       const DepthMap d = read_depth_exr(depth_path);
+      check_depth_aspect(depth_path, d.depth.cols, d.depth.rows, label, W0, H0);
       in.depth = map_to_tensor(resize_depth(d.depth, Wm, Hm));
       in.valid = (in.depth > 0).to(torch::kFloat32);
     }
     if (!prompts_path.empty()) {
       const CsvTable t = read_csv(prompts_path);
+      ISPLAT_CHECK(t.size() >= 3, prompts_path, ": ", t.size(), " prompts; the sparse prior needs at least 3");
       auto p = torch::empty({static_cast<int64_t>(t.size()), 3});
-      for (size_t r = 0; r < t.size(); ++r) {
-        p[r][0] = t.number(r, "u") * Wm / W0;
-        p[r][1] = t.number(r, "v") * Hm / H0;
-        p[r][2] = t.number(r, "z");
+      for (size_t r = 0; r < t.size(); ++r) {  // a prompt off the photo or at no depth contradicts the photo
+        const double u = t.number(r, "u"), v = t.number(r, "v"), z = t.number(r, "z");
+        ISPLAT_CHECK(u >= 0 && u <= W0 && v >= 0 && v <= H0 && std::isfinite(z) && z > 0, prompts_path, ": row ", r + 1,
+                     ": prompt (u ", u, ", v ", v, ", z ", z, ") is off the ", W0, "x", H0,
+                     " photo or not at a positive depth");
+        p[r][0] = u * Wm / W0;
+        p[r][1] = v * Hm / H0;
+        p[r][2] = z;
       }
       in.prompts = p;
     }

@@ -54,20 +54,26 @@ int run_render(int argc, char** argv) {
   args.option("--trajectory", trajectory, "orbit | dolly | a camera-path JSON file", "PATH");
   args.option("--out", out, "output folder", "DIR");
   args.option("--camera", camera_json, "source camera JSON (default: <ply>.camera.json from predict)", "FILE");
-  args.option("--frames", frames, "frames for orbit/dolly");
-  args.option("--fps", fps, "video frame rate");
-  args.option("--width", width, "render width (default: the source camera's)");
-  args.option("--height", height, "render height");
-  args.option("--hfov", hfov, "horizontal field of view when there is no camera JSON, degrees");
-  args.option("--radius", radius, "orbit radius as a fraction of the scene depth");
+  args.option("--frames", frames, "frames for orbit/dolly").range(1, 100000);
+  args.option("--fps", fps, "video frame rate").range(1, 1000);
+  args.option("--width", width, "render width, with --height (default: the source camera's)").range(1, 65536, "pixels");
+  args.option("--height", height, "render height, with --width").range(1, 65536, "pixels");
+  args.option("--hfov", hfov, "horizontal field of view when there is no camera JSON, degrees")
+      .range(1, 179, "degrees");
+  args.option("--radius", radius, "orbit radius as a fraction of the scene depth").range(0, 10);
   args.flag("--depth", depth, "also write depth visualizations");
   args.flag("--normal", normal, "also write normal visualizations");
   args.flag("--no-video", no_video, "PNG frames only");
   args.flag("--strip", strip,
             "also write a side-by-side strip per frame (RGB | depth | normals | alpha); the video shows the strips");
-  args.option("--threads", threads, "threads (0 = all cores)");
+  args.option("--threads", threads, "threads (0 = all cores)").range(0, kMaxThreads);
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!ply.empty() && !out.empty(), "render: --ply and --out are required (see --help)");
+  ISPLAT_CHECK((width > 0) == (height > 0), "render: give --width and --height together (got ", width, "x", height,
+               ")");
+  // The same limit as every reader and predict: a 60000x60000 frame is gigabytes per output plane.
+  ISPLAT_CHECK(width <= max_image_pixels() / std::max<int64_t>(1, height), "render: --width x --height = ", width, "x",
+               height, " is above runtime.max_image_pixels (", max_image_pixels(), ")");
   configure_threads(threads);
   const Gaussians g = read_ply(ply, true);
   ISPLAT_CHECK(g.count() > 0, ply, ": no Gaussians to render");
@@ -84,7 +90,8 @@ int run_render(int argc, char** argv) {
     log_info("render: no camera JSON beside ", ply, "; using a ", hfov, " degree camera at the origin");
   }
   if (width > 0 && height > 0) base.intr = base.intr.resized(static_cast<int>(width), static_cast<int>(height));
-  ISPLAT_CHECK(typical_depth > 0, "render: cannot size the camera motion (typical depth ", typical_depth, ")");
+  ISPLAT_CHECK(typical_depth > 0, "render: ", ply, ": cannot size the camera motion (typical depth ", typical_depth,
+               "; the Gaussians lie behind the camera)");
   CameraPath path;
   if (trajectory == "orbit")
     path = orbit_path(base, typical_depth, static_cast<int>(frames), radius);
@@ -109,7 +116,11 @@ int run_render(int argc, char** argv) {
     for (const auto& name : names)
       refuse_output_over_input("render", {"--out", (fs::path(out) / name).string()}, inputs);
   }
-  fs::create_directories(out);
+  {
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec) fail("render: --out ", out, ": cannot create the folder: ", ec.message());
+  }
   // The first SIGINT/SIGTERM stops after the frame being drawn and finishes the video with the frames so far; a
   // second one ends at once, removing the temporaries (the video's among them).
   remove_temporaries_on_signal(/*graceful=*/true);
@@ -128,12 +139,16 @@ int run_render(int argc, char** argv) {
       no_video = true;
     }
   }
+  ISPLAT_CHECK(W <= max_image_pixels() / H, "render: ", cam_path, ": frames of ", W, "x", H,
+               " are above runtime.max_image_pixels (", max_image_pixels(), ")");
+  ErrorContext context("rendering ", ply, " at ", W, "x", H, " into ", out);
   ProgressBar bar("render", static_cast<int64_t>(path.views.size()), "frame");
   double total_ms = 0;
   size_t drawn = 0;
   for (size_t i = 0; i < path.views.size() && !interrupt_signal(); ++i, ++drawn) {
     const View& v = path.views[i];
-    ISPLAT_CHECK(v.intr.width == W && v.intr.height == H, "render: all frames of a path must share one size");
+    ISPLAT_CHECK(v.intr.width == W && v.intr.height == H, "render: ", trajectory, ": frame ", i, " is ", v.intr.width,
+                 "x", v.intr.height, " but frame 0 is ", W, "x", H, "; all frames of a path share one size");
     const auto t0 = std::chrono::steady_clock::now();
     torch::NoGradGuard ng;
     const RenderOutput r = render(g, to_camera(v));

@@ -13,7 +13,7 @@ int run_version(int argc, char** argv) {
   ArgParser args("infinisplat version",
                  "Print the project and LibTorch versions, the thread count, the BLAS "
                  "library in use and a measured matmul throughput.");
-  args.option("--threads", threads, "intra-op threads (0 = all cores)");
+  args.option("--threads", threads, "intra-op threads (0 = all cores)").range(0, kMaxThreads);
   args.flag("--no-bench", no_bench, "skip the matmul throughput measurement");
   if (!args.parse(argc, argv, 2)) return 0;
   configure_threads(threads);

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
     common.add_to(args);
     args.flag("--pairs-only", pairs_only, "write the manifests and stop");
     args.option("--shard", shard, "score only shard i of n (every n-th pair) into its own results files", "I/N");
-    args.option("--merge", merge, "combine the results of N finished shards and write the reports", "N");
+    args.option("--merge", merge, "combine the results of N finished shards and write the reports", "N").range(1, 1e6);
     args.epilog(
         "examples:\n  infinisplat-eval --config configs/eval_synthetic.json --set scoring.max_per_bin=8\n"
         "  infinisplat-eval --config X.json --shard 0/3   (and 1/3, 2/3 on any machines), then\n"
