@@ -25,15 +25,15 @@ namespace prior_golden {
 using test::aten_capability;
 using test::fnv1a;
 
-constexpr int64_t kH = 40, kW = 56;
+constexpr int64_t kPriorGoldenH = 40, kPriorGoldenW = 56;
 
 // A camera 1.6 m above a floor facing a wall 5 m away, with a box on the floor; planar depth.
 torch::Tensor room_depth() {
-  auto d = torch::empty({kH, kW});
+  auto d = torch::empty({kPriorGoldenH, kPriorGoldenW});
   auto a = d.accessor<float, 2>();
   const double fy = 40.0, cy = 20.0;
-  for (int64_t i = 0; i < kH; ++i)
-    for (int64_t j = 0; j < kW; ++j) {
+  for (int64_t i = 0; i < kPriorGoldenH; ++i)
+    for (int64_t j = 0; j < kPriorGoldenW; ++j) {
       double z = 5.0;
       const double y = (static_cast<double>(i) + 0.5 - cy) / fy;
       if (y > 0) z = std::min(z, 1.6 / y);
@@ -48,11 +48,11 @@ torch::Tensor room_K() {
 }
 
 torch::Tensor room_image() {
-  auto im = torch::empty({3, kH, kW});
+  auto im = torch::empty({3, kPriorGoldenH, kPriorGoldenW});
   auto a = im.accessor<float, 3>();
   for (int64_t c = 0; c < 3; ++c)
-    for (int64_t i = 0; i < kH; ++i)
-      for (int64_t j = 0; j < kW; ++j)
+    for (int64_t i = 0; i < kPriorGoldenH; ++i)
+      for (int64_t j = 0; j < kPriorGoldenW; ++j)
         a[c][i][j] = static_cast<float>(0.5 + 0.4 * std::sin(0.2 * static_cast<double>(i * (c + 1) + j)));
   return im;
 }
@@ -73,7 +73,7 @@ TEST_CASE("prior golden: the priors, the alignment and the floor fit are those t
   const bool print = std::getenv("ISPLAT_PRINT_GOLDEN") != nullptr;
   const bool same_capability = aten_capability() == "avx512";
   const torch::Tensor depth = room_depth(), K = room_K(), image = room_image();
-  auto valid = torch::ones({kH, kW});
+  auto valid = torch::ones({kPriorGoldenH, kPriorGoldenW});
   valid[3][4] = 0.0f;
 
   const torch::Tensor prompts = draw_prompts(depth, valid, 300, 0.02, 7);
