@@ -8,7 +8,12 @@
 # text: wrong types, huge and deep values, deleted keys, bad tokens) and runs the tool that reads each one.
 # A run is fine when it exits 0 or 1 (1: an error message). A crash is a signal, another exit code or a
 # timeout; exit-1 messages that name no file ("internal error", "LibTorch error", "out of memory") are
-# listed as unnamed errors. Crashing inputs are kept under the work folder, which is then not removed.
+# listed as unnamed errors (unless they say what was being done: "... (while reading X)"). Crashing inputs are kept
+# under the work folder, which is then not removed.
+#
+# Then scripts/fuzz_families.py runs its crafted families (contradictions, degenerate values, colliding outputs,
+# full and read-only disks, signals, concurrency) and counts crashes, hangs, silent and unnamed cases. SECONDS = 0
+# runs the families alone. The exit status is 1 when either part found anything.
 set -uo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -22,7 +27,9 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/fuzz_readers.XXXXXX")"
 echo "fuzz_readers: tools from $build, work folder $work, $seconds s, seed $seed"
 
 cd "$root" || exit 2
-exec python3 - "$build" "$work" "$seconds" "$seed" <<'PYTHON'
+mutation=0
+if [ "$seconds" != 0 ]; then
+python3 - "$build" "$work" "$seconds" "$seed" <<'PYTHON'
 import json, os, random, re, resource, shutil, subprocess, sys, time
 
 build, work, seconds, seed = sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4])
@@ -313,7 +320,7 @@ while time.time() - start < seconds:
         crashes.append((name, rc, victim, last))
         open(os.path.join(case, "command.txt"), "w").write(" ".join(cmd) + "\n")
     else:
-        if rc == 1 and re.search(r"internal error|LibTorch error|out of memory", last):
+        if rc == 1 and re.search(r"internal error|LibTorch error|out of memory", last) and "(while " not in last:
             stats[name]["unnamed"] += 1
             unnamed.append((name, victim, last))
             open(os.path.join(case, "command.txt"), "w").write(" ".join(cmd) + "\n")
@@ -334,6 +341,15 @@ if crashes or unnamed:
     print(f"fuzz_readers: inputs and commands kept in {work}/cases")
 else:
     shutil.rmtree(work)
-print(f"fuzz_readers: {len(crashes)} crashes in {total} runs (seed {seed}, {seconds:.0f} s)")
-sys.exit(1 if crashes else 0)
+hangs = sum(1 for c in crashes if c[1] == "timeout")
+print(f"fuzz_readers: {len(crashes) - hangs} crashes, {hangs} hangs, {len(unnamed)} unnamed errors in {total} runs "
+      f"(seed {seed}, {seconds:.0f} s)")
+sys.exit(1 if crashes or unnamed else 0)
 PYTHON
+mutation=$?
+else
+  rm -rf "$work"
+fi
+python3 "$root/scripts/fuzz_families.py" "$build"
+families=$?
+[ "$mutation" = 0 ] && [ "$families" = 0 ]
