@@ -22,7 +22,7 @@ namespace isplat {
 
 bool PerturbOptions::any_depth() const {
   return depth_scale != 1.0 || depth_noise > 0 || depth_warp > 0 || depth_blur_px > 0 || depth_holes > 0 ||
-         depth_edge_noise > 0 || depth_edge_holes > 0 || depth_side != "all";
+         depth_edge_noise > 0 || depth_edge_holes > 0 || depth_side != "all" || sensor.any();
 }
 
 bool PerturbOptions::any() const {
@@ -60,6 +60,11 @@ void PerturbOptions::visit(ConfigVisitor& v) {
   v.field("exposure", exposure, "source image multiplied by this in linear light", Range::above(0.0));
   v.field("jpeg_quality", jpeg_quality, "re-encode the source image as JPEG at this quality (0 = off)",
           Range::between(0, 100));
+  v.section("sensor",
+            "a depth sensor's errors on the source depth, applied after depth_edge_holes and before the other depth "
+            "options: drop-outs (range, grazing angles, dark surfaces, occlusion shadows), flying pixels, noise "
+            "growing with z^2, disparity quantization, misregistration; a preset or single effects",
+            sensor);
 }
 
 torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid, double relative) {
@@ -79,7 +84,7 @@ torch::Tensor depth_edges(const torch::Tensor& depth, const torch::Tensor& valid
 }
 
 PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor& valid_in, const PerturbOptions& o,
-                             uint64_t seed) {
+                             uint64_t seed, const torch::Tensor& image, const torch::Tensor& K) {
   if (!o.any_depth()) return {depth_in, valid_in};
   auto gen = at::make_generator<at::CPUGeneratorImpl>(seed * 0x9E3779B97F4A7C15ull + 1);
   auto depth = depth_in.to(torch::kFloat32).clone();
@@ -92,21 +97,17 @@ PerturbedDepth perturb_depth(const torch::Tensor& depth_in, const torch::Tensor&
     const std::vector<uint8_t> mask(edges.data_ptr<uint8_t>(), edges.data_ptr<uint8_t>() + H * W);
     std::vector<uint8_t> band = dilate_square(mask, H, W, o.depth_edge_holes);
     if (o.depth_edge_holes_side == "far") {  // only band pixels with one 5% nearer within n + 1: the far side
-      // The smallest valid depth within n + 1 px (Chebyshev): an erosion, with invalid pixels (and the outside of
-      // the image) at +inf.
-      const float inf = std::numeric_limits<float>::infinity();
-      auto z = torch::where(valid > 0, depth, inf).contiguous();
-      const int k = static_cast<int>(2 * (o.depth_edge_holes + 1) + 1);
-      cv::Mat zm(static_cast<int>(H), static_cast<int>(W), CV_32F, z.data_ptr<float>()), nearest;
-      cv::erode(zm, nearest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)), cv::Point(-1, -1), 1,
-                cv::BORDER_CONSTANT, cv::Scalar::all(inf));
-      const float* zp = depth.data_ptr<float>();
-      const float* np = nearest.ptr<float>();
-      for (int64_t p = 0; p < H * W; ++p) band[p] = band[p] && np[p] < 0.95f * zp[p];
+      const auto far = far_edge_band(depth, valid, o.depth_edge_holes).to(torch::kUInt8).contiguous();
+      const uint8_t* fp = far.data_ptr<uint8_t>();
+      for (int64_t p = 0; p < H * W; ++p) band[p] = band[p] && fp[p];
     }
     const auto drop = torch::from_blob(const_cast<uint8_t*>(band.data()), {H, W}, torch::kUInt8);
     valid = valid * (drop == 0).to(torch::kFloat32);
     depth = depth * valid;
+  }
+  if (o.sensor.any()) {
+    const SensorDepth sensed = apply_sensor(depth, valid, o.sensor, seed, image, K);
+    depth = sensed.depth.clone(), valid = sensed.valid.clone();
   }
   if (o.depth_blur_px > 0) {  // normalized convolution: blur depth·valid and valid, then divide
     cv::Mat d(static_cast<int>(H), static_cast<int>(W), CV_32F, depth.data_ptr<float>());
@@ -193,7 +194,7 @@ ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& o, u
   ViewTensors v = source;
   if (!o.any()) return v;
   if (o.any_depth() && source.depth.defined()) {
-    PerturbedDepth d = perturb_depth(source.depth, source.valid, o, seed);
+    PerturbedDepth d = perturb_depth(source.depth, source.valid, o, seed, source.image, source.camera.K);
     v.depth = d.depth, v.valid = d.valid;
   }
   if (o.exposure != 1.0)

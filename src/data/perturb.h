@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "data/sensor.h"
 #include "data/tuples.h"
 
 namespace isplat {
@@ -25,6 +26,7 @@ struct PerturbOptions {
   std::string depth_side = "all";              // all | left | right | top | bottom: depth (and prompts) only there
   double exposure = 1.0;                       // source image scaled by this in linear light
   int64_t jpeg_quality = 0;                    // 0 = off; else the source image re-encoded as JPEG at this quality
+  SensorOptions sensor;                        // a depth sensor's errors (data/sensor.h), after depth_edge_holes
   bool any() const;
   bool any_depth() const;  // any option that changes depth or its valid mask
   void visit(ConfigVisitor& v);
@@ -35,13 +37,14 @@ struct PerturbedDepth {
 };
 
 // The depth options applied to a depth map (a copy). Used on the source depth (dataset and sparse priors
-// consume it; prompts are drawn from it) and on an image-only prior's output (see eval/methods).
+// consume it; prompts are drawn from it) and on an image-only prior's output (see eval/methods). image [3,H,W] and
+// K [3,3]: the view's, needed by sensor.dark and sensor.grazing_deg.
 PerturbedDepth perturb_depth(const torch::Tensor& depth, const torch::Tensor& valid, const PerturbOptions& options,
-                             uint64_t seed);
+                             uint64_t seed, const torch::Tensor& image = {}, const torch::Tensor& K = {});
 
 // The depth options that make sense for sparse prompts [P,3] (u, v, z) given directly (COLMAP points3D):
 // scale, multiplicative noise (depth_noise), holes (that share of prompts dropped) and side (by u or v in an
-// image of `width` x `height`). Blur and edge noise need a dense map and leave prompts unchanged.
+// image of `width` x `height`). Blur, edge noise and the sensor model need a dense map and leave prompts unchanged.
 torch::Tensor perturb_prompts(const torch::Tensor& prompts, const PerturbOptions& options, uint64_t seed, int64_t width,
                               int64_t height);
 
