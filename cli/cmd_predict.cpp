@@ -35,6 +35,7 @@
 #include "metrics/display.h"
 #include "model/model_io.h"
 #include "render/prune.h"
+#include "render/scale_align.h"
 #include "sampler/sampler.h"
 
 namespace isplat::cli {
@@ -179,7 +180,7 @@ bool outputs_complete(const std::string& ply) {
 }  // namespace
 
 int run_predict(int argc, char** argv) {
-  std::string checkpoint, image_path, depth_model, depth_path, prompts_path, out;
+  std::string checkpoint, image_path, depth_model, depth_path, prompts_path, align_path, out;
   double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
   MergeOptions merge;  // off unless --merge-cell
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
@@ -211,6 +212,11 @@ int run_predict(int argc, char** argv) {
   args.option("--depth-model", depth_model, "TorchScript depth model instead of the checkpoint's prior", "FILE");
   args.option("--depth", depth_path, "metric depth (EXR, planar metres) instead of a prior", "FILE");
   args.option("--prompts", prompts_path, "sparse depth prompts, CSV with columns u,v,z (photo pixels, metres)", "FILE");
+  args.option("--align-points", align_path,
+              "scale the prediction to a capture's units (e.g. a COLMAP reconstruction): CSV with columns u,v,z "
+              "(photo pixels, the capture's planar depth there); the scene is scaled about the camera by the median "
+              "of z / predicted depth at those pixels",
+              "FILE");
   args.option("--fx", fx, "focal length in photo pixels (fy = fx unless --fy)").range(kMinFocal, kMaxFocal, "pixels");
   args.option("--fy", fy, "vertical focal length in photo pixels (with --fx)").range(kMinFocal, kMaxFocal, "pixels");
   args.option("--cx", cx, "principal point x in photo pixels (default: centre; with --fx; inside the photo)")
@@ -259,16 +265,15 @@ int run_predict(int argc, char** argv) {
                " is outside [0, ", kMaxSupports, "] (0 = no limit)");
   check_intrinsics_options(fx, fy, cx, cy, width, height);
   const InputKind kind = input_kind(image_path);
-  const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},
-                                         {"--image", image_path},
-                                         {"--depth", depth_path},
-                                         {"--prompts", prompts_path},
-                                         {"--depth-model", depth_model}};
+  const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},   {"--image", image_path},
+                                         {"--depth", depth_path},        {"--prompts", prompts_path},
+                                         {"--align-points", align_path}, {"--depth-model", depth_model}};
   if (kind == InputKind::Image) {  // Neither output may be one of the inputs (same path, hard link, symlinked folder).
     refuse_output_over_input("predict", {"--out", out}, inputs);
     refuse_output_over_input("predict", {"--out's camera JSON", camera_sidecar_path(out)}, inputs);
   } else {
-    ISPLAT_CHECK(depth_path.empty() && prompts_path.empty(), "predict: --depth and --prompts hold one photo's data; ",
+    ISPLAT_CHECK(depth_path.empty() && prompts_path.empty() && align_path.empty(),
+                 "predict: --depth, --prompts and --align-points hold one photo's data; ",
                  "with a folder, list or video as --image (", image_path, ") give neither");
     ISPLAT_CHECK(!fs::exists(out) || fs::is_directory(out), "predict: --out ", out,
                  " must be a folder when --image is a folder, list or video (", image_path, ")");
@@ -362,6 +367,20 @@ int run_predict(int argc, char** argv) {
                  ": the sampler placed ", pred.supports.count(), " supports for --max-gaussians ", max_gaussians,
                  " (sampler.mode ", configured.mode, ")");
     Gaussians g = pred.gaussians;
+    ScaleFit aligned;
+    if (!align_path.empty()) {  // the evaluator's scoring.align_scale, from the user's points
+      const CsvTable t = read_csv(align_path);
+      auto samples = torch::empty({static_cast<int64_t>(t.size()), 3});
+      for (size_t r = 0; r < t.size(); ++r) {
+        samples[r][0] = t.number(r, "u") * Wm / W0;
+        samples[r][1] = t.number(r, "v") * Hm / H0;
+        samples[r][2] = t.number(r, "z");
+      }
+      aligned = fit_scene_scale(g, to_camera(view), samples);
+      ISPLAT_CHECK(aligned.samples > 0, "predict: --align-points ", align_path, ": none of its ", t.size(),
+                   " points falls on the predicted surface of ", label);
+      g = scale_about_camera(g, to_camera(view), aligned.factor);
+    }
     const int64_t made = g.count();
     int64_t outside = 0;
     if (!keep_outside) {
@@ -393,10 +412,13 @@ int run_predict(int argc, char** argv) {
             << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
     ply.comments.push_back(pruning.str());
     ply.comments.push_back(cat("working_size ", Wm, "x", Hm, " (photo ", W0, "x", H0, ")"));
+    if (aligned.samples > 0)
+      ply.comments.push_back(
+          cat("scale_aligned ", aligned.factor, " (median over ", aligned.samples, " points of ", align_path, ")"));
     {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
       AtomicPath ply_file(ply_out), camera_file(camera_sidecar_path(ply_out));
       write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
-      write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>());
+      write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>() * aligned.factor);
       commit_together({&camera_file, &ply_file});
     }
 
@@ -404,6 +426,9 @@ int run_predict(int argc, char** argv) {
     std::cout << "photo        " << label << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm << "\n";
     std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
     std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
+    if (aligned.samples > 0)
+      std::cout << "scale        x" << aligned.factor << " to the units of " << align_path << " (median over "
+                << aligned.samples << " points)\n";
     std::cout << "supports     " << pred.supports.count()
               << (max_gaussians > 0 && would_place > max_gaussians
                       ? cat(" (--max-gaussians ", max_gaussians, "; the checkpoint's sampler would place ", would_place,

@@ -198,6 +198,12 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "also render each target at these multiples of its size (e.g. [2, 4]) and score PSNR and holes against "
           "the target image and mask resized to match: what a viewer above the working size sees (empty = off)",
           Range::between(1.0, 8.0));
+  v.field("align_scale", align_scale,
+          "captures whose units are not metres (COLMAP): scale each method's prediction about the source camera by "
+          "the median ratio of reference to rendered depth at the source view's samples before rendering the "
+          "target: points (the COLMAP points3D the source view sees), depth (the source view's reference depth); "
+          "none (the default) for metric datasets",
+          {"none", "points", "depth"});
   v.field("max_per_bin", max_per_bin, "score only the first N pairs of each baseline bin (0 = all; for quick looks)",
           Range::at_least(0));
   v.field("reference", reference,

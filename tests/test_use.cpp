@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "core/error.h"
 #include "core/log.h"
 #include "geometry/trajectory.h"
 #include "io/exif.h"
@@ -193,6 +194,24 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   const Gaussians filled = read_ply(out + "/filled.ply");
   CHECK(filled.count() == g.count());  // the same budget, placed over more of the photo
   CHECK_FALSE(torch::equal(filled.means, g.means));
+  // --align-points scales the scene about the camera by the median ratio of the points' z to the predicted depth:
+  // points twice as far give a scene twice as large, and the PLY and the printout say by how much.
+  for (const auto& [name, z] : {std::pair{"near", 5.0}, {"far", 10.0}}) {
+    std::string csv = "u,v,z\n";
+    for (int k = 0; k < 9; ++k) csv += cat(20 + 3 * k, ",", 18 + k, ",", z, "\n");
+    test::write_bytes(out + "/" + name + ".csv", csv);
+    const std::string aligned = predict_photo + "--align-points " + out + "/" + name + ".csv --out " + out + "/" +
+                                name + ".ply > " + out + "/" + name + ".txt 2>&1";
+    REQUIRE(std::system(aligned.c_str()) == 0);
+    CHECK_THAT(test::read_bytes(out + "/" + name + ".txt"), Catch::Contains("scale        x"));
+  }
+  const Gaussians near = read_ply(out + "/near.ply"), far = read_ply(out + "/far.ply");
+  REQUIRE(near.count() == far.count());
+  CHECK(torch::allclose(far.means, 2 * near.means, 1e-4, 1e-5));
+  CHECK(torch::allclose(far.scales, 2 * near.scales, 1e-4, 1e-6));
+  bool commented = false;
+  for (const std::string& c : read_ply_comments(out + "/far.ply")) commented |= c.rfind("scale_aligned ", 0) == 0;
+  CHECK(commented);
   const std::string bad_fill =
       predict_photo + "--fill-holes -3 --out " + out + "/bad_fill.ply > " + out + "/bad_fill.txt 2>&1";
   CHECK(std::system(bad_fill.c_str()) != 0);
