@@ -13,6 +13,7 @@
 #include "core/progress.h"
 #include "data/colmap.h"
 #include "data/perturb.h"
+#include "eval/densify.h"
 #include "eval/method_stamp.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
@@ -21,6 +22,7 @@
 #include "metrics/display.h"
 #include "metrics/mask.h"
 #include "metrics/stability.h"
+#include "render/scale_align.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -120,6 +122,15 @@ torch::Tensor points3d_prompts(const ColmapModel& model, const LoadedFrame& fram
   return k < 3 ? torch::Tensor() : t.narrow(0, 0, k);
 }
 }  // namespace
+
+const std::vector<ColmapModel>& Evaluator::alignment_points(size_t d) {
+  auto it = align_models_.find(d);
+  if (it != align_models_.end()) return it->second;
+  const auto& ds = config_.datasets.at(d);
+  ISPLAT_CHECK(ds.format == "colmap", "eval: scoring.align_scale = points needs COLMAP points3D, but dataset '",
+               ds.name, "' has format ", ds.format, " (use align_scale = depth where the dataset has depth)");
+  return align_models_[d] = load_eval_points3d(ds);
+}
 
 std::vector<int64_t> Evaluator::select_pairs(const Manifest& m) const {
   std::vector<int64_t> pairs;
@@ -271,8 +282,19 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
       points.empty() ? torch::Tensor() : points3d_prompts(points.at(p.sequence_index), sf, src);
   // Masks come from the unperturbed source, so a perturbation never changes which pixels are scored.
   const ViewTensors seen = perturb_source(src, mo.perturb, static_cast<uint64_t>(i));
+  AlignScene align;  // scoring.align_scale: the same fit on the same reference samples for every method
+  if (config_.scoring.align_scale != "none") {
+    const torch::Tensor samples = config_.scoring.align_scale == "depth"
+                                      ? depth_samples(src.depth, src.valid)
+                                      : points3d_prompts(alignment_points(d).at(p.sequence_index), sf, src);
+    align = [&, samples](Gaussians& g) {
+      const ScaleFit fit = fit_scene_scale(g, src.camera, samples, config_.scoring.render);
+      g = scale_about_camera(g, src.camera, fit.factor);
+      return fit;
+    };
+  }
   const MethodOutput o = method.predict(seen, tgt.camera, static_cast<uint64_t>(i),
-                                        perturb_prompts(prompts, mo.perturb, static_cast<uint64_t>(i), W, H));
+                                        perturb_prompts(prompts, mo.perturb, static_cast<uint64_t>(i), W, H), align);
   PairResult r;
   r.index = i;
   r.bin = p.bin;
@@ -301,6 +323,12 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
       r.crack_rate = crack_rate(crack_depth_sum(o, config_.scoring.crack_depth), o.alpha, ref, mask, crack_options());
       r.normal_deg = normal_incoherence_deg(o.normal, o.alpha, ref, tgt.camera.K, mask);
     }
+  }
+  if (o.aligned) r.scale = o.scale.factor, r.scale_samples = o.scale.samples;
+  if (o.densified.defined() && src.valid.defined()) {
+    const DensifyScores ds_scores = score_densification(o.densified, o.prompt_pixels, src.depth, src.valid,
+                                                        seen.valid.defined() ? seen.valid : src.valid);
+    r.unprompted = ds_scores.unprompted, r.removed = ds_scores.removed;
   }
   if (o.scene.means.defined())
     for (double factor : config_.scoring.display_factors) r.display.push_back(score_display(o, tgt, mask, factor));
@@ -480,6 +508,14 @@ std::vector<ReportRow> Evaluator::run(bool pairs_only) {
                                                 ? load_eval_points3d(ds)
                                                 : std::vector<ColmapModel>{};
     const Manifest m = manifest(d, sequences, models);
+    ISPLAT_CHECK(config_.scoring.align_scale != "depth" || has_depth,
+                 "eval: scoring.align_scale = depth, but dataset '", ds.name,
+                 "' has no depth (use align_scale = points with its COLMAP points3D)");
+    if (config_.scoring.align_scale != "none")
+      notes_.push_back(cat(ds.name,
+                           ": every prediction was scaled to the dataset before rendering (scoring.align_scale"
+                           " = ",
+                           config_.scoring.align_scale, "); baseline bins are in the dataset's units"));
     if (!has_depth)
       notes_.push_back(cat(ds.name,
                            ": no reference depth, so masks are the full frame (the paper masks only where "

@@ -87,7 +87,11 @@ class Evaluator {
   // at once naming it and the holder's pid. Each shard of a sharded run has its own lock.
   void lock_output();
 
+  // The COLMAP points3D of dataset d that scoring.align_scale = points fits on, loaded once (Error for other formats).
+  const std::vector<ColmapModel>& alignment_points(size_t d);
+
   EvalConfig config_;
+  std::map<size_t, std::vector<ColmapModel>> align_models_;
   std::unique_ptr<FolderLock> lock_;
   std::map<std::string, std::unique_ptr<Lpips>> lpips_;  // available variants
   std::vector<std::string> notes_;

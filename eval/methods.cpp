@@ -45,8 +45,8 @@ class ModelMethod final : public Method {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
   }
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed,
-                       const torch::Tensor& prompts) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed, const torch::Tensor& prompts,
+                       const AlignScene& align) override {
     torch::NoGradGuard g;
     const bool peak = reset_peak_memory();
     const WorkMemory work;
@@ -55,26 +55,37 @@ class ModelMethod final : public Method {
     // Depth perturbations reach a dataset or sparse prior through the source depth (eval/evaluator); an
     // image-only prior ignores that depth, so its own output is perturbed instead.
     const std::string& type = pipeline_->model()->options.prior.type;
-    std::function<void(PriorOutput&)> perturb_prior;
+    std::function<void(PriorOutput&)> after_prior;
+    MethodOutput out;
     if (options_.perturb.any_depth() && type != "dataset" && type != "sparse")
-      perturb_prior = [&](PriorOutput& po) {
-        const PerturbedDepth d = perturb_depth(po.depth, po.valid, options_.perturb, seed);
+      after_prior = [&](PriorOutput& po) {
+        const PerturbedDepth d = perturb_depth(po.depth, po.valid, options_.perturb, seed, src.image, po.K);
         po.depth = d.depth, po.valid = d.valid;
       };
-    const Prediction p = pipeline_->run(in, src.camera.T_cw, false, perturb_prior);
-    MethodOutput out;
+    if (type == "sparse") {  // the densified depth and the prompts' pixels, for the evaluator's densification scores
+      after_prior = [&](PriorOutput& po) { out.densified = (po.depth * (po.valid > 0)).clone(); };
+      const SparsePriorOptions& sp = pipeline_->model()->options.prior.sparse;
+      const torch::Tensor used =
+          prompts.defined() ? prompts
+                            : draw_prompts(src.depth, src.valid.defined() ? src.valid : (src.depth > 0), sp.prompts,
+                                           sp.noise, seed);  // the draw the prior makes (prior/sparse_prior.cpp)
+      out.prompt_pixels = torch::floor(used.narrow(1, 0, 2)).to(torch::kLong);
+    }
+    const Prediction p = pipeline_->run(in, src.camera.T_cw, false, after_prior);
     out.stage_ms = p.timings_ms;
     out.decoded = p.gaussians.count();
     const auto tp = Clock::now();
     const PruneResult pr = prune_gaussians(p.gaussians, src.camera, options_.prune, render_);
     if (options_.prune.enabled) out.stage_ms["prune"] = ms_since(tp), out.prune_counts = prune_counts(pr);
     out.infer_ms = ms_since(t0);
+    Gaussians scene = pr.kept;
+    if (align) out.scale = align(scene), out.aligned = true;
     t0 = Clock::now();
-    const RenderOutput r = render(pr.kept, target, render_, maps_);
+    const RenderOutput r = render(scene, target, render_, maps_);
     out.render_ms = ms_since(t0);
     out.linear_rgb = pipeline_->model()->options.composer.linear_rgb;
     out.image = rendered_srgb(r.rgb, out.linear_rgb);
-    out.scene = pr.kept;
+    out.scene = scene;
     out.gaussians = pr.kept.count();
     out.alpha = r.alpha, out.depth = r.depth, out.normal = r.normal, out.median_depth = r.median_depth;
     if (peak) out.peak_mb = peak_memory_mb();
@@ -98,7 +109,8 @@ class ModelMethod final : public Method {
 class LiftMethod final : public Method {
  public:
   LiftMethod(const RenderOptions& r, const RenderMaps& maps) : render_(r), maps_(maps) {}
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&,
+                       const AlignScene& align) override {
     torch::NoGradGuard g;
     const WorkMemory work;
     auto t0 = Clock::now();
@@ -106,9 +118,10 @@ class LiftMethod final : public Method {
     px.mode = "pixel";
     const Supports s = sample_supports(src.depth, src.valid, src.camera.K, src.image, px);
     const BaseGaussians base = make_base_gaussians(s);
-    const Gaussians gs =
+    Gaussians gs =
         compose(base, torch::zeros({s.count(), kDeltaDim}), src.camera.K, src.camera.T_cw, ComposerOptions{});
     MethodOutput out;
+    if (align) out.scale = align(gs), out.aligned = true;
     out.infer_ms = ms_since(t0);
     t0 = Clock::now();
     const RenderOutput r = render(gs, target, render_, maps_);
@@ -130,7 +143,8 @@ class LiftMethod final : public Method {
 
 class IdentityMethod final : public Method {
  public:
-  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&) override {
+  MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t, const torch::Tensor&,
+                       const AlignScene&) override {  // nothing to scale: the image is copied
     ISPLAT_CHECK(src.image.size(1) == target.height && src.image.size(2) == target.width,
                  "identity: source and target sizes differ");
     MethodOutput out;

@@ -1,6 +1,7 @@
 // Methods the evaluator scores: a trained checkpoint (RGB or LiDAR variant, or an ablation), and the
 // baselines any reviewer asks for ("lift" and "identity").
 #pragma once
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -9,6 +10,7 @@
 #include "core/gaussians.h"
 #include "data/tuples.h"
 #include "eval/eval_config.h"
+#include "render/scale_align.h"
 
 namespace isplat {
 
@@ -29,7 +31,15 @@ struct MethodOutput {
   // them from other cameras (scoring.display_factors); scene.means undefined where the method has none (identity).
   Gaussians scene;
   bool linear_rgb = true;
+  ScaleFit scale;               // what the evaluator's alignment applied (AlignScene); samples 0 when none
+  bool aligned = false;         // an AlignScene was applied to `scene` before the render
+  torch::Tensor densified;      // sparse prior: its depth [H,W] (the densified prompts), else undefined
+  torch::Tensor prompt_pixels;  // ... and the prompts' pixels [P,2] (col, row) it was given or drew
 };
+
+// Changes a method's Gaussians (world frame) before it renders the target and returns what it did: the evaluator's
+// scale alignment (scoring.align_scale). Empty = none.
+using AlignScene = std::function<ScaleFit(Gaussians&)>;
 
 // A render's colours [3,H,W] as the metrics compare them: clamped, and through the sRGB transfer when linear.
 torch::Tensor rendered_srgb(const torch::Tensor& rgb, bool linear);
@@ -40,8 +50,9 @@ class Method {
   // source: the source view (image, depth, valid, camera) at evaluation size; target: its camera.
   // prompts: sparse depth prompts [P,3] (u, v, z) for LiDAR-variant checkpoints, or undefined (then a
   // sparse prior draws them from the source depth).
+  // align: applied to the Gaussians before the render, by the methods that render Gaussians.
   virtual MethodOutput predict(const ViewTensors& source, const Camera& target, uint64_t seed,
-                               const torch::Tensor& prompts) = 0;
+                               const torch::Tensor& prompts, const AlignScene& align = {}) = 0;
   virtual std::string describe() const = 0;
   // True when predict() needs the source view's depth (given `prompts`, or drawing them from the depth).
   virtual bool needs_source_depth(bool have_prompts) const { return false; }

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "eval/depth_eval.h"
 #include "eval/report.h"
 #include "eval/report_parts.h"
 
@@ -91,6 +92,8 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
     int64_t psnr_n = 0;
     std::map<double, DisplayScore> display_sum;
     std::map<double, std::pair<int64_t, int64_t>> display_n;  // pairs with a finite PSNR, with a hole rate
+    std::vector<double> scales;
+    DensifyScore dense_sum[2] = {{0, 0, 0}, {0, 0, 0}};
     for (const auto& x : results) {
       if (bin >= 0 && x.bin != bin) continue;
       ++r.pairs;
@@ -104,6 +107,16 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
         if (std::isfinite(d.psnr)) sum.psnr += d.psnr, ++np;
         if (std::isfinite(d.hole_rate)) sum.hole_rate += d.hole_rate, ++nh;
       }
+      if (std::isfinite(x.scale)) {
+        if (x.scale_samples > 0)
+          scales.push_back(x.scale);
+        else
+          ++r.scale_missed;
+      }
+      const DensifyScore* dense[2] = {&x.unprompted, &x.removed};
+      for (int k = 0; k < 2; ++k)
+        if (dense[k]->pixels > 0 && std::isfinite(dense[k]->abs_rel))
+          dense_sum[k].abs_rel += dense[k]->abs_rel, dense_sum[k].delta1 += dense[k]->delta1, ++dense_sum[k].pixels;
       for (const auto& [k, v] : x.prune_counts) pruned[k] += double(v);
       pruned_n += x.prune_counts.empty() ? 0 : 1;
       const double measures[3] = {x.hole_rate, x.crack_rate, x.normal_deg};
@@ -133,6 +146,15 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
       const auto [np, nh] = display_n[factor];
       r.display[factor] = {factor, np ? sum.psnr / np : nan, nh ? sum.hole_rate / nh : nan};
     }
+    r.scale_pairs = static_cast<int64_t>(scales.size());
+    if (!scales.empty()) {
+      const ScaleSummary sc = summarize_scales(scales);
+      r.scale = sc.mean, r.scale_spread = sc.spread;
+    }
+    DensifyScore* dense_out[2] = {&r.unprompted, &r.removed};
+    for (int k = 0; k < 2; ++k)
+      if (const int64_t m = dense_sum[k].pixels; m > 0)
+        *dense_out[k] = {dense_sum[k].abs_rel / double(m), dense_sum[k].delta1 / double(m), m};
     rows.push_back(r);
   };
   int64_t total_req = 0;

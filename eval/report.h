@@ -19,6 +19,14 @@ struct DisplayScore {
   double hole_rate = std::numeric_limits<double>::quiet_NaN();
 };
 
+// A depth-guided method's densified depth (the sparse prior's output) against the true source depth on some pixels:
+// AbsRel and the share within 1.25x. NaN where not measured.
+struct DensifyScore {
+  double abs_rel = std::numeric_limits<double>::quiet_NaN();
+  double delta1 = std::numeric_limits<double>::quiet_NaN();
+  int64_t pixels = 0;  // scored pixels (pair) or pairs measured (report row)
+};
+
 struct PairResult {
   int64_t index = 0;  // position in the manifest
   int bin = 0;
@@ -40,6 +48,13 @@ struct PairResult {
   double rotation_deg = std::numeric_limits<double>::quiet_NaN();  // between optical axes
   std::string motion;                 // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
   std::vector<DisplayScore> display;  // at scoring.display_factors, for the methods that render Gaussians
+  // scoring.align_scale: the factor applied to the prediction and the reference samples it was fitted on (NaN and 0
+  // when alignment is off or the method renders no Gaussians; 1 and 0 when no sample was usable).
+  double scale = std::numeric_limits<double>::quiet_NaN();
+  int64_t scale_samples = 0;
+  // Sparse-prior methods: the densified depth on valid true-depth pixels that held no prompt, and on those whose
+  // depth the perturbation removed (perturb: holes, edge holes, sensor drop-outs), scored against the true depth.
+  DensifyScore unprompted, removed;
   MethodId method;  // who scored it (results log fields; a log that predates them is its file's method)
 };
 
@@ -57,6 +72,11 @@ struct ReportRow {
   double hole_rate = 0, crack_rate = 0, normal_deg = 0;  // means over the pairs where measured (else NaN)
   std::map<std::string, double> prune_counts;            // means over the pairs that pruned (render/prune_counts)
   std::map<double, DisplayScore> display;                // by factor: means over the pairs scored there
+  // scoring.align_scale: geometric mean and spread (exp of the std of log factors) over the aligned pairs, how many
+  // were aligned and how many had no usable sample (NaN, 0, 0 when off).
+  double scale = std::numeric_limits<double>::quiet_NaN(), scale_spread = std::numeric_limits<double>::quiet_NaN();
+  int64_t scale_pairs = 0, scale_missed = 0;
+  DensifyScore unprompted, removed;  // means over the pairs measured; pixels = those pairs
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".

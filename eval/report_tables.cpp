@@ -142,6 +142,35 @@ Table display_table(const std::vector<ReportRow>& rows, const std::string& d) {
   return t;
 }
 
+// scoring.align_scale on dataset d: each method's factors over the aligned pairs (geometric mean and spread).
+Table scale_table(const std::vector<ReportRow>& rows, const std::string& d) {
+  Table t;
+  t.columns = {{"method"}, {"bin"}, {"aligned"}, {"no sample"}, {"scale", 4}, {"spread", 4}};
+  for (const auto& r : rows)
+    if (r.dataset == d && (r.scale_pairs > 0 || r.scale_missed > 0))
+      t.add({r.method.label(), r.bin, r.scale_pairs, r.scale_missed, r.scale, r.scale_spread});
+  return t;
+}
+
+// Sparse-prior methods on dataset d: the densified depth against the true depth beside PSNR.
+Table densify_table(const std::vector<ReportRow>& rows, const std::string& d) {
+  Table t;
+  t.columns = {{"method"},
+               {"bin"},
+               {"psnr", 2, "PSNR"},
+               {"AbsRel unprompted", 4},
+               {"d<1.25 unprompted", 4},
+               {"pairs"},
+               {"AbsRel removed", 4},
+               {"d<1.25 removed", 4},
+               {"pairs removed"}};
+  for (const auto& r : rows)
+    if (r.dataset == d && (r.unprompted.pixels > 0 || r.removed.pixels > 0))
+      t.add({r.method.label(), r.bin, r.psnr, r.unprompted.abs_rel, r.unprompted.delta1, r.unprompted.pixels,
+             r.removed.abs_rel, r.removed.delta1, r.removed.pixels});
+  return t;
+}
+
 // The paper's figure for a sweep, where it reports one: Table 4's LiDAR prompt noise (override:prior.sparse.noise,
 // family key "noise"), 25.9 -> 23.6 dB on ETH3D from 0% to 5%.
 std::string paper_slope(const std::string& key) {
@@ -267,6 +296,19 @@ std::string dataset_section(const std::vector<ReportRow>& rows, const std::strin
         "and mask resized to match (bilinear): what a viewer above the working size sees, gaps between Gaussians "
         "included:\n\n" +
         table_markdown(display);
+  if (const Table scale = scale_table(rows, d); !scale.rows.empty())
+    md +=
+        "\nScale alignment (scoring.align_scale): each prediction scaled about the source camera by the median ratio "
+        "of reference to rendered depth at the source view's samples; the geometric mean of the factors and their "
+        "spread (exp of the standard deviation of their logs; 1 = the same factor on every pair); pairs without a "
+        "usable sample kept factor 1:\n\n" +
+        table_markdown(scale);
+  if (const Table dense = densify_table(rows, d); !dense.rows.empty())
+    md +=
+        "\nDensification (sparse-prior methods): the densified depth against the true source depth, AbsRel and the "
+        "share within 1.25x, on the pixels that held no prompt and on the pixels whose depth the perturbation "
+        "removed (means over the pairs measured):\n\n" +
+        table_markdown(dense);
   if (const Table sweeps = sweep_table(rows, d, slopes); !sweeps.rows.empty())
     md +=
         "\nSweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and exposure as "
@@ -380,6 +422,19 @@ Table summary_table(const std::vector<ReportRow>& rows, const std::vector<std::s
   for (const auto& r : rows)
     for (const auto& kv : r.prune_counts) pruning.insert(kv.first);
   for (const auto& k : pruning) t.columns.push_back({"prune_" + k, 1});
+  // Columns of measures that were taken, so reports without them keep their columns.
+  const bool scaled = std::any_of(rows.begin(), rows.end(), [](const ReportRow& r) { return r.scale_pairs > 0; });
+  const bool dense = std::any_of(rows.begin(), rows.end(),
+                                 [](const ReportRow& r) { return r.unprompted.pixels > 0 || r.removed.pixels > 0; });
+  if (scaled)
+    for (const TableColumn& c : std::initializer_list<TableColumn>{{"scale", 6}, {"scale_spread", 6}, {"scale_pairs"}})
+      t.columns.push_back(c);
+  if (dense)
+    for (const TableColumn& c : std::initializer_list<TableColumn>{{"densify_unprompted_abs_rel", 5},
+                                                                   {"densify_unprompted_delta1", 5},
+                                                                   {"densify_removed_abs_rel", 5},
+                                                                   {"densify_removed_delta1", 5}})
+      t.columns.push_back(c);
   for (const auto& r : rows) {
     std::vector<TableCell> cells = {r.dataset};
     add_method_cells(cells, r.method);
@@ -390,6 +445,9 @@ Table summary_table(const std::vector<ReportRow>& rows, const std::vector<std::s
     for (const char* st : kStages) cells.push_back(r.stage_ms.count(st) ? TableCell(r.stage_ms.at(st)) : TableCell());
     for (const auto& k : pruning)
       cells.push_back(r.prune_counts.count(k) ? TableCell(r.prune_counts.at(k)) : TableCell());
+    if (scaled) cells.insert(cells.end(), {r.scale, r.scale_spread, r.scale_pairs});
+    if (dense)
+      cells.insert(cells.end(), {r.unprompted.abs_rel, r.unprompted.delta1, r.removed.abs_rel, r.removed.delta1});
     t.add(std::move(cells));
   }
   return t;

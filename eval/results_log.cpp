@@ -30,6 +30,12 @@ nlohmann::json result_json(const PairResult& r) {
   if (!r.motion.empty()) j["motion"] = r.motion;
   for (const DisplayScore& d : r.display)
     j["display"].push_back({{"factor", d.factor}, {"psnr", num(d.psnr)}, {"hole_rate", num(d.hole_rate)}});
+  // Written only when measured, so records of runs without them are as before.
+  if (std::isfinite(r.scale)) j["scale"] = r.scale, j["scale_samples"] = r.scale_samples;
+  for (const auto& [key, d] : {std::pair{"unprompted", &r.unprompted}, {"removed", &r.removed}})
+    if (d->pixels > 0)
+      j[std::string("densify_") + key] = {
+          {"abs_rel", num(d->abs_rel)}, {"delta1", num(d->delta1)}, {"pixels", d->pixels}};
   for (const auto& [k, v] : r.lpips) j["lpips_" + k] = num(v);
   if (!r.stage_ms.empty()) j["stage_ms"] = r.stage_ms;
   if (!r.prune_counts.empty()) j["prune"] = r.prune_counts;
@@ -100,6 +106,20 @@ PairResult result_from_json(const nlohmann::json& j) {
       if (!d.at("hole_rate").is_null())
         s.hole_rate = d.at("hole_rate").get<double>(), check_range("display.hole_rate", s.hole_rate, 0, 1);
       r.display.push_back(s);
+    }
+  if (j.contains("scale")) {
+    r.scale = j.at("scale").get<double>();
+    check_range("scale", r.scale, 1e-12, 1e12);
+    r.scale_samples = j.value("scale_samples", int64_t{0});
+    ISPLAT_CHECK(r.scale_samples >= 0, "'scale_samples' = ", r.scale_samples, " is negative");
+  }
+  for (const auto& [key, d] : {std::pair{"densify_unprompted", &r.unprompted}, {"densify_removed", &r.removed}})
+    if (j.contains(key)) {
+      const auto& o = j.at(key);
+      d->pixels = o.at("pixels").get<int64_t>();
+      ISPLAT_CHECK(d->pixels >= 0, "'", key, ".pixels' = ", d->pixels, " is negative");
+      if (!o.at("abs_rel").is_null()) d->abs_rel = o.at("abs_rel").get<double>(), check_range(key, d->abs_rel, 0, 1e6);
+      if (!o.at("delta1").is_null()) d->delta1 = o.at("delta1").get<double>(), check_range(key, d->delta1, 0, 1);
     }
   if (j.contains("stage_ms"))
     for (auto it = j.at("stage_ms").begin(); it != j.at("stage_ms").end(); ++it) {
