@@ -61,6 +61,7 @@ std::vector<PairResult> score_on(const EvalDatasetOptions& ds, const std::string
   c.scoring.examples = 0;
   c.scoring.align_scale = align;
   Evaluator ev(c);
+  torch::manual_seed(11);  // the untrained learned net is initialized from the global generator: the same net each time
   return ev.score(0, load_eval_dataset(ds), m, ev.select_pairs(m), mo);
 }
 
