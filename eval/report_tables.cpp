@@ -273,55 +273,53 @@ std::string dataset_section(const std::vector<ReportRow>& rows, const std::strin
                             const std::vector<std::string>& nets, const std::vector<SweepSlope>& slopes,
                             const std::vector<ReportRow>& breakdowns) {
   std::string md = "## " + d + "\n\n" + table_markdown(scores_table(rows, d, nets));
-  md +=
-      "\nWhere the time goes (ms per pair, all bins; Gaussians decoded -> rendered after pruning; peak = the process's "
+  // A captioned table; the optional ones only when they have rows.
+  const auto section = [&md](const std::string& caption, const Table& table, bool always = false) {
+    if (always || !table.rows.empty()) md += "\n" + caption + ":\n\n" + table_markdown(table);
+  };
+  section(
+      "Where the time goes (ms per pair, all bins; Gaussians decoded -> rendered after pruning; peak = the process's "
       "resident peak during one prediction and render, which keeps what earlier pairs and methods left resident; work "
       "= the CPU tensor memory one prediction and render needed beyond what was live before, largest over pairs, "
-      "which is what a budget changes):\n\n" +
-      table_markdown(time_table(rows, d));
-  if (const Table pruning = pruning_table(rows, d); !pruning.rows.empty())
-    md +=
-        "\nPruning (mean Gaussians per pair, all bins): decoded, removed below the opacity floor, removed as faint "
-        "over the source and nearby views (largest alpha*T below the threshold), merged away into neighbours, "
-        "rendered:\n\n" +
-        table_markdown(pruning);
-  md +=
-      "\nStability: holes = masked pixels with rendered alpha < 0.5; cracks = neighbour pairs whose rendered depth "
+      "which is what a budget changes)",
+      time_table(rows, d), true);
+  section(
+      "Pruning (mean Gaussians per pair, all bins): decoded, removed below the opacity floor, removed as faint "
+      "over the source and nearby views (largest alpha*T below the threshold), merged away into neighbours, "
+      "rendered",
+      pruning_table(rows, d));
+  section(
+      "Stability: holes = masked pixels with rendered alpha < 0.5; cracks = neighbour pairs whose rendered depth "
       "jumps by > 5% where the reference depth is smooth; normals = mean angle (degrees) between neighbouring "
-      "rendered normals on reference-planar surfaces:\n\n" +
-      table_markdown(stability_table(rows, d));
-  if (const Table display = display_table(rows, d); !display.rows.empty())
-    md +=
-        "\nAt display resolution: each target rendered again at k times its size, scored against the target image "
-        "and mask resized to match (bilinear): what a viewer above the working size sees, gaps between Gaussians "
-        "included:\n\n" +
-        table_markdown(display);
-  if (const Table scale = scale_table(rows, d); !scale.rows.empty())
-    md +=
-        "\nScale alignment (scoring.align_scale): each prediction scaled about the source camera by the median ratio "
-        "of reference to rendered depth at the source view's samples; the geometric mean of the factors and their "
-        "spread (exp of the standard deviation of their logs; 1 = the same factor on every pair); pairs without a "
-        "usable sample kept factor 1:\n\n" +
-        table_markdown(scale);
-  if (const Table dense = densify_table(rows, d); !dense.rows.empty())
-    md +=
-        "\nDensification (sparse-prior methods): the densified depth against the true source depth, AbsRel and the "
-        "share within 1.25x, on the pixels that held no prompt and on the pixels whose depth the perturbation "
-        "removed (means over the pairs measured):\n\n" +
-        table_markdown(dense);
-  if (const Table sweeps = sweep_table(rows, d, slopes); !sweeps.rows.empty())
-    md +=
-        "\nSweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and exposure as "
-        "abs(ln value) so both sides count, JPEG as quality lost, prompts as e-folds fewer), its least-squares slope "
-        "with its 95% interval over pairs (the mean of per-pair slopes on the pairs every point scored; an interval "
-        "containing 0 is no measurable change), and whether the mean PSNR falls steadily as the strength grows "
-        "(graceful):\n\n" +
-        table_markdown(sweeps);
-  if (const Table groups = breakdown_table(breakdowns, d, nets, true); !groups.rows.empty())
-    md +=
-        "\nBy baseline (finer than the protocol's bins) and by motion type (what moves the image most: lateral or "
-        "forward translation, or rotation):\n\n" +
-        table_markdown(groups);
+      "rendered normals on reference-planar surfaces",
+      stability_table(rows, d), true);
+  section(
+      "At display resolution: each target rendered again at k times its size, scored against the target image "
+      "and mask resized to match (bilinear): what a viewer above the working size sees, gaps between Gaussians "
+      "included",
+      display_table(rows, d));
+  section(
+      "Scale alignment (scoring.align_scale): each prediction scaled about the source camera by the median ratio "
+      "of reference to rendered depth at the source view's samples; the geometric mean of the factors and their "
+      "spread (exp of the standard deviation of their logs; 1 = the same factor on every pair); pairs without a "
+      "usable sample kept factor 1",
+      scale_table(rows, d));
+  section(
+      "Densification (sparse-prior methods): the densified depth against the true source depth, AbsRel and the "
+      "share within 1.25x, on the pixels that held no prompt and on the pixels whose depth the perturbation "
+      "removed (means over the pairs measured)",
+      densify_table(rows, d));
+  section(
+      "Sweeps: PSNR (all bins) against the perturbation's strength (noise and shares in %, scale and exposure as "
+      "abs(ln value) so both sides count, JPEG as quality lost, prompts as e-folds fewer), its least-squares slope "
+      "with its 95% interval over pairs (the mean of per-pair slopes on the pairs every point scored; an interval "
+      "containing 0 is no measurable change), and whether the mean PSNR falls steadily as the strength grows "
+      "(graceful)",
+      sweep_table(rows, d, slopes));
+  section(
+      "By baseline (finer than the protocol's bins) and by motion type (what moves the image most: lateral or "
+      "forward translation, or rotation)",
+      breakdown_table(breakdowns, d, nets, true));
   return md + "\n";
 }
 
