@@ -51,7 +51,7 @@ stamp "5. evaluation: trained vs the release's defaults vs step 0 vs baselines o
   --set "methods[1].checkpoint=$out/quickstart/checkpoints/last.safetensors" \
   --set "methods[2].checkpoint=$out/quickstart/checkpoints/init.safetensors" \
   --set "methods[3].checkpoint=$out/quickstart_release/checkpoints/last.safetensors" \
-  --set scoring.out="$out/eval" --set scoring.max_per_bin=6
+  --set scoring.out="$out/eval" --set scoring.max_per_bin=4
 
 stamp "6. one photo -> Gaussians (PLY) -> orbit video"
 photo="$out/data/eval/courtyard_colmap/scene_0/images/IMG_0010.jpg"
