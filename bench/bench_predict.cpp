@@ -7,16 +7,19 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
 
 #include <torch/torch.h>
 
+#include "bench/flops.h"
 #include "core/app.h"
 #include "core/args.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/precision.h"
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "decoder/feature_sampler.h"
@@ -37,6 +40,34 @@ std::pair<torch::Tensor, torch::Tensor> scene(int64_t W, int64_t H) {
   depth = torch::where(box, depth - 1.0, depth).to(torch::kFloat32).contiguous();
   auto image = torch::clamp(0.5 + 0.2 * torch::randn({3, H, W}), 0.0, 1.0);
   return {depth, image};
+}
+
+// The stages' analytic counts, the rates they achieve, and this machine's matmul rates at their dominant shapes.
+void print_counts(const ModelOptions& o, int64_t W, int64_t H, double encoder_ms, double decoder_ms) {
+  const bench::StageFlops f = bench::count_flops(o, W, H, o.sampler.budget);
+  std::printf(
+      "  counted: encoder %.1f GFLOP (ViT linears %.1f, attention %.1f, CNN %.1f) at %.0f GFLOP/s; decoder %.1f "
+      "GFLOP (maps %.2f, MLP %.1f) at %.0f GFLOP/s\n",
+      f.encoder() * 1e-9, f.vit_linear * 1e-9, f.vit_attention * 1e-9, f.cnn * 1e-9, f.encoder() / (encoder_ms * 1e6),
+      f.decoder() * 1e-9, f.decoder_maps * 1e-9, f.decoder_mlp * 1e-9, f.decoder() / (decoder_ms * 1e6));
+  const int64_t C = o.encoder.vit.dim(), heads = o.encoder.vit.num_heads();
+  const int64_t N = (H / 16) * (W / 16) + 1 + o.encoder.vit.registers;
+  const int64_t rows = std::max<int64_t>(1, (o.encoder.vit.attention_chunk_mb << 20) / (heads * N * 4));
+  const int64_t chunk = std::min(o.decoder.chunk, o.sampler.budget);
+  const bool bf16 = cpu_has_bf16();
+  auto both = [&](const char* what, const std::function<double(torch::Dtype)>& rate) {
+    std::printf("  machine: %-44s fp32 %6.0f GFLOP/s", what, rate(torch::kFloat32));
+    if (bf16)
+      std::printf(", bf16 %6.0f GFLOP/s\n", rate(torch::kBFloat16));
+    else
+      std::printf(", bf16 n/a (no AVX512-BF16 or AMX)\n");
+  };
+  both(cat("ViT MLP linear [", N, " x ", C, "] -> ", 4 * C).c_str(),
+       [&](torch::Dtype t) { return bench::linear_gflops(N, C, 4 * C, t); });
+  both(cat("attention scores, ", heads, " heads x ", N, "^2 x ", C / heads).c_str(),
+       [&](torch::Dtype t) { return bench::attention_gflops(heads, N, C / heads, rows, t); });
+  both(cat("decoder MLP linear [", chunk, " x ", C, "] -> ", C).c_str(),
+       [&](torch::Dtype t) { return bench::linear_gflops(chunk, C, C, t); });
 }
 
 void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int runs, bool warm_up = true) {
@@ -65,6 +96,7 @@ void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int run
   for (const char* k : {"sampler", "encoder", "decoder", "composer", "total"})
     std::printf(" %s %8.1f", k, median(ms[k]));
   std::printf(" ms | peak %7.0f MB\n", peak);
+  print_counts(o, W, H, median(ms["encoder"]), median(ms["decoder"]));
   if (!model->decoder || !warm_up) return;
   // The decoder's parts on the same supports: one plain feature query, the whole decoder, and its MLP alone; the
   // decoder minus the MLP (medians over the runs) is the fused query of both branches with the gate. A per-run
@@ -104,19 +136,23 @@ int main(int argc, char** argv) {
   return run_main("bench_predict", [&] {
     bool paper = false;
     int64_t threads = 0, runs = 5;
+    std::string precision = "fp32";
     ArgParser parser("bench_predict",
                      "Times one prediction (no autograd) from image and depth to Gaussians, stage by stage, with "
                      "untrained weights: ViT-S with 100k and 40k supports at 256x192.");
     parser.flag("--paper", paper, "also the paper's setting: ViT-L, 1.5M supports, 1536x1152 (one cold run)");
     parser.option("--threads", threads, "threads (0 = all cores)");
     parser.option("--runs", runs, "timed runs per setting (after one warm-up)");
+    parser.option("--precision", precision, "the encoder's and decoder's matmuls: fp32, bf16 or auto",
+                  "fp32|bf16|auto");
     if (!parser.parse(argc, argv)) return 0;
     ISPLAT_CHECK(runs >= 1, "bench_predict: --runs must be at least 1, got ", runs);
     configure_threads(threads);
+    set_compute_precision(resolve_precision(precision, "bench_predict: --precision"));
     set_log_level(LogLevel::Warn);
     torch::NoGradGuard no_grad;
-    std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, BLAS: %s\n", (long long)runs,
-                at::get_num_threads(), loaded_blas().c_str());
+    std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, %s, BLAS: %s\n",
+                (long long)runs, at::get_num_threads(), precision_name(compute_precision()), loaded_blas().c_str());
     ModelOptions o;
     o.sampler.budget_mode = "fixed";
     o.sampler.budget = 100000;

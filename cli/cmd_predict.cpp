@@ -20,6 +20,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/paths.h"
+#include "core/precision.h"
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "geometry/camera_torch.h"
@@ -184,6 +185,7 @@ int run_predict(int argc, char** argv) {
   double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
   MergeOptions merge;  // off unless --merge-cell
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
+  std::string precision = "fp32";
   bool keep_outside = false, photo_size = false;
   std::vector<std::string> sets;
   int64_t max_gaussians = 0, every = 1;
@@ -256,6 +258,10 @@ int run_predict(int argc, char** argv) {
                 "KEY=VALUE");
   args.option("--seed", seed, "sampler seed").range(0, 9.2e18);
   args.option("--threads", threads, "threads (0 = all cores)").range(0, kMaxThreads);
+  args.option("--precision", precision,
+              "the encoder's and decoder's matmuls: fp32, bf16 (fp32 accumulation) or auto (bf16 where the CPU has "
+              "AVX512-BF16 or AMX)",
+              "fp32|bf16|auto");
   if (!args.parse(argc, argv, 2)) return 0;
   ISPLAT_CHECK(!checkpoint.empty() && !image_path.empty() && !out.empty(),
                "predict: --checkpoint, --image and --out are required (see --help)");
@@ -281,6 +287,7 @@ int run_predict(int argc, char** argv) {
   // The merge flags pass the config schema's bounds, with its error naming the key.
   merge = config_from_json<MergeOptions>(config_to_json(merge), "predict's --merge-* flags");
   configure_threads(threads);
+  set_compute_precision(resolve_precision(precision, "predict: --precision"));
   remove_temporaries_on_signal();  // SIGINT/SIGTERM leave neither output nor a temporary behind
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();

@@ -21,6 +21,10 @@ void MethodOptions::visit(ConfigVisitor& v) {
   v.field("budgets", budgets,
           "model: support budgets to sweep on the same pairs, one method each: px:<supports per pixel>, "
           "n:<supports>, detail:<supports per pixel at full detail> (see model.sampler.detail_floor)");
+  v.field("precision", precision,
+          "model: the networks' compute precision for this method (fp32, bf16 or auto; empty = runtime.precision): "
+          "two methods that differ only here compare bf16 with fp32 on the same pairs",
+          {"", "fp32", "bf16", "auto"});
   v.section("prune", "model: drop Gaussians that contribute nothing visible after decoding", prune);
   v.section("perturb", "perturbations of the source view before the method sees it (stability suite)", perturb);
   v.field("sweep_key", sweep_key,
@@ -31,6 +35,11 @@ void MethodOptions::visit(ConfigVisitor& v) {
             "the budget or sweep point this method was expanded to: written by the evaluator into <out>/config.json "
             "(so that file scores the same methods and results files again); hand-written configs leave it out",
             sweep);
+}
+
+Precision method_precision(const MethodOptions& m) {
+  return m.precision.empty() ? compute_precision()
+                             : resolve_precision(m.precision, cat("methods[].precision of method '", m.name, "'"));
 }
 
 namespace {
@@ -94,6 +103,8 @@ std::vector<MethodOptions> expand_sweeps(const std::vector<MethodOptions>& input
   for (const auto& m : input)
     for (auto& e : expand_value_sweep(m)) methods.push_back(std::move(e));
   for (const auto& m : methods) {
+    ISPLAT_CHECK(m.type == "model" || m.precision.empty(), "method '", m.name, "': precision '", m.precision,
+                 "' applies to type model only (", m.type, " runs no network)");
     if (m.budgets.empty()) {
       out.push_back(m);
       continue;

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "core/precision.h"
 #include "core/runtime.h"
 #include "data/perturb.h"
 #include "eval/datasets.h"
@@ -26,10 +27,14 @@ struct MethodOptions {
   std::string sweep_key;               // a key of this method's options, e.g. perturb.depth_noise
   std::vector<double> sweep_values;    // ... and the values it takes, one method each
   SweepPoint sweep;                    // the point expand_sweeps made this method for (recorded in config.json)
+  std::string precision;               // model: fp32 | bf16 | auto; empty = runtime.precision
   void visit(ConfigVisitor& v);
   MethodId id() const { return {name, sweep}; }
   std::string label() const { return id().label(); }  // unique after expand_sweeps: its results file's name
 };
+
+// The precision a model method runs its networks in: its own, else runtime.precision's (in effect process-wide).
+Precision method_precision(const MethodOptions& method);
 
 // A method with its name, type and (models) checkpoint and overrides set, the other options at their defaults.
 inline MethodOptions named_method(const std::string& name, const std::string& type, const std::string& checkpoint = "",

@@ -38,6 +38,8 @@ nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOptions& scor
   nlohmann::json j = nlohmann::json::parse(config_to_json(mo).dump());
   j.erase("name");
   j.erase("sweep");  // the point is the results file's and each record's; its options are stamped above
+  j.erase("precision");
+  if (mo.type == "model") j["precision"] = precision_name(method_precision(mo));  // as run, whichever key chose it
   j["scoring.crack_edge_margin"] = scoring.crack_edge_margin;
   j["scoring.crack_holes"] = scoring.crack_holes;
   j["scoring.crack_side"] = scoring.crack_side;
@@ -83,7 +85,9 @@ void check_method_stamp(const std::string& results, const MethodOptions& mo, con
         before.is_object() && !before.contains("checkpoint_fingerprint") && now.contains("checkpoint_fingerprint");
     if (adopt_weights) before["checkpoint_fingerprint"] = now["checkpoint_fingerprint"];
     bool adopt = adopt_data || adopt_weights;
-    adopt = adopt_new_defaults(before, now, stamp_options(MethodOptions{}, ScoringOptions{})) || adopt;
+    nlohmann::json defaults = stamp_options(MethodOptions{}, ScoringOptions{});
+    defaults["precision"] = "fp32";  // what everything scored before runtime.precision existed ran in
+    adopt = adopt_new_defaults(before, now, defaults) || adopt;
     if (before.is_object() && now.contains("checkpoint_fingerprint") &&
         before.value("checkpoint_fingerprint", "") != now["checkpoint_fingerprint"].get<std::string>() &&
         before.value("checkpoint", "") == mo.checkpoint)

@@ -41,13 +41,14 @@ class WorkMemory {
 class ModelMethod final : public Method {
  public:
   ModelMethod(const MethodOptions& o, const RenderOptions& r, const RenderMaps& maps)
-      : options_(o), render_(r), maps_(maps) {
+      : options_(o), render_(r), maps_(maps), precision_(method_precision(o)) {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
   }
   MethodOutput predict(const ViewTensors& src, const Camera& target, uint64_t seed, const torch::Tensor& prompts,
                        const AlignScene& align) override {
     torch::NoGradGuard g;
+    const PrecisionScope precision(precision_);
     const bool peak = reset_peak_memory();
     const WorkMemory work;
     PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
@@ -102,6 +103,7 @@ class ModelMethod final : public Method {
   MethodOptions options_;
   RenderOptions render_;
   RenderMaps maps_;
+  Precision precision_;
   std::unique_ptr<Pipeline> pipeline_;
 };
 

@@ -20,6 +20,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/precision.h"
 
 namespace isplat {
 
@@ -31,6 +32,10 @@ void RuntimeOptions::visit(ConfigVisitor& v) {
           "largest image (width x height) any reader decodes; larger ones are refused from their header",
           Range::at_least(1));
   v.field("log_level", log_level, "verbosity of stderr logging", {"debug", "info", "warn", "error", "quiet"});
+  v.field("precision", precision,
+          "the encoder's and decoder's matmuls, attention and convolutions: fp32, bf16 (fp32 accumulation; fast "
+          "where the CPU has AVX512-BF16 or AMX, emulated and slow elsewhere) or auto (bf16 where the CPU has it)",
+          {"fp32", "bf16", "auto"});
 }
 
 namespace {
@@ -64,6 +69,9 @@ void apply_runtime(const RuntimeOptions& options) {
   set_log_level(levels.at(options.log_level));
   configure_threads(options.threads);
   set_max_image_pixels(options.max_image_pixels);
+  set_compute_precision(resolve_precision(options.precision));
+  if (options.precision == "bf16" && !cpu_has_bf16())
+    log_warn("runtime.precision = bf16 on a CPU without AVX512-BF16 or AMX: emulated, slower than fp32");
   torch::manual_seed(static_cast<uint64_t>(options.seed));
 }
 
@@ -131,6 +139,8 @@ std::string runtime_report(bool measure) {
      << " hardware threads\n";
   os << "OpenMP          " << (at::get_parallel_info().find("OpenMP") != std::string::npos ? "yes" : "no") << "\n";
   os << "BLAS            " << loaded_blas() << "\n";
+  os << "precision       " << precision_name(compute_precision()) << " (CPU bf16: " << (cpu_has_bf16() ? "yes" : "no")
+     << ")\n";
   auto env_or_unset = [](const char* key) {
     const char* value = std::getenv(key);
     return std::string(key) + "=" + (value ? value : "(unset)");

@@ -19,6 +19,7 @@ struct RuntimeOptions {
   int64_t seed = 0;
   int64_t max_image_pixels = kDefaultMaxImagePixels;
   std::string log_level = "info";
+  std::string precision = "fp32";  // fp32 | bf16 | auto (core/precision.h)
   void visit(ConfigVisitor& v);
 };
 

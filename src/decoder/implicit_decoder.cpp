@@ -8,6 +8,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/precision.h"
 #include "decoder/composer.h"
 #include "decoder/feature_sampler.h"
 #include "geometry/camera_torch.h"
@@ -94,19 +95,23 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
   // sampled features, at a fraction of the cost (thousands of texels instead of 10^5..10^6 supports).
   std::function<torch::Tensor(const torch::Tensor&)> fused;  // the fused feature [n,C] of a chunk of supports
   torch::Tensor dino, cproj, g_dino, g_cnn;
-  if (dino_dim > 0 && cnn_dim > 0) {
-    dino = f.dino.narrow(0, 0, 1);
-    auto as_conv = [](const torch::Tensor& w) { return w.view({w.size(0), w.size(1), 1, 1}); };
-    cproj = F::conv2d(f.cnn.narrow(0, 0, 1), as_conv(cnn_proj->weight), F::Conv2dFuncOptions().bias(cnn_proj->bias));
-    auto wg = gate->weight;  // [Cd, 2Cd] acting on [f_dino, c']
-    g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
-    g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
-    dino = channels_last(dino), g_dino = channels_last(g_dino), cproj = channels_last(cproj),
-    g_cnn = channels_last(g_cnn);
-    fused = [&](const torch::Tensor& part) { return gated_sample(dino, g_dino, cproj, g_cnn, part, width, height); };
-  } else {  // one branch: its features are h
-    const torch::Tensor map = channels_last((dino_dim > 0 ? f.dino : f.cnn).narrow(0, 0, 1));
-    fused = [&, map](const torch::Tensor& part) { return sample_features(map, part, width, height); };
+  torch::Tensor map;
+  {
+    const Fp32Region fp32;  // the per-texel maps feed our float sampling kernels (the MLP below may run in bf16)
+    if (dino_dim > 0 && cnn_dim > 0) {
+      dino = f.dino.narrow(0, 0, 1);
+      auto as_conv = [](const torch::Tensor& w) { return w.view({w.size(0), w.size(1), 1, 1}); };
+      cproj = F::conv2d(f.cnn.narrow(0, 0, 1), as_conv(cnn_proj->weight), F::Conv2dFuncOptions().bias(cnn_proj->bias));
+      auto wg = gate->weight;  // [Cd, 2Cd] acting on [f_dino, c']
+      g_dino = F::conv2d(dino, as_conv(wg.narrow(1, 0, dino_dim)));
+      g_cnn = F::conv2d(cproj, as_conv(wg.narrow(1, dino_dim, dino_dim)), F::Conv2dFuncOptions().bias(gate->bias));
+      dino = channels_last(dino), g_dino = channels_last(g_dino), cproj = channels_last(cproj),
+      g_cnn = channels_last(g_cnn);
+      fused = [&](const torch::Tensor& part) { return gated_sample(dino, g_dino, cproj, g_cnn, part, width, height); };
+    } else {  // one branch: its features are h
+      map = channels_last((dino_dim > 0 ? f.dino : f.cnn).narrow(0, 0, 1));
+      fused = [&](const torch::Tensor& part) { return sample_features(map, part, width, height); };
+    }
   }
   std::vector<torch::Tensor> out;
   for (int64_t s = 0; s < N; s += chunk) {

@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/precision.h"
 #include "core/progress.h"
 #include "decoder/feature_sampler.h"
 
@@ -63,11 +64,22 @@ Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Ten
   if (options.decoder.mode == "none") {
     p.delta = torch::zeros({N, kDeltaDim});
   } else {
+    // runtime.precision = bf16: the networks' matmuls and convolutions in bf16; what leaves them is fp32 again.
+    const bool bf16 = compute_precision() == Precision::bf16;
+    auto fp32 = [](const torch::Tensor& t) { return t.defined() ? t.to(torch::kFloat32) : t; };
     t0 = std::chrono::steady_clock::now();
-    const EncoderFeatures f = encoder->forward(image.unsqueeze(0));
+    EncoderFeatures f;
+    {
+      const Bf16Region region(bf16);
+      f = encoder->forward(image.unsqueeze(0));
+    }
+    f = {fp32(f.dino), fp32(f.cnn)};
     p.timings_ms["encoder"] = ms_since(t0);
     t0 = std::chrono::steady_clock::now();
-    p.delta = decode(f, p.supports.uv, W, H);
+    {
+      const Bf16Region region(bf16);
+      p.delta = fp32(decode(f, p.supports.uv, W, H));
+    }
     p.timings_ms["decoder"] = ms_since(t0);
   }
   t0 = std::chrono::steady_clock::now();
@@ -80,7 +92,7 @@ torch::Tensor InfiniSplatImpl::decode(const EncoderFeatures& f, const torch::Ten
                                       int64_t height) {
   ISPLAT_CHECK(decoder || dense, "model: decoder.mode = none has no learned decoder");
   return decoder ? decoder->forward(uv, width, height, f)
-                 : sample_features(dense->forward(f, width, height), uv, width, height);
+                 : sample_features(dense->forward(f, width, height).to(torch::kFloat32), uv, width, height);
 }
 
 Prediction InfiniSplatImpl::predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

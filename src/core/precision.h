@@ -1,0 +1,62 @@
+// Compute precision of the encoder's and decoder's matmuls and convolutions: fp32, or bf16 with fp32 accumulation.
+#pragma once
+#include <string>
+
+namespace isplat {
+
+enum class Precision { fp32, bf16 };
+
+// The values runtime.precision and --precision accept.
+inline constexpr const char* kPrecisionNames[] = {"fp32", "bf16", "auto"};
+
+// True when the CPU has AVX512-BF16 or AMX-BF16 (oneDNN's bf16 matmul and convolution kernels).
+bool cpu_has_bf16();
+
+// "fp32" | "bf16" | "auto" (bf16 where cpu_has_bf16(), else fp32); anything else is an error naming `key`.
+Precision resolve_precision(const std::string& name, const std::string& key = "runtime.precision");
+const char* precision_name(Precision p);
+
+// Process-wide: what the model's encoder and decoder run in (apply_runtime sets it from runtime.precision).
+void set_compute_precision(Precision p);
+Precision compute_precision();
+
+// Sets the process-wide precision while alive, then restores the one it found (one method of an evaluation).
+class PrecisionScope {
+ public:
+  explicit PrecisionScope(Precision p) : was_(compute_precision()) { set_compute_precision(p); }
+  ~PrecisionScope() { set_compute_precision(was_); }
+  PrecisionScope(const PrecisionScope&) = delete;
+  PrecisionScope& operator=(const PrecisionScope&) = delete;
+
+ private:
+  Precision was_;
+};
+
+// While alive and `enabled`, LibTorch's CPU autocast runs matmuls, linears and convolutions in bf16 (their outputs
+// are bf16; everything else keeps its input type). Weights stay fp32: their bf16 copies are cached per region and
+// dropped when the outermost region ends, so an optimizer step between regions is always seen.
+class Bf16Region {
+ public:
+  explicit Bf16Region(bool enabled);
+  ~Bf16Region();
+  Bf16Region(const Bf16Region&) = delete;
+  Bf16Region& operator=(const Bf16Region&) = delete;
+
+ private:
+  bool active_ = false, was_enabled_ = false;
+  int was_dtype_ = 0;
+};
+
+// While alive, autocast is off (code that must see fp32 inside a Bf16Region, e.g. our own float kernels' inputs).
+class Fp32Region {
+ public:
+  Fp32Region();
+  ~Fp32Region();
+  Fp32Region(const Fp32Region&) = delete;
+  Fp32Region& operator=(const Fp32Region&) = delete;
+
+ private:
+  bool was_enabled_;
+};
+
+}  // namespace isplat
