@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
     if (!parser.parse(argc, argv)) return 0;
     ISPLAT_CHECK(runs >= 1, "bench_predict: --runs must be at least 1, got ", runs);
     configure_threads(threads);
-    set_compute_precision(resolve_precision(precision, "bench_predict: --precision"));
+    use_precision(precision, "bench_predict: --precision");
     set_log_level(LogLevel::Warn);
     torch::NoGradGuard no_grad;
     std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, %s, BLAS: %s\n",

@@ -41,7 +41,7 @@ int time_steps(std::string root, const std::string& config_path, const std::stri
   auto config = load_config<TrainConfig>(
       config_path, {"data.hypersim.root=" + root, "data.workers=0", "model.prior.type=dataset",
                     "train.out=" + (tmp / "run").string(), "train.val_every=100000", "runtime.precision=" + precision});
-  set_compute_precision(resolve_precision(config.runtime.precision));
+  use_precision(config.runtime.precision, "bench_train_step: --precision");
   if (find_weights_file(config.loss.perceptual_weights).empty())
     std::fprintf(stderr, "bench_train_step: no perceptual weights, the step is timed without that term (%s)\n",
                  missing_weights_hint().c_str());

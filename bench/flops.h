@@ -65,34 +65,34 @@ inline StageFlops count_flops(const ModelOptions& o, int64_t W, int64_t H, int64
   return f;
 }
 
-// GFLOP/s of y = x W^T with x [m, k] and W [n, k] in `dtype` (the median of `runs` after one warm-up).
-inline double linear_gflops(int64_t m, int64_t k, int64_t n, torch::Dtype dtype, int runs = 5) {
+// GFLOP/s of `flop` operations done by `work`: the median of `runs` timed calls after one warm-up.
+template <class Work>
+double median_gflops(double flop, int runs, const Work& work) {
   torch::NoGradGuard g;
-  const auto x = torch::randn({m, k}).to(dtype), w = torch::randn({n, k}).to(dtype);
   std::vector<double> ms;
   for (int r = 0; r <= runs; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto y = torch::nn::functional::linear(x, w);
+    work();
     if (r > 0) ms.push_back(ms_since(t0));
   }
   std::sort(ms.begin(), ms.end());
-  return 2.0 * m * k * n / (ms[ms.size() / 2] * 1e6);
+  return flop / (ms[ms.size() / 2] * 1e6);
+}
+
+// GFLOP/s of y = x W^T with x [m, k] and W [n, k] in `dtype`.
+inline double linear_gflops(int64_t m, int64_t k, int64_t n, torch::Dtype dtype, int runs = 5) {
+  const auto x = torch::randn({m, k}).to(dtype), w = torch::randn({n, k}).to(dtype);
+  return median_gflops(2.0 * m * k * n, runs, [&] { torch::nn::functional::linear(x, w); });
 }
 
 // GFLOP/s of the attention's score product Q K^T for `heads` heads of width `head_dim` over n tokens (rows in
 // blocks of at most `rows`), in `dtype`.
 inline double attention_gflops(int64_t heads, int64_t n, int64_t head_dim, int64_t rows, torch::Dtype dtype,
                                int runs = 3) {
-  torch::NoGradGuard g;
   const auto q = torch::randn({1, heads, n, head_dim}).to(dtype), kt = torch::randn({1, heads, head_dim, n}).to(dtype);
-  std::vector<double> ms;
-  for (int r = 0; r <= runs; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    for (int64_t s = 0; s < n; s += rows) const auto scores = torch::matmul(q.narrow(2, s, std::min(rows, n - s)), kt);
-    if (r > 0) ms.push_back(ms_since(t0));
-  }
-  std::sort(ms.begin(), ms.end());
-  return 2.0 * heads * n * n * head_dim / (ms[ms.size() / 2] * 1e6);
+  return median_gflops(2.0 * heads * n * n * head_dim, runs, [&] {
+    for (int64_t s = 0; s < n; s += rows) torch::matmul(q.narrow(2, s, std::min(rows, n - s)), kt);
+  });
 }
 
 }  // namespace isplat::bench

@@ -287,7 +287,7 @@ int run_predict(int argc, char** argv) {
   // The merge flags pass the config schema's bounds, with its error naming the key.
   merge = config_from_json<MergeOptions>(config_to_json(merge), "predict's --merge-* flags");
   configure_threads(threads);
-  set_compute_precision(resolve_precision(precision, "predict: --precision"));
+  use_precision(precision, "predict: --precision");
   remove_temporaries_on_signal();  // SIGINT/SIGTERM leave neither output nor a temporary behind
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();

@@ -24,12 +24,6 @@ namespace isplat::precision_test {
 
 constexpr int64_t H = 32, W = 48;
 
-// Sets the process-wide precision for one test and restores fp32 after it, whatever happens.
-struct PrecisionFor {
-  explicit PrecisionFor(Precision p) { set_compute_precision(p); }
-  ~PrecisionFor() { set_compute_precision(Precision::fp32); }
-};
-
 double relative_error(const torch::Tensor& a, const torch::Tensor& reference) {
   return (a - reference).norm().item<double>() / reference.norm().item<double>();
 }
@@ -107,7 +101,7 @@ TEST_CASE("precision: the model in bf16 predicts fp32 Gaussians within 3% of fp3
   const Prediction fp32 = model->predict(s.image, s.source.K, s.source.T_cw, s.depth, s.valid, 1);
   Prediction bf16;
   {
-    const PrecisionFor p(Precision::bf16);
+    const PrecisionScope p(Precision::bf16);
     bf16 = model->predict(s.image, s.source.K, s.source.T_cw, s.depth, s.valid, 1);
   }
   const Prediction fp32_again = model->predict(s.image, s.source.K, s.source.T_cw, s.depth, s.valid, 1);
@@ -134,7 +128,7 @@ TEST_CASE("precision: training in bf16 keeps fp32 weights and gradients that poi
                       W, H};
   auto gradients = [&](Precision precision) {
     InfiniSplat model = trained_looking_model();
-    const PrecisionFor p(precision);
+    const PrecisionScope p(precision);
     Prediction pred = model->forward(s.image, s.source.K, s.source.T_cw, s.depth, s.valid, 1);
     render(pred.gaussians, target).rgb.mean().backward();
     std::map<std::string, torch::Tensor> g;

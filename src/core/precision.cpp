@@ -7,6 +7,7 @@
 #include <atomic>
 
 #include "core/error.h"
+#include "core/log.h"
 
 namespace isplat {
 
@@ -41,6 +42,12 @@ void set_compute_precision(Precision p) {
 
 Precision compute_precision() {
   return g_precision.load();
+}
+
+void use_precision(const std::string& name, const std::string& key) {
+  set_compute_precision(resolve_precision(name, key));
+  if (name == "bf16" && !cpu_has_bf16())
+    log_warn(key, " = bf16 on a CPU without AVX512-BF16 or AMX: emulated, slower than fp32");
 }
 
 Bf16Region::Bf16Region(bool enabled) : active_(enabled) {

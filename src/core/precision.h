@@ -6,9 +6,6 @@ namespace isplat {
 
 enum class Precision { fp32, bf16 };
 
-// The values runtime.precision and --precision accept.
-inline constexpr const char* kPrecisionNames[] = {"fp32", "bf16", "auto"};
-
 // True when the CPU has AVX512-BF16 or AMX-BF16 (oneDNN's bf16 matmul and convolution kernels).
 bool cpu_has_bf16();
 
@@ -19,6 +16,10 @@ const char* precision_name(Precision p);
 // Process-wide: what the model's encoder and decoder run in (apply_runtime sets it from runtime.precision).
 void set_compute_precision(Precision p);
 Precision compute_precision();
+
+// Resolves `name` (an error naming `key` if it is none), makes it the process-wide precision, and warns when bf16 is
+// asked for on a CPU that can only emulate it: what runtime.precision and every --precision flag do.
+void use_precision(const std::string& name, const std::string& key);
 
 // Sets the process-wide precision while alive, then restores the one it found (one method of an evaluation).
 class PrecisionScope {

@@ -69,9 +69,7 @@ void apply_runtime(const RuntimeOptions& options) {
   set_log_level(levels.at(options.log_level));
   configure_threads(options.threads);
   set_max_image_pixels(options.max_image_pixels);
-  set_compute_precision(resolve_precision(options.precision));
-  if (options.precision == "bf16" && !cpu_has_bf16())
-    log_warn("runtime.precision = bf16 on a CPU without AVX512-BF16 or AMX: emulated, slower than fp32");
+  use_precision(options.precision, "runtime.precision");
   torch::manual_seed(static_cast<uint64_t>(options.seed));
 }
 
