@@ -51,7 +51,7 @@ class ModelMethod final : public Method {
     const PrecisionScope precision(precision_);
     const bool peak = reset_peak_memory();
     const WorkMemory work;
-    PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed};
+    PriorInput in{src.image, src.camera.K, src.depth, src.valid, prompts, seed, src.true_depth};
     auto t0 = Clock::now();
     // Depth perturbations reach a dataset or sparse prior through the source depth (eval/evaluator); an
     // image-only prior ignores that depth, so its own output is perturbed instead.

@@ -195,7 +195,7 @@ ViewTensors perturb_source(const ViewTensors& source, const PerturbOptions& o, u
   if (!o.any()) return v;
   if (o.any_depth() && source.depth.defined()) {
     PerturbedDepth d = perturb_depth(source.depth, source.valid, o, seed, source.image, source.camera.K);
-    v.depth = d.depth, v.valid = d.valid;
+    v.depth = d.depth, v.valid = d.valid, v.true_depth = source.depth;
   }
   if (o.exposure != 1.0)
     v.image = torch::clamp(linear_to_srgb(srgb_to_linear(source.image) * o.exposure), 0.0, 1.0).contiguous();

@@ -35,6 +35,7 @@ struct ViewTensors {
   torch::Tensor valid;  // [H,W] float 0/1
   Camera camera;        // K [3,3], T_cw [4,4] (float32)
   std::string name;
+  torch::Tensor true_depth = {};  // [H,W] the depth before perturb_source changed it (evaluation), else undefined
 };
 
 struct TupleSample {

@@ -16,7 +16,33 @@ namespace isplat {
 void SparsePriorOptions::visit(ConfigVisitor& v) {
   v.field("prompts", prompts, "sparse depth prompts drawn from the source depth (paper: 1500)", Range::at_least(3));
   v.field("noise", noise, "multiplicative prompt noise sigma (Table 4 uses 0, 0.01, 0.03, 0.05)", Range::at_least(0));
-  v.field("mono", mono, "monocular prior aligned to the prompts", {"learned", "torchscript", "none"});
+  v.field("mono", mono,
+          "monocular prior aligned to the prompts; dataset = the frame's own true depth (a diagnostic of a prior "
+          "with the right shape, evaluations only)",
+          {"learned", "torchscript", "dataset", "none"});
+  v.field("mono_warp", mono_warp,
+          "mono = dataset: warp that depth by exp(sigma f), f a smooth unit-variance random field (3 cells across the "
+          "width, seeded per frame): a prior wrong in shape (0 = the right shape)",
+          Range::between(0, 3));
+  v.require("mono_warp", mono_warp == 0 || mono == "dataset", "needs prior.sparse.mono = dataset");
+  v.field("densify", densify,
+          "how prompts become dense depth: fit (the monocular prior aligned, then its residual field), image (the "
+          "prompts alone, interpolated edge-aware in the image), blend (image, with the fit taken per region where "
+          "held-out prompts show it cuts the error)",
+          {"fit", "image", "blend"});
+  v.field("color_range", color_range,
+          "densify = image or blend: colour range (sRGB units) of the joint bilateral kernel; a prompt counts less "
+          "for a pixel of another colour",
+          Range::between(0.01, 10));
+  v.field("far", far,
+          "pixels further than far_spacings from every prompt (where a sensor returned nothing): keep the "
+          "densified depth, drop it (invalid: no supports, as dataset depth there), or keep it only behind the "
+          "farthest supported depth nearby (it cannot occlude what the prompts support)",
+          {"keep", "drop", "behind"});
+  v.field("far_spacings", far_spacings,
+          "the far rule's distance to the nearest prompt, in mean prompt spacings "
+          "sqrt(H W / prompts)",
+          Range::above(0));
   v.field("bandwidth", bandwidth, "residual scale field: coarsest kernel width, fraction of the image diagonal",
           Range::above(0));
   v.field("finest", finest,

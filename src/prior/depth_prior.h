@@ -18,7 +18,12 @@ class ConfigVisitor;
 struct SparsePriorOptions {
   int64_t prompts = 1500;        // paper: 1,500 LiDAR-like prompts
   double noise = 0.0;            // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
-  std::string mono = "learned";  // monocular prior aligned to the prompts: learned | torchscript | none
+  std::string mono = "learned";  // monocular prior aligned to the prompts: learned | torchscript | dataset | none
+  double mono_warp = 0.0;        // mono = dataset: the frame's true depth warped by a smooth random field (sigma)
+  std::string densify = "fit";   // fit (the prior aligned) | image (prompts only, image-guided) | blend
+  double color_range = 0.1;      // image-guided interpolation: colour range of the joint bilateral kernel (sRGB)
+  std::string far = "keep";      // pixels further than far_spacings from every prompt: keep | drop | behind
+  double far_spacings = 2.0;     // ... in mean prompt spacings sqrt(H W / P)
   double bandwidth = 0.08;       // residual scale field: coarsest Gaussian kernel width, fraction of the diagonal
   double finest = 0.005;         // finest kernel width; levels halve from bandwidth down to it
   bool cross_validate = true;    // stop refining where held-out prompts stop improving (noisy prompts stay smooth)
@@ -53,13 +58,16 @@ struct PriorInput {
   torch::Tensor valid;    // [H,W]
   torch::Tensor prompts;  // [P,3] (u, v, z) sparse prompts given directly (e.g. from COLMAP points), optional
   uint64_t seed = 0;      // prompt draw and noise
+  torch::Tensor reference_depth = {};  // [H,W] the view's unperturbed depth (evaluation), optional: prior.sparse.mono =
+                                       // dataset reads it (else `depth`)
 };
 
 struct PriorOutput {
-  torch::Tensor depth;        // [H,W] planar metres, 0 where invalid
-  torch::Tensor K;            // [3,3]
-  torch::Tensor valid;        // [H,W] float 0/1
-  bool floor_scaled = false;  // camera_height_m found a floor and set the metric scale from it
+  torch::Tensor depth;            // [H,W] planar metres, 0 where invalid
+  torch::Tensor K;                // [3,3]
+  torch::Tensor valid;            // [H,W] float 0/1
+  bool floor_scaled = false;      // camera_height_m found a floor and set the metric scale from it
+  torch::Tensor confidence = {};  // [H,W] in [0,1], the sparse prior's (densify_prompts); undefined for the others
 };
 
 class DepthPrior {
@@ -95,6 +103,24 @@ double floor_height_scale(const torch::Tensor& depth, const torch::Tensor& valid
 // `levels_used` (optional) receives it. Deterministic.
 torch::Tensor align_to_prompts(const torch::Tensor& mono_depth, const torch::Tensor& prompts,
                                const SparsePriorOptions& options, int64_t* levels_used = nullptr);
+// The sparse prior's densification (prior.sparse.densify, far, far_spacings): depth from prompts [P,3] (u, v, z) on
+// image [3,H,W], with mono [H,W] the monocular depth (unused, may be undefined, for densify = image).
+//   fit:   align_to_prompts(mono, prompts);
+//   image: log depth interpolated from the prompts alone, coarse to fine, edge-aware in the image's colour;
+//   blend: image, with the fit blended in per region (tiles of the coarsest kernel width, smoothed over their
+//          neighbours) by how much it cuts the prompts' 5-fold held-out |log error| (weight 0 where it does not).
+// confidence = exp(-d^2/2) / (1 + e/0.1), d the distance to the nearest prompt in mean spacings, e the local held-out
+// error; pixels with d > far_spacings are kept, dropped (depth 0), or kept only where no supported depth nearby is
+// farther (behind). Clear errors for prompts that are not [P>=3, 3], outside the image, or not positive.
+struct SparseDensity {
+  torch::Tensor depth;         // [H,W] metres, 0 where left out
+  torch::Tensor confidence;    // [H,W] in [0,1]; 0 where left out
+  torch::Tensor distance;      // [H,W] distance to the nearest prompt, in mean prompt spacings
+  torch::Tensor prior_weight;  // [H,W] the fit's share: 1 (fit), 0 (image), per region (blend)
+  int64_t levels = 0;          // levels of the field the result is built on (the fit's for fit, else the image's)
+};
+SparseDensity densify_prompts(const torch::Tensor& image, const torch::Tensor& mono, const torch::Tensor& prompts,
+                              const SparsePriorOptions& options);
 // Draws `count` prompts (u, v, z) from valid depth, with multiplicative noise sigma (deterministic in seed).
 torch::Tensor draw_prompts(const torch::Tensor& depth, const torch::Tensor& valid, int64_t count, double noise,
                            uint64_t seed);

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "data/perturb.h"
 #include "geometry/camera_torch.h"
 #include "prior/prior_common.h"
 
@@ -20,6 +21,7 @@ class SparsePrior final : public DepthPrior {
     // Below 1e-3 the range kernel's 1/(2 range^2) overflows to inf and 0 * inf poisons the fit with NaN.
     ISPLAT_CHECK(o.sparse.depth_range == 0 || o.sparse.depth_range >= 1e-3, "prior.sparse.depth_range (",
                  o.sparse.depth_range, ") must be 0 (off) or at least 0.001");
+    if (o.sparse.densify == "image") return;  // the prompts alone: no monocular prior to load
     if (o.sparse.mono == "learned") {
       mono_ = make_learned_prior(o, embedded);
     } else if (o.sparse.mono == "torchscript") {
@@ -35,20 +37,43 @@ class SparsePrior final : public DepthPrior {
       prompts = draw_prompts(in.depth, in.valid.defined() ? in.valid : (in.depth > 0), o_.sparse.prompts,
                              o_.sparse.noise, in.seed);
     }
-    ISPLAT_CHECK(prompts.dim() == 2 && prompts.size(1) == 3 && prompts.size(0) >= 3,
-                 "sparse prior: prompts must be [P>=3, 3] (u, v, z), got ", prompts.sizes());
-    const int64_t H = in.image.size(1), W = in.image.size(2);
-    torch::Tensor mono = mono_ ? mono_->predict(in).depth : torch::ones({H, W});
-    return finish(align_to_prompts(mono, prompts, o_.sparse), intrinsics_for(in, o_.hfov_deg));
+    SparsePriorOptions so = o_.sparse;
+    torch::Tensor mono = monocular(in);
+    if (so.densify == "blend" && !mono.defined()) so.densify = "image";  // mono = none: nothing to blend in
+    if (so.densify == "fit" && !mono.defined()) mono = torch::ones({in.image.size(1), in.image.size(2)});
+    const SparseDensity d = densify_prompts(in.image, mono, prompts, so);
+    PriorOutput out = finish(d.depth, intrinsics_for(in, o_.hfov_deg));
+    out.confidence = d.confidence;
+    return out;
   }
   std::string describe() const override {
+    const std::string mono = mono_                         ? mono_->describe()
+                             : o_.sparse.mono == "dataset" ? cat("the true depth warped by ", o_.sparse.mono_warp)
+                                                           : std::string("a constant");
     return cat("sparse prompts (", o_.sparse.prompts, ", noise ", o_.sparse.noise, ", residual field ",
                o_.sparse.bandwidth, " -> ", o_.sparse.finest, o_.sparse.cross_validate ? " cross-validated" : "",
-               ") aligning ", mono_ ? mono_->describe() : std::string("a constant"));
+               "), densify ", o_.sparse.densify, o_.sparse.densify == "image" ? "" : " with " + mono, ", far ",
+               o_.sparse.far, " beyond ", o_.sparse.far_spacings, " spacings");
   }
   const torch::nn::Module* embeddable_weights() const override { return mono_ ? mono_->embeddable_weights() : nullptr; }
 
  private:
+  // The monocular depth to align, or undefined (mono = none, or densify = image).
+  torch::Tensor monocular(const PriorInput& in) const {
+    if (o_.sparse.densify == "image") return {};
+    if (mono_) return mono_->predict(in).depth;
+    if (o_.sparse.mono != "dataset") return {};
+    const torch::Tensor& truth = in.reference_depth.defined() ? in.reference_depth : in.depth;
+    ISPLAT_CHECK(truth.defined(), "prior.sparse.mono = dataset needs the frame's depth (an evaluation with depth)");
+    auto z = truth.to(torch::kFloat32);
+    auto ok = torch::isfinite(z) & (z > 0);
+    ISPLAT_CHECK(ok.any().item<bool>(), "prior.sparse.mono = dataset: the frame's depth has no valid pixel");
+    z = torch::where(ok, z, z.masked_select(ok).max());  // no depth (sky): as far as the farthest surface
+    if (o_.sparse.mono_warp <= 0) return z;
+    PerturbOptions warp;
+    warp.depth_warp = o_.sparse.mono_warp;
+    return perturb_depth(z, torch::ones_like(z), warp, in.seed ^ 0x3A5C0FFEEull).depth;
+  }
   PriorOptions o_;
   std::unique_ptr<DepthPrior> mono_;
 };
