@@ -166,6 +166,12 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "~/.cache/infinisplat/weights)");
   v.field("mask_radius", mask_radius, "radius of the morphological closing of the projected mask, pixels",
           Range::at_least(0));
+  v.field("mask_depth", mask_depth,
+          "the source depth the mask is projected from: true (the dataset's, whatever a method's perturbation does) "
+          "or seen (as each method's perturbation leaves it: a sensor's holes go unscored, as on real RGB-D frames "
+          "whose only depth is the sensor's; methods with different perturbations are then scored on different "
+          "pixels, so compare within one perturbation)",
+          {"true", "seen"});
   v.field("examples", examples, "example panels (source, target, prediction, mask) per dataset and method",
           Range::at_least(0));
   v.field("gallery", gallery,

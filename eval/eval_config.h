@@ -58,14 +58,15 @@ struct ScoringOptions {
   std::vector<std::string> lpips = {"squeeze", "alex", "vgg"};
   std::string weights_dir;  // LPIPS backbones + heads; "" = the weights lookup (core/weights.h)
   int64_t mask_radius = 2;
-  int64_t examples = 4;            // example panels saved per dataset and method
-  int64_t gallery = 0;             // failure gallery: the worst pairs by PSNR and by hole rate, per dataset and method
-  double baseline_step = 0.5;      // metres: the finer baseline groups of the breakdown table
-  int64_t max_per_bin = 0;         // score only the first N pairs of each bin (0 = all)
-  int64_t crack_edge_margin = 0;   // cracks skip pairs this close (px) to a reference depth edge (0 = none)
-  bool crack_holes = false;        // cracks count pairs with a hole on either side as broken (false = skip them)
-  std::string crack_side = "any";  // cracks count only broken pairs erring to this side: any | nearer | farther
-  double crack_min_error = 0.0;    // cracks count only breaks whose deviant pixel errs by at least this share
+  std::string mask_depth = "true";  // the mask's source depth: true (unperturbed) | seen (as the perturbation left it)
+  int64_t examples = 4;             // example panels saved per dataset and method
+  int64_t gallery = 0;              // failure gallery: the worst pairs by PSNR and by hole rate, per dataset and method
+  double baseline_step = 0.5;       // metres: the finer baseline groups of the breakdown table
+  int64_t max_per_bin = 0;          // score only the first N pairs of each bin (0 = all)
+  int64_t crack_edge_margin = 0;    // cracks skip pairs this close (px) to a reference depth edge (0 = none)
+  bool crack_holes = false;         // cracks count pairs with a hole on either side as broken (false = skip them)
+  std::string crack_side = "any";   // cracks count only broken pairs erring to this side: any | nearer | farther
+  double crack_min_error = 0.0;     // cracks count only breaks whose deviant pixel errs by at least this share
   std::string crack_edge_side = "any";  // cracks count only breaks whose deviant pixel lies there: any | near | far
   std::string crack_depth = "mean";     // the rendered depth cracks compare: mean (Σwz / Σw) | median (surface shown)
   std::string reference;                // method the others are compared with, pair by pair (empty = none)

@@ -273,15 +273,17 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   const int64_t W = ds.width ? ds.width : sf.image.cols, H = ds.height ? ds.height : sf.image.rows;
   const ViewTensors src = make_view_tensors(sf, p.source_name, W, H);
   const ViewTensors tgt = make_view_tensors(tf, p.target_name, W, H);
-  // Without reference depth the paper scores the whole frame; with it, where the source projects.
-  const torch::Tensor mask = src.valid.sum().item<double>() > 0
-                                 ? projected_mask(src.depth, src.valid, to_view(src.camera), to_view(tgt.camera),
-                                                  static_cast<int>(config_.scoring.mask_radius))
-                                 : torch::ones({H, W});
   const torch::Tensor prompts =
       points.empty() ? torch::Tensor() : points3d_prompts(points.at(p.sequence_index), sf, src);
-  // Masks come from the unperturbed source, so a perturbation never changes which pixels are scored.
   const ViewTensors seen = perturb_source(src, mo.perturb, static_cast<uint64_t>(i));
+  // Without reference depth the paper scores the whole frame; with it, where the source projects. The mask comes
+  // from the unperturbed source (a perturbation never changes which pixels are scored) unless scoring.mask_depth =
+  // seen asks for the depth the method saw.
+  const ViewTensors& masked = config_.scoring.mask_depth == "seen" && seen.valid.defined() ? seen : src;
+  const torch::Tensor mask = masked.valid.sum().item<double>() > 0
+                                 ? projected_mask(masked.depth, masked.valid, to_view(src.camera), to_view(tgt.camera),
+                                                  static_cast<int>(config_.scoring.mask_radius))
+                                 : torch::ones({H, W});
   AlignScene align;  // scoring.align_scale: the same fit on the same reference samples for every method
   if (config_.scoring.align_scale != "none") {
     const torch::Tensor samples = config_.scoring.align_scale == "depth"

@@ -2,6 +2,7 @@
 // depth-guided method scored with the sensor preset reports them beside PSNR.
 #include <catch2/catch.hpp>
 
+#include "core/config.h"
 #include "eval/densify.h"
 #include "eval/evaluator.h"
 #include "io/jsonl.h"
@@ -85,6 +86,40 @@ TEST_CASE("densify: a depth-guided method under the sensor preset reports its de
   const std::string md = test::read_bytes(c.scoring.out + "/report.md");
   CHECK_THAT(md, Catch::Contains("Densification (sparse-prior methods)") && Catch::Contains("| lidar_kinect | all |"));
   CHECK_THAT(test::read_bytes(c.scoring.out + "/report.csv"), Catch::Contains("densify_removed_abs_rel"));
+}
+
+TEST_CASE("densify: scoring.mask_depth = seen leaves a sensor's holes unscored", "[eval][densify]") {
+  test::QuietLogs quiet;
+  const auto g = test::make_tiny_dataset("mask_seen_data", 16);
+  EvalConfig c;
+  EvalDatasetOptions ds;
+  ds.name = "courtyard";
+  ds.root = generated_eval_root(g.out, "courtyard_colmap");
+  c.datasets = {ds};
+  c.protocol.pairs_per_bin = 2;
+  c.scoring.lpips = {};
+  c.scoring.examples = 0;
+  MethodOptions clean = named_method("lift", "lift"), holes = named_method("lift_holes", "lift");
+  holes.perturb.depth_holes = 0.4;  // 40% of the source depth gone, in blobs
+  c.methods = {clean, holes};
+  auto masks = [&](const std::string& mask_depth) {
+    c.scoring.mask_depth = mask_depth;
+    c.scoring.out = test::temp_dir("mask_seen_out_" + mask_depth);
+    Evaluator(c).run();
+    std::map<std::string, std::vector<double>> fraction;
+    for (const std::string m : {"lift", "lift_holes"})
+      for (const auto& j : read_jsonl(c.scoring.out + "/courtyard/results_" + m + ".jsonl"))
+        fraction[m].push_back(j.at("mask_fraction").get<double>());
+    return fraction;
+  };
+  auto truth = masks("true"), seen = masks("seen");
+  REQUIRE(!truth["lift"].empty());
+  CHECK(truth["lift"] == truth["lift_holes"]);  // the default: the same pixels for every method
+  CHECK(seen["lift"] == truth["lift"]);         // no perturbation: nothing changes
+  for (size_t i = 0; i < seen["lift_holes"].size(); ++i)
+    CHECK(seen["lift_holes"][i] < truth["lift_holes"][i]);  // the holes are not scored
+  CHECK_THROWS_WITH(config_from_json<EvalConfig>(nlohmann::json{{"scoring", {{"mask_depth", "sensor"}}}}, "t.json"),
+                    Catch::Contains("mask_depth"));
 }
 
 }  // namespace densify_test
