@@ -47,21 +47,27 @@ TEST_CASE("densify: with a useless prior, blend is the prompt-only densification
   const auto prompts = draw_prompts(s.depth, torch::ones({H, W}), 500, 0.0, 3);
   torch::manual_seed(0);
   const auto useless = 0.5 + 5.0 * torch::rand({H, W});  // no shape at all: a new depth at every pixel
-  SparsePriorOptions o;
-  o.densify = "image";
-  const SparseDensity image = densify_prompts(s.image, {}, prompts, o);
-  o.densify = "blend";
-  const SparseDensity blend = densify_prompts(s.image, useless, prompts, o);
-  CHECK(blend.prior_weight.max().item<double>() == 0.0);
-  CHECK(torch::equal(blend.depth, image.depth));  // exactly
-  INFO("confidence gap " << (blend.confidence - image.confidence).abs().max().item<double>());
-  CHECK(torch::equal(blend.confidence, image.confidence));
-  // The prompt-only floor is edge-aware in the image: better than today's fit of a constant (mono = none).
-  o.densify = "fit";
-  const SparseDensity constant = densify_prompts(s.image, torch::ones({H, W}), prompts, o);
-  INFO("image-guided " << abs_rel(image.depth, s.depth) << ", constant fit " << abs_rel(constant.depth, s.depth));
-  CHECK(abs_rel(image.depth, s.depth) < abs_rel(constant.depth, s.depth));
-  CHECK(abs_rel(image.depth, s.depth) < 0.03);
+  for (double range : {1.0, 0.1}) {                      // the default, and a narrow colour range (more edge-aware)
+    SparsePriorOptions o;
+    o.color_range = range;
+    o.densify = "image";
+    const SparseDensity image = densify_prompts(s.image, {}, prompts, o);
+    o.densify = "blend";
+    const SparseDensity blend = densify_prompts(s.image, useless, prompts, o);
+    CHECK(blend.prior_weight.max().item<double>() == 0.0);
+    CHECK(torch::equal(blend.depth, image.depth));  // exactly
+    CHECK(torch::equal(blend.confidence, image.confidence));
+    // The prompt-only floor beats today's fit of a constant (mono = none), and is edge-aware with a narrow range.
+    o.densify = "fit";
+    const SparseDensity constant = densify_prompts(s.image, torch::ones({H, W}), prompts, o);
+    INFO("range " << range << ": image-guided " << abs_rel(image.depth, s.depth) << ", constant fit "
+                  << abs_rel(constant.depth, s.depth));
+    CHECK(abs_rel(image.depth, s.depth) <= abs_rel(constant.depth, s.depth));
+    if (range < 1) {
+      CHECK(abs_rel(image.depth, s.depth) < 0.7 * abs_rel(constant.depth, s.depth));
+      CHECK(abs_rel(image.depth, s.depth) < 0.03);
+    }
+  }
 }
 
 TEST_CASE("densify: with a good prior, blend is at least as good as today's fit", "[prior][densify_prior]") {

@@ -16,18 +16,18 @@ namespace isplat {
 class ConfigVisitor;
 
 struct SparsePriorOptions {
-  int64_t prompts = 1500;        // paper: 1,500 LiDAR-like prompts
-  double noise = 0.0;            // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
-  std::string mono = "learned";  // monocular prior aligned to the prompts: learned | torchscript | dataset | none
-  double mono_warp = 0.0;        // mono = dataset: the frame's true depth warped by a smooth random field (sigma)
-  std::string densify = "fit";   // fit (the prior aligned) | image (prompts only, image-guided) | blend
-  double color_range = 0.1;      // image-guided interpolation: colour range of the joint bilateral kernel (sRGB)
-  std::string far = "keep";      // pixels further than far_spacings from every prompt: keep | drop | behind
-  double far_spacings = 2.0;     // ... in mean prompt spacings sqrt(H W / P)
-  double bandwidth = 0.08;       // residual scale field: coarsest Gaussian kernel width, fraction of the diagonal
-  double finest = 0.005;         // finest kernel width; levels halve from bandwidth down to it
-  bool cross_validate = true;    // stop refining where held-out prompts stop improving (noisy prompts stay smooth)
-  double depth_range = 0.1;      // > 0: a prompt's weight also falls with the log-depth gap to the pixel (edge-aware)
+  int64_t prompts = 1500;         // paper: 1,500 LiDAR-like prompts
+  double noise = 0.0;             // multiplicative noise sigma: z(1 + eps), eps ~ N(0, sigma^2)
+  std::string mono = "learned";   // monocular prior aligned to the prompts: learned | torchscript | dataset | none
+  double mono_warp = 0.0;         // mono = dataset: the frame's true depth warped by a smooth random field (sigma)
+  std::string densify = "blend";  // fit (the prior aligned) | image (prompts only, image-guided) | blend
+  double color_range = 1.0;       // image-guided interpolation: colour range of the joint bilateral kernel (sRGB)
+  std::string far = "keep";       // pixels further than far_spacings from every prompt: keep | drop | behind
+  double far_spacings = 2.0;      // ... in mean prompt spacings sqrt(H W / P)
+  double bandwidth = 0.08;        // residual scale field: coarsest Gaussian kernel width, fraction of the diagonal
+  double finest = 0.005;          // finest kernel width; levels halve from bandwidth down to it
+  bool cross_validate = true;     // stop refining where held-out prompts stop improving (noisy prompts stay smooth)
+  double depth_range = 0.1;       // > 0: a prompt's weight also falls with the log-depth gap to the pixel (edge-aware)
   void visit(ConfigVisitor& v);
 };
 
