@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The densification study, resumable (the evaluator keeps every scored pair): the development scenes first
+# (configs/dev.json: the far rule and the default chosen there; dev_color_range.json: the colour range), then the
+# evaluation sets (configs/study.json, and study_seen.json: the kinect rows masked by the sensor's depth), then the
+# tables. Needs the display study's full_s0 checkpoint and a learned depth net (README, "Inputs").
+# Usage, from anywhere: lab/2026-12-07-densify/run.sh [dev|study|tables|all] [infinisplat-eval options]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+cd "$root"
+here=lab/2026-12-07-densify
+bin="${BUILD_DIR:-$root/build}"
+stage="${1:-all}"
+[ $# -gt 0 ] && shift
+for file in out/experiments/display/runs/full_s0/checkpoints/last.safetensors out/densify/depth_net.safetensors; do
+  [ -f "$file" ] || { echo "run.sh: $file is missing (README, Inputs)" >&2; exit 1; }
+done
+if [ "$stage" = dev ] || [ "$stage" = all ]; then
+  nice -n 19 "$bin/infinisplat-eval" --config "$here/configs/dev.json" "$@"
+  nice -n 19 "$bin/infinisplat-eval" --config "$here/configs/dev_color_range.json" "$@"
+fi
+if [ "$stage" = study ] || [ "$stage" = all ]; then
+  nice -n 19 "$bin/infinisplat-eval" --config "$here/configs/study.json" "$@"
+  nice -n 19 "$bin/infinisplat-eval" --config "$here/configs/study_seen.json" "$@"
+fi
+if [ "$stage" = tables ] || [ "$stage" = all ] || [ "$stage" = dev ] || [ "$stage" = study ]; then
+  python3 "$here/tables.py" out/densify/dev out/densify/tune > "$here/tables_dev.md"
+  [ -d out/densify/study ] && python3 "$here/tables.py" out/densify/study out/densify/study_seen > "$here/tables.md"
+fi
+echo "run.sh: tables in $here/tables_dev.md and $here/tables.md"
