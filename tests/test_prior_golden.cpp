@@ -89,7 +89,7 @@ TEST_CASE("prior golden: the priors, the alignment and the floor fit are those t
   PriorOptions o;
   o.type = "sparse";
   o.sparse.mono = "none";
-  o.sparse.densify = "fit";  // the alignment the golden values were taken with (the default blends since 2026-12-07)
+  o.sparse.densify = "fit";  // the alignment the golden values were taken with (the default blends since 2026-12-06)
   o.sparse.prompts = 200;
   PriorInput in;
   in.image = image, in.K = K, in.depth = depth, in.valid = valid, in.seed = 3;

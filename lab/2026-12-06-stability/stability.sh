@@ -4,7 +4,7 @@
 # prompt sweeps for the full model (eval_stability.json); the rows unperturbed with paired differences and a failure
 # gallery, and the prior-shape axis: the LiDAR variant's fit, prompt-only and blend densifications on the learned,
 # a random and a warped prior, clean and with the kinect sensor preset, beside dataset depth (eval_failures.json;
-# lab/2026-12-07-densify); the held-out rooms at three resolutions (eval_resolution.json). Scored pairs are kept,
+# lab/2026-12-06-densify); the held-out rooms at three resolutions (eval_resolution.json). Scored pairs are kept,
 # so re-running only writes the reports again.
 # Usage, from the repository root or anywhere: lab/2026-12-06-stability/stability.sh [infinisplat-eval options, e.g. --set scoring.max_per_bin=2]
 set -euo pipefail

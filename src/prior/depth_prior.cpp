@@ -28,13 +28,13 @@ void SparsePriorOptions::visit(ConfigVisitor& v) {
   v.field("densify", densify,
           "how prompts become dense depth: fit (the monocular prior aligned, then its residual field), image (the "
           "prompts alone, interpolated edge-aware in the image), blend (image, with the fit taken per region where "
-          "held-out prompts show it cuts the error; the default, lab/2026-12-07-densify); checkpoints stored "
+          "held-out prompts show it cuts the error; the default, lab/2026-12-06-densify); checkpoints stored "
           "without the key keep fit",
           {"fit", "image", "blend"});
   v.field("color_range", color_range,
           "densify = image or blend: colour range (sRGB units) of the joint bilateral kernel; a prompt counts less "
           "for a pixel of another colour (1 chosen on the development scenes: 0.1 and 0.3 made textured surfaces "
-          "bumpy, -1.5 and -0.4 dB; lab/2026-12-07-densify)",
+          "bumpy, -1.5 and -0.4 dB; lab/2026-12-06-densify)",
           Range::between(0.01, 10));
   v.field("far", far,
           "pixels further than far_spacings from every prompt (where a sensor returned nothing): keep the "

@@ -3,11 +3,11 @@
 # (configs/dev.json: the far rule and the default chosen there; dev_color_range.json: the colour range), then the
 # evaluation sets (configs/study.json, and study_seen.json: the kinect rows masked by the sensor's depth), then the
 # tables. Needs the display study's full_s0 checkpoint and a learned depth net (README, "Inputs").
-# Usage, from anywhere: lab/2026-12-07-densify/run.sh [dev|study|tables|all] [infinisplat-eval options]
+# Usage, from anywhere: lab/2026-12-06-densify/run.sh [dev|study|tables|all] [infinisplat-eval options]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"
-here=lab/2026-12-07-densify
+here=lab/2026-12-06-densify
 bin="${BUILD_DIR:-$root/build}"
 stage="${1:-all}"
 [ $# -gt 0 ] && shift
