@@ -93,7 +93,8 @@ TEST_CASE("densify: with a good prior, blend is at least as good as today's fit"
   CHECK(torch::equal(fit.depth, align_to_prompts(1.0 / (good + 0.2), prompts, today)));
 }
 
-TEST_CASE("densify: confidence falls with the distance to the prompts, and the far rule holds", "[prior][densify_prior]") {
+TEST_CASE("densify: confidence falls with the distance to the prompts, and the far rule holds",
+          "[prior][densify_prior]") {
   const int64_t H = 48, W = 96;
   const Scene s = room(H, W);
   auto left = torch::zeros({H, W});
