@@ -24,8 +24,8 @@ struct ComposerOptions {
   // z axis starts on the support's surface normal, so a Gaussian flattened along z lies in the surface).
   std::string orientation = "camera";  // the release's; the model's default is surface (ModelOptions)
   // (scale_floor_px · z / f)² added to every axis's variance (z the depth, f the source focal length): no Gaussian
-  // narrower than that share of a source pixel, so larger views see no gaps. 0 = off.
-  double scale_floor_px = 0.0;
+  // narrower than that share of a source pixel, so larger views see fewer gaps.
+  double scale_floor_px = 0.0;  // the release's (off); the model's default is 0.35 (ModelOptions)
   void visit(ConfigVisitor& v);
 };
 

@@ -17,7 +17,9 @@ namespace isplat {
 ModelOptions::ModelOptions() {
   // 0.85 supports per pixel, edge supports with half the budget spread per pixel and a per-pixel floor, a 2-pixel
   // band of pixel rays on the near side of silhouettes, 0.5 px off the far side, with 3 pixels of surface behind
-  // them; rotation updates in the surface's frame (lab/2026-11-28-seeds, -behind-band, 2026-11-26-surface-frame).
+  // them; rotation updates in the surface's frame (lab/2026-11-28-seeds, -behind-band, 2026-11-26-surface-frame);
+  // no Gaussian narrower than 0.35 source pixels, so views above the working size show fewer gaps
+  // (lab/2026-12-06-display-holes).
   sampler.budget_mode = "per_pixel";
   sampler.density = 0.85;
   sampler.edge_supports = true;
@@ -27,6 +29,7 @@ ModelOptions::ModelOptions() {
   sampler.edge_shift = 0.5;
   sampler.edge_behind = 3;
   composer.orientation = "surface";
+  composer.scale_floor_px = 0.35;
 }
 
 void ModelOptions::visit(ConfigVisitor& v) {

@@ -25,9 +25,10 @@ int config_version(const Checkpoint& ck, const std::string& source) {
 
 ModelOptions model_defaults(int config_version) {
   ModelOptions o;
-  // Stored configs written before prior.sparse.densify existed aligned the prior (fit); a config that has the key
-  // keeps its value (every config written since stores it).
+  // Stored configs written before these keys existed ran without them: the prior aligned (fit), no scale floor. A
+  // config that has a key keeps its value (every config written since stores every key).
   o.prior.sparse.densify = "fit";
+  o.composer.scale_floor_px = 0.0;
   if (config_version >= 2) return o;
   // Version 1: the paper release's fixed budget, no edge supports, rotations in the camera frame.
   o.sampler.budget_mode = "fixed";
