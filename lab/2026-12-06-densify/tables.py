@@ -65,16 +65,23 @@ def main():
                   " | − dataset (dB) | − prompts (dB) | AbsRel unprompted | δ<1.25 unprompted | AbsRel removed | δ<1.25 removed |")
             print("|---" * (10 + len(BINS)) + "|")
             for name in sorted(methods, key=lambda n: (n.endswith("-kinect"), n)):
-                rows = list(methods[name].values())
-                cells = [name, str(len(rows)), fmt(*interval([r["psnr"] for r in rows]))]
+                # A pair with nothing to score (mask_depth = seen, the sensor returned nothing there) has no PSNR.
+                rows = [r for r in methods[name].values() if r["psnr"] is not None]
+                unscored = len(methods[name]) - len(rows)
+                cells = [name, str(len(rows)) + (" (+%d empty)" % unscored if unscored else ""),
+                         fmt(*interval([r["psnr"] for r in rows]))]
                 for b in range(len(BINS)):
                     cells.append(fmt(*interval([r["psnr"] for r in rows if r["bin"] == b])))
                 for kind in ("dataset", "prompts"):
                     other = methods.get(partner(name, kind))
+                    if other is None and kind == "prompts":  # the development scenes name it by its far rule
+                        suffix = "-kinect" if name.endswith("-kinect") else ""
+                        other = methods.get("prompts-farkeep" + suffix)
                     if other is None or other is methods[name]:
                         cells.append("")
                         continue
-                    diffs = [r["psnr"] - other[i]["psnr"] for i, r in methods[name].items() if i in other]
+                    diffs = [r["psnr"] - other[i]["psnr"] for i, r in methods[name].items()
+                             if i in other and r["psnr"] is not None and other[i]["psnr"] is not None]
                     cells.append(fmt(*interval(diffs), signed=True))
                 cells += [*densify(rows, "densify_unprompted"), *densify(rows, "densify_removed")]
                 print("| " + " | ".join(cells) + " |")
