@@ -211,3 +211,27 @@ TEST_CASE("precision: the evaluator scores one checkpoint in fp32 and bf16 on th
 }
 
 }  // namespace isplat::precision_eval_test
+
+namespace isplat::precision_train_test {
+
+TEST_CASE("precision: a trainer runs in its own runtime.precision, whatever the process's, and restores it",
+          "[precision][train]") {
+  test::QuietLogs quiet;
+  const auto g = test::make_tiny_dataset("precision_train", 16);
+  auto first_steps = [&](const std::string& precision) {
+    TrainConfig config = test::tiny_train_config(g, test::temp_dir("precision_train_" + precision), 3);
+    config.runtime.precision = precision;
+    Trainer trainer(config);
+    std::vector<double> losses;
+    for (int i = 0; i < 3; ++i) losses.push_back(trainer.train_step().losses.at("total"));
+    return losses;
+  };
+  REQUIRE(compute_precision() == Precision::fp32);  // as an experiment's process is: its rows set their own
+  const auto fp32 = first_steps("fp32"), bf16 = first_steps("bf16");
+  CHECK(compute_precision() == Precision::fp32);
+  CHECK(fp32 == first_steps("fp32"));  // deterministic, so a difference below is the precision's
+  CHECK(bf16 != fp32);
+  for (size_t i = 0; i < fp32.size(); ++i) CHECK(bf16[i] == Approx(fp32[i]).epsilon(0.05));
+}
+
+}  // namespace isplat::precision_train_test

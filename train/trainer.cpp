@@ -60,6 +60,7 @@ void Trainer::request_stop() {
 
 Trainer::Trainer(const TrainConfig& config)
     : config_(config),
+      precision_(resolve_precision(config.runtime.precision)),
       run_dir_(config.train.out),
       checkpoints_((fs::path(config.train.out) / "checkpoints").string(), config.train.keep_last) {
   torch::manual_seed(static_cast<uint64_t>(config.runtime.seed));
@@ -157,6 +158,7 @@ void Trainer::synchronize_gradients(StepStats& s) {
 }
 
 StepStats Trainer::train_step() {
+  const PrecisionScope precision(precision_);
   StepStats s;
   const auto t_step = Clock::now();
   auto t0 = Clock::now();
@@ -220,6 +222,7 @@ StepStats Trainer::train_step() {
 
 double Trainer::validate(bool write_images) {
   if (!val_sampler_) return std::numeric_limits<double>::quiet_NaN();
+  const PrecisionScope precision(precision_);
   torch::NoGradGuard g;
   trainable().eval();
   double total = 0, psnr_sum = 0;

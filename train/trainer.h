@@ -8,6 +8,7 @@
 
 #include <torch/optim/adamw.h>
 
+#include "core/precision.h"
 #include "data/loader.h"
 #include "io/checkpoint.h"
 #include "io/folder_lock.h"
@@ -50,6 +51,9 @@ class Trainer {
   Checkpoint make_checkpoint(bool with_optimizer) const;
 
   TrainConfig config_;
+  // runtime.precision, applied by each step and validation itself: an experiment trains rows of different
+  // precisions in one process, whose own runtime section is not theirs.
+  Precision precision_;
   std::unique_ptr<TrainTask> task_;
   std::unique_ptr<TupleSampler> train_sampler_, val_sampler_;
   std::unique_ptr<BatchLoader> loader_;
