@@ -72,6 +72,9 @@ std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, in
 }
 // The CLI's bounds on intrinsics and sizes: a focal length of 1e-3 or 1e9 pixels is a typo, not a lens.
 constexpr double kMinFocal = 1e-2, kMaxFocal = 1e7, kMaxSide = 65536;
+// --view-floor's default: the smallest floor (in steps of 0.05 px) with at most 0.1% gaps at 4x on every development
+// frame, for both seeds of the recipe (lab/2026-12-06-display-holes).
+constexpr double kViewFloorPx = 0.45;
 
 // Options that only mean something together: a value given without its partner would be ignored in silence.
 void check_intrinsics_options(double fx, double fy, double cx, double cy, int64_t width, int64_t height) {
@@ -183,6 +186,7 @@ bool outputs_complete(const std::string& ply) {
 int run_predict(int argc, char** argv) {
   std::string checkpoint, image_path, depth_model, depth_path, prompts_path, align_path, out;
   double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
+  double view_floor = kViewFloorPx;
   MergeOptions merge;  // off unless --merge-cell
   int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
   std::string precision = "fp32";
@@ -240,6 +244,13 @@ int run_predict(int argc, char** argv) {
   args.flag("--photo-size", photo_size,
             "predict at the photo's own resolution (in multiples of 16) instead of the working size: more Gaussians, "
             "fewer gaps in large views, slower");
+  args.option("--view-floor", view_floor,
+              cat("no written Gaussian narrower than this many working-size pixels at its depth (the composer's scale "
+                  "floor, raised for viewers, who render above the working size: at ",
+                  kViewFloorPx,
+                  ", the default, a viewer at 4x sees almost no gaps, at a small cost at the working size); 0 = the "
+                  "checkpoint's own composer.scale_floor_px"))
+      .range(0, 4, "pixels");
   args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)").range(0, 1);
   args.option("--prune-contribution", prune_contribution,
               "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
@@ -299,6 +310,10 @@ int run_predict(int argc, char** argv) {
   const Checkpoint ck = load_checkpoint(checkpoint);
   auto pipeline = load_pipeline(ck, checkpoint, sets);
 
+  // The floor the Gaussians are written with: the checkpoint's, raised to --view-floor for viewers.
+  double& floor_px = pipeline->model()->options.composer.scale_floor_px;
+  const double trained_floor_px = floor_px;
+  floor_px = std::max(floor_px, view_floor);
   const SamplerOptions configured = pipeline->model()->options.sampler;
   // One photo -> its PLY and camera JSON at `ply_out`. `exif_from`: the file whose EXIF may give the focal length.
   const auto predict_one = [&](const cv::Mat& photo, const std::string& exif_from, const std::string& label,
@@ -419,6 +434,7 @@ int run_predict(int argc, char** argv) {
             << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
     ply.comments.push_back(pruning.str());
     ply.comments.push_back(cat("working_size ", Wm, "x", Hm, " (photo ", W0, "x", H0, ")"));
+    ply.comments.push_back(cat("scale_floor_px ", floor_px, " (the checkpoint's: ", trained_floor_px, ")"));
     if (aligned.samples > 0)
       ply.comments.push_back(
           cat("scale_aligned ", aligned.factor, " (median over ", aligned.samples, " points of ", align_path, ")"));

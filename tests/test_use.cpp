@@ -157,6 +157,24 @@ TEST_CASE("use: predict writes a PLY that render turns into frames and a video",
   REQUIRE(std::system(full_size.c_str()) == 0);
   CHECK(size_comment(out + "/full.ply") == "working_size 64x48 (photo 64x48)");
   CHECK_THAT(test::read_bytes(out + "/full.txt"), Catch::Contains("working size 64x48"));
+  // The written Gaussians get the viewer's floor (--view-floor, default 0.45 px) unless the checkpoint's is larger;
+  // --view-floor 0 writes the checkpoint's own: the same Gaussians, none wider, most narrower.
+  auto floor_comment = [](const std::string& ply) {
+    for (const std::string& c : read_ply_comments(ply))
+      if (c.rfind("scale_floor_px ", 0) == 0) return c;
+    return std::string();
+  };
+  CHECK_THAT(floor_comment(out + "/scene.ply"), Catch::StartsWith("scale_floor_px 0.45 (the checkpoint's: "));
+  const std::string own_floor = predict_photo + "--view-floor 0 --out " + out + "/own_floor.ply > /dev/null 2>&1";
+  REQUIRE(std::system(own_floor.c_str()) == 0);
+  const std::string own = floor_comment(out + "/own_floor.ply");
+  const std::string own_value = own.substr(15, own.find(' ', 15) - 15);
+  CHECK(own == "scale_floor_px " + own_value + " (the checkpoint's: " + own_value + ")");
+  const Gaussians narrow = read_ply(out + "/own_floor.ply");
+  REQUIRE(narrow.count() == g.count());
+  const auto widened = g.scales - narrow.scales;  // same supports, same order
+  CHECK(widened.min().item<float>() >= -1e-6f);
+  CHECK((widened > 1e-6f).to(torch::kFloat32).mean().item<float>() > 0.5f);
   // Pruning by contribution drops what stays faint over the source and 2 nearby views; the printed count, the PLY's
   // comment and the Gaussians written agree (the run is the same as above up to that rule).
   const std::string prune = predict_photo + "--prune-contribution 0.05 --prune-views 2 --out " + out +
