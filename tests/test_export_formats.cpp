@@ -339,6 +339,10 @@ TEST_CASE("html: the viewer page opens in headless Chromium at the source camera
     return;
   }
   REQUIRE(fs::file_size(page) > 100000);  // the viewer and the scene are inside the page
+  // It opens playing our sway about the source view, not the viewer's own orbit about the scene's centre; the
+  // screenshot below, paused at the track's start (noanim), shows the source view.
+  const std::string html = test::read_bytes(page);
+  CHECK_THAT(html, Catch::Contains("\"startMode\":\"animTrack\"") && Catch::Contains("\"name\":\"sway\""));
   if (std::system("command -v chromium >/dev/null 2>&1") != 0) {
     WARN("html viewer check skipped: chromium is not installed (scripts/setup.sh installs it)");
     return;

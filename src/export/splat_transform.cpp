@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
 #include <torch/torch.h>
 #include <nlohmann/json.hpp>
@@ -55,8 +56,37 @@ struct ScratchDir {
 
 // The viewer's settings (version 2 of the SuperSplat viewer schema, as splat-transform's defaults) with
 // our camera; the viewer's world is ours turned 180 degrees about z.
+// The viewer opens playing an animation; without one in the settings it makes its own, a full orbit about the
+// scene's centre, which shows the empty back of a one-view scene. Ours sways the camera gently about the source
+// view (a figure of eight, 8% of the viewing distance across, 10 s a loop) and starts at the source camera.
+nlohmann::json sway_track(const ViewerCamera& camera,
+                          const std::function<nlohmann::json(std::array<double, 3>)>& to_viewer) {
+  const double reach = 0.04 * std::hypot(camera.target[0] - camera.position[0], camera.target[1] - camera.position[1],
+                                         camera.target[2] - camera.position[2]);
+  nlohmann::json times = nlohmann::json::array(), positions = nlohmann::json::array(),
+                 targets = nlohmann::json::array(), fovs = nlohmann::json::array();
+  constexpr int kKeys = 8;
+  constexpr double kSeconds = 10;
+  for (int k = 0; k < kKeys; ++k) {
+    const double a = 2 * M_PI * k / kKeys;
+    std::array<double, 3> p = camera.position;
+    p[0] += reach * std::sin(a), p[1] += 0.5 * reach * std::sin(2 * a);  // our x right, y down
+    times.push_back(kSeconds * k / kKeys);
+    for (const auto& v : to_viewer(p)) positions.push_back(v);
+    for (const auto& v : to_viewer(camera.target)) targets.push_back(v);
+    fovs.push_back(camera.fov_deg);
+  }
+  return {{"name", "sway"},
+          {"duration", kSeconds},
+          {"frameRate", 1},
+          {"loopMode", "repeat"},
+          {"interpolation", "spline"},
+          {"smoothness", 1},
+          {"keyframes", {{"times", times}, {"values", {{"position", positions}, {"target", targets}, {"fov", fovs}}}}}};
+}
+
 nlohmann::json viewer_settings(const ViewerCamera& camera) {
-  auto to_viewer = [](const std::array<double, 3>& p) { return nlohmann::json::array({-p[0], -p[1], p[2]}); };
+  const auto to_viewer = [](const std::array<double, 3>& p) { return nlohmann::json::array({-p[0], -p[1], p[2]}); };
   return {
       {"version", 2},
       {"tonemapping", "none"},
@@ -68,12 +98,12 @@ nlohmann::json viewer_settings(const ViewerCamera& camera) {
         {"grading", {{"enabled", false}, {"brightness", 0}, {"contrast", 1}, {"saturation", 1}, {"tint", {1, 1, 1}}}},
         {"vignette", {{"enabled", false}, {"intensity", 0.5}, {"inner", 0.3}, {"outer", 0.75}, {"curvature", 1}}},
         {"fringing", {{"enabled", false}, {"intensity", 0.5}}}}},
-      {"animTracks", nlohmann::json::array()},
+      {"animTracks", nlohmann::json::array({sway_track(camera, to_viewer)})},
       {"cameras",
        {{{"initial",
           {{"position", to_viewer(camera.position)}, {"target", to_viewer(camera.target)}, {"fov", camera.fov_deg}}}}}},
       {"annotations", nlohmann::json::array()},
-      {"startMode", "default"},
+      {"startMode", "animTrack"},
   };
 }
 
