@@ -109,8 +109,13 @@ torch::Tensor AttentionImpl::forward(const torch::Tensor& x, const torch::Tensor
     for (int64_t s = 0; s < N; s += rows) {
       const int64_t n = std::min(rows, N - s);
       auto scores = torch::matmul(q.narrow(2, s, n), kt);
-      scores.sub_(std::get<0>(scores.max(-1, true))).exp_();
-      scores.div_(scores.sum(-1, true));
+      if (scores.scalar_type() == torch::kBFloat16) {
+        // bf16 scores (runtime.precision): the softmax in fp32 in one fused pass; elementwise bf16 is slow here.
+        scores = torch::softmax(scores, -1, torch::kFloat);
+      } else {
+        scores.sub_(std::get<0>(scores.max(-1, true))).exp_();
+        scores.div_(scores.sum(-1, true));
+      }
       out.narrow(2, s, n).copy_(torch::matmul(scores, v));
     }
   }
