@@ -8,6 +8,15 @@ import sys
 
 CK = "out/experiments/display/runs/full_s0/checkpoints/last.safetensors"
 SPARSE = ["variant=lidar", "prior.type=sparse"]
+PROTOCOL = {"window": 10, "min_overlap": 0.6, "pairs_per_bin": 16, "per_scene_cap": 12, "seed": 0}
+EVAL_SETS = [
+    {"name": "rooms-heldout", "format": "hypersim", "root": "out/experiments/data/hypersim", "split": "test",
+     "width": 256, "height": 192},
+    {"name": "courtyard-colmap", "format": "colmap", "root": "out/experiments/data/eval/courtyard_colmap",
+     "width": 384, "height": 256},
+    {"name": "atrium-nerfstudio", "format": "nerfstudio", "root": "out/experiments/data/eval/atrium_nerfstudio",
+     "width": 384, "height": 256},
+]
 PRIORS = {
     "learned": ["prior.sparse.mono=learned", "prior.learned_weights=out/densify/depth_net.safetensors"],
     "random": ["prior.sparse.mono=learned", "prior.learned_weights="],
@@ -33,23 +42,6 @@ def rows(far, kinect):
     return out
 
 
-far = sys.argv[1]
-study = {
-    "datasets": [
-        {"name": "rooms-heldout", "format": "hypersim", "root": "out/experiments/data/hypersim", "split": "test",
-         "width": 256, "height": 192},
-        {"name": "courtyard-colmap", "format": "colmap", "root": "out/experiments/data/eval/courtyard_colmap",
-         "width": 384, "height": 256},
-        {"name": "atrium-nerfstudio", "format": "nerfstudio", "root": "out/experiments/data/eval/atrium_nerfstudio",
-         "width": 384, "height": 256},
-    ],
-    "protocol": {"window": 10, "min_overlap": 0.6, "pairs_per_bin": 16, "per_scene_cap": 12, "seed": 0},
-    "methods": rows(far, False) + rows(far, True),
-    "scoring": {"out": "out/densify/study", "lpips": ["squeeze"], "weights_dir": "weights", "examples": 0,
-                "max_per_bin": 1, "reference": "dataset-kinect"},
-}
-
-
 def write(config, path):
     with open(path, "w") as f:
         f.write("{\n")
@@ -63,7 +55,16 @@ def write(config, path):
         f.write("}\n")
 
 
-write(study, "configs/study.json")
-seen = dict(study, methods=[m for m in study["methods"] if m["name"].endswith("-kinect")],
-            scoring=dict(study["scoring"], out="out/densify/study_seen", mask_depth="seen", max_per_bin=1))
-write(seen, "configs/study_seen.json")
+if __name__ == "__main__":
+    far = sys.argv[1]
+    study = {
+        "datasets": EVAL_SETS,
+        "protocol": PROTOCOL,
+        "methods": rows(far, False) + rows(far, True),
+        "scoring": {"out": "out/densify/study", "lpips": ["squeeze"], "weights_dir": "weights", "examples": 0,
+                    "max_per_bin": 1, "reference": "dataset-kinect"},
+    }
+    write(study, "configs/study.json")
+    seen = dict(study, methods=[m for m in study["methods"] if m["name"].endswith("-kinect")],
+                scoring=dict(study["scoring"], out="out/densify/study_seen", mask_depth="seen", max_per_bin=1))
+    write(seen, "configs/study_seen.json")

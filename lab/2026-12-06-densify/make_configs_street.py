@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the configs of the second sitting (2026-12-07): the other-style prior (a depth net trained on generated
+"""Writes the configs of the second sitting (2026-12-06): the other-style prior (a depth net trained on generated
 streets, out/densify/depth_street/depth_net.safetensors) in today's fit and in the blend, clean and with the kinect
 preset, and the clean decisive rows again at 4 pairs per bin.
   configs/dev_street.json:   development scenes, scoring.out out/densify/dev (the reference rows resume from there)
@@ -10,44 +10,13 @@ preset, and the clean decisive rows again at 4 pairs per bin.
   configs/study16_seen.json: the kinect rows at 16 per set with the mask from the sensor's depth, out/densify/study16_seen
 The rows' options are those of make_configs.py (far = keep, colour range 1), so the names resume their scores.
 Usage: make_configs_street.py   (from this folder)"""
-import json
+from make_configs import CK, EVAL_SETS, PROTOCOL, SPARSE, method, write
 
-CK = "out/experiments/display/runs/full_s0/checkpoints/last.safetensors"
-SPARSE = ["variant=lidar", "prior.type=sparse"]
 LEARNED = ["prior.sparse.mono=learned", "prior.learned_weights=out/densify/depth_net.safetensors"]
 STREET = ["prior.sparse.mono=learned", "prior.learned_weights=out/densify/depth_street/depth_net.safetensors"]
 FIT = ["prior.sparse.densify=fit", "prior.sparse.far=keep"]
 BLEND = ["prior.sparse.densify=blend", "prior.sparse.color_range=1", "prior.sparse.far=keep"]
 PROMPTS = ["prior.sparse.densify=image", "prior.sparse.color_range=1", "prior.sparse.far=keep"]
-PROTOCOL = {"window": 10, "min_overlap": 0.6, "pairs_per_bin": 16, "per_scene_cap": 12, "seed": 0}
-EVAL_SETS = [
-    {"name": "rooms-heldout", "format": "hypersim", "root": "out/experiments/data/hypersim", "split": "test",
-     "width": 256, "height": 192},
-    {"name": "courtyard-colmap", "format": "colmap", "root": "out/experiments/data/eval/courtyard_colmap",
-     "width": 384, "height": 256},
-    {"name": "atrium-nerfstudio", "format": "nerfstudio", "root": "out/experiments/data/eval/atrium_nerfstudio",
-     "width": 384, "height": 256},
-]
-
-
-def method(name, overrides, kinect):
-    m = {"name": name + ("-kinect" if kinect else ""), "type": "model", "checkpoint": CK, "overrides": overrides}
-    if kinect:
-        m["perturb"] = {"sensor": {"preset": "kinect"}}
-    return m
-
-
-def write(config, path):
-    with open(path, "w") as f:
-        f.write("{\n")
-        for i, key in enumerate(config):
-            value = config[key]
-            if isinstance(value, list):
-                f.write(' "%s": [\n' % key + ",\n".join("  " + json.dumps(v) for v in value) + "\n ]")
-            else:
-                f.write(' "%s": %s' % (key, json.dumps(value)))
-            f.write(",\n" if i + 1 < len(config) else "\n")
-        f.write("}\n")
 
 
 # Development scenes: dev.json's names (the blend and prompt rows carry the far rule in their names there).
@@ -99,7 +68,3 @@ write({"datasets": EVAL_SETS, "protocol": PROTOCOL, "methods": rows16 + rows16_o
 write({"datasets": EVAL_SETS, "protocol": PROTOCOL, "methods": rows16_of(True),
        "scoring": {"out": "out/densify/study16_seen", "lpips": [], "weights_dir": "weights", "examples": 0,
                    "max_per_bin": 4, "reference": "dataset-kinect", "mask_depth": "seen"}}, "configs/study16_seen.json")
-# Without the street rows, for the run that starts before the street prior is trained (same names, same results).
-write({"datasets": EVAL_SETS, "protocol": PROTOCOL, "methods": rows16[:4],
-       "scoring": {"out": "out/densify/study16", "lpips": [], "weights_dir": "weights", "examples": 0,
-                   "max_per_bin": 4, "reference": "dataset"}}, "/tmp/x/study16_first.json")
