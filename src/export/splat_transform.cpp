@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 
 #include <torch/torch.h>
 #include <nlohmann/json.hpp>
@@ -54,15 +53,16 @@ struct ScratchDir {
   ScratchDir& operator=(const ScratchDir&) = delete;
 };
 
-// The viewer's settings (version 2 of the SuperSplat viewer schema, as splat-transform's defaults) with
-// our camera; the viewer's world is ours turned 180 degrees about z.
+// Our frame (OpenCV) to the viewer's world, ours turned 180 degrees about z.
+nlohmann::json to_viewer(const std::array<double, 3>& p) {
+  return nlohmann::json::array({-p[0], -p[1], p[2]});
+}
+
 // The viewer opens playing an animation; without one in the settings it makes its own, a full orbit about the
 // scene's centre, which shows the empty back of a one-view scene. Ours sways the camera gently about the source
 // view (a figure of eight, 8% of the viewing distance across, 10 s a loop) and starts at the source camera.
-nlohmann::json sway_track(const ViewerCamera& camera,
-                          const std::function<nlohmann::json(std::array<double, 3>)>& to_viewer) {
-  const double reach = 0.04 * std::hypot(camera.target[0] - camera.position[0], camera.target[1] - camera.position[1],
-                                         camera.target[2] - camera.position[2]);
+nlohmann::json sway_track(const ViewerCamera& camera, double viewing_distance) {
+  const double reach = 0.04 * viewing_distance;
   nlohmann::json times = nlohmann::json::array(), positions = nlohmann::json::array(),
                  targets = nlohmann::json::array(), fovs = nlohmann::json::array();
   constexpr int kKeys = 8;
@@ -85,8 +85,9 @@ nlohmann::json sway_track(const ViewerCamera& camera,
           {"keyframes", {{"times", times}, {"values", {{"position", positions}, {"target", targets}, {"fov", fovs}}}}}};
 }
 
-nlohmann::json viewer_settings(const ViewerCamera& camera) {
-  const auto to_viewer = [](const std::array<double, 3>& p) { return nlohmann::json::array({-p[0], -p[1], p[2]}); };
+// The viewer's settings (version 2 of the SuperSplat viewer schema, as splat-transform's defaults) with
+// our camera and its sway.
+nlohmann::json viewer_settings(const ViewerCamera& camera, double viewing_distance) {
   return {
       {"version", 2},
       {"tonemapping", "none"},
@@ -98,7 +99,7 @@ nlohmann::json viewer_settings(const ViewerCamera& camera) {
         {"grading", {{"enabled", false}, {"brightness", 0}, {"contrast", 1}, {"saturation", 1}, {"tint", {1, 1, 1}}}},
         {"vignette", {{"enabled", false}, {"intensity", 0.5}, {"inner", 0.3}, {"outer", 0.75}, {"curvature", 1}}},
         {"fringing", {{"enabled", false}, {"intensity", 0.5}}}}},
-      {"animTracks", nlohmann::json::array({sway_track(camera, to_viewer)})},
+      {"animTracks", nlohmann::json::array({sway_track(camera, viewing_distance)})},
       {"cameras",
        {{{"initial",
           {{"position", to_viewer(camera.position)}, {"target", to_viewer(camera.target)}, {"fov", camera.fov_deg}}}}}},
@@ -165,7 +166,7 @@ bool write_html_viewer(const std::string& path, const Gaussians& g, const Viewer
   const std::string ply = (scratch.path / "scene.ply").string();
   const std::string settings = (scratch.path / "settings.json").string();
   write_ply(ply, g, colors_linear);
-  write_file_atomic(settings, viewer_settings(camera).dump(2) + "\n");
+  write_file_atomic(settings, viewer_settings(camera, gap).dump(2) + "\n");
   AtomicPath out(path);
   // -q: errors only; -w: never stop to ask about an existing file (the temporary name is ours).
   if (!run_splat_transform(tool, {"-q", "-w", "-E", settings, ply, out.temp()}, why)) return false;
