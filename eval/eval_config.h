@@ -71,6 +71,7 @@ struct ScoringOptions {
   std::string crack_depth = "mean";     // the rendered depth cracks compare: mean (Σwz / Σw) | median (surface shown)
   std::string reference;                // method the others are compared with, pair by pair (empty = none)
   std::vector<double> display_factors;  // also score each target at these multiples of its size (empty = off)
+  bool regions = false;                 // also score by image region and re-render the source view
   std::string align_scale = "none";     // scale each prediction to the dataset: none | points | depth
   RenderOptions render;
   void visit(ConfigVisitor& v);

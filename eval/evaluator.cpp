@@ -15,6 +15,7 @@
 #include "data/perturb.h"
 #include "eval/densify.h"
 #include "eval/method_stamp.h"
+#include "eval/region_scores.h"
 #include "eval/results_log.h"
 #include "io/atomic_file.h"
 #include "io/folder_lock.h"
@@ -334,6 +335,12 @@ ScoredPair Evaluator::score_pair(size_t d, const std::vector<Sequence>& sequence
   }
   if (o.scene.means.defined())
     for (double factor : config_.scoring.display_factors) r.display.push_back(score_display(o, tgt, mask, factor));
+  if (config_.scoring.regions) {
+    const Lpips* first = nullptr;
+    for (const auto& net : config_.scoring.lpips)
+      if (auto it = lpips_.find(net); !first && it != lpips_.end()) first = it->second.get();
+    score_regions(o, src, tgt, mask, reference_depth(tgt), first, config_.scoring.render, r);
+  }
   return {r, src, tgt, mask, o};
 }
 

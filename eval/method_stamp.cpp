@@ -48,6 +48,7 @@ nlohmann::json stamp_options(const MethodOptions& mo, const ScoringOptions& scor
   j["scoring.crack_depth"] = scoring.crack_depth;
   j["scoring.display_factors"] = scoring.display_factors;
   j["scoring.align_scale"] = scoring.align_scale;
+  j["scoring.regions"] = scoring.regions;
   return j;
 }
 

@@ -71,6 +71,20 @@ std::pair<std::function<double(double)>, std::string> perturbation_strength(cons
 using reporting::neutral_values;
 using reporting::perturbation_strength;
 
+// Each field's mean over the scores where it is finite (NaN where none is).
+static RegionScore mean_score(const std::vector<const RegionScore*>& scores) {
+  RegionScore mean;
+  for (double RegionScore::*field :
+       {&RegionScore::share, &RegionScore::psnr, &RegionScore::lpips, &RegionScore::detail, &RegionScore::density}) {
+    double sum = 0;
+    int64_t n = 0;
+    for (const RegionScore* g : scores)
+      if (std::isfinite(g->*field)) sum += g->*field, ++n;
+    mean.*field = n ? sum / double(n) : std::numeric_limits<double>::quiet_NaN();
+  }
+  return mean;
+}
+
 std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& method,
                                  const std::vector<std::string>& bin_labels, const std::vector<int64_t>& requested,
                                  const std::vector<PairResult>& results, const std::vector<std::string>& lpips_nets) {
@@ -94,9 +108,12 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
     std::map<double, std::pair<int64_t, int64_t>> display_n;  // pairs with a finite PSNR, with a hole rate
     std::vector<double> scales;
     DensifyScore dense_sum[2] = {{0, 0, 0}, {0, 0, 0}};
+    std::map<std::string, std::vector<const RegionScore*>> regions;
     for (const auto& x : results) {
       if (bin >= 0 && x.bin != bin) continue;
       ++r.pairs;
+      for (const auto& [name, g] : x.regions) regions[name].push_back(&g);
+      if (std::isfinite(x.source_view.share)) regions["source_view"].push_back(&x.source_view);
       if (std::isfinite(x.psnr)) p += x.psnr, ++psnr_n;
       s += x.ssim, inf += x.infer_ms, ren += x.render_ms, g += x.gaussians, dec += x.decoded;
       for (const auto& [k, v] : x.stage_ms) stage[k] += v;
@@ -155,6 +172,7 @@ std::vector<ReportRow> summarize(const std::string& dataset, const MethodId& met
     for (int k = 0; k < 2; ++k)
       if (const int64_t m = dense_sum[k].pixels; m > 0)
         *dense_out[k] = {dense_sum[k].abs_rel / double(m), dense_sum[k].delta1 / double(m), m};
+    for (const auto& [name, scores] : regions) r.regions[name] = mean_score(scores);
     rows.push_back(r);
   };
   int64_t total_req = 0;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "eval/sweep.h"
+#include "io/table.h"
 #include "metrics/stats.h"
 
 namespace isplat {
@@ -17,6 +18,15 @@ struct DisplayScore {
   double factor = 0;
   double psnr = std::numeric_limits<double>::quiet_NaN();
   double hole_rate = std::numeric_limits<double>::quiet_NaN();
+};
+
+// One pair scored on a part of it (scoring.regions): an image region of the target, or the source view re-rendered.
+struct RegionScore {
+  double share = std::numeric_limits<double>::quiet_NaN();  // of the scored mask's pixels (1 for the source view)
+  double psnr = std::numeric_limits<double>::quiet_NaN();
+  double lpips = std::numeric_limits<double>::quiet_NaN();    // the first available of scoring.lpips
+  double detail = std::numeric_limits<double>::quiet_NaN();   // metrics/regions detail_ratio: below 1 = blurrier
+  double density = std::numeric_limits<double>::quiet_NaN();  // Gaussian centres per pixel (centre_density)
 };
 
 // A depth-guided method's densified depth (the sparse prior's output) against the true source depth on some pixels:
@@ -48,6 +58,10 @@ struct PairResult {
   double rotation_deg = std::numeric_limits<double>::quiet_NaN();  // between optical axes
   std::string motion;                 // lateral | forward | rotation (eval/pairs motion_type); empty in old logs
   std::vector<DisplayScore> display;  // at scoring.display_factors, for the methods that render Gaussians
+  // scoring.regions: by image region (metrics/regions image_regions, plus "all" for the whole mask) and the source
+  // view rendered again and scored against the photo (share NaN when not measured).
+  std::map<std::string, RegionScore> regions;
+  RegionScore source_view;
   // scoring.align_scale: the factor applied to the prediction and the reference samples it was fitted on (NaN and 0
   // when alignment is off or the method renders no Gaussians; 1 and 0 when no sample was usable).
   double scale = std::numeric_limits<double>::quiet_NaN();
@@ -77,6 +91,9 @@ struct ReportRow {
   double scale = std::numeric_limits<double>::quiet_NaN(), scale_spread = std::numeric_limits<double>::quiet_NaN();
   int64_t scale_pairs = 0, scale_missed = 0;
   DensifyScore unprompted, removed;  // means over the pairs measured; pixels = those pairs
+  // scoring.regions: by region name (PairResult::regions, and "source_view"), each field's mean over the pairs where
+  // it is finite.
+  std::map<std::string, RegionScore> regions;
 };
 
 // Rows for one dataset and method: one per bin label given, then "all".
@@ -127,6 +144,10 @@ struct SweepSlope {
 };
 std::vector<SweepSlope> sweep_slopes(const std::string& dataset, const ScoredMethods& results,
                                      int64_t resamples = 2000);
+
+// by_region.csv and the report's region section (scoring.regions): per dataset, method, bin and region, the means
+// of share, PSNR, LPIPS, detail and density; the section shows bin "all". Empty when no row has regions.
+Table regions_table(const std::vector<ReportRow>& rows, bool markdown);
 
 // Writes report.md, report.csv, report.json and speed_quality.png (per dataset: PSNR against time and
 // against Gaussians, log scale, one series per method family, the Pareto front marked) into `out`.

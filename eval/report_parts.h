@@ -1,4 +1,5 @@
-// Internal to the evaluation report (eval/report*.cpp): the sweeps' points and strengths, and the charts.
+// Internal to the evaluation report (eval/report*.cpp): method columns, the sweeps' points and strengths, and the
+// charts.
 #pragma once
 #include <functional>
 #include <map>
@@ -8,9 +9,15 @@
 
 #include "eval/report.h"
 #include "io/chart.h"
+#include "io/table.h"
 
 namespace isplat {
 namespace reporting {
+
+// The columns that name a method in CSV and JSON: its name and its sweep point as typed fields (report.md shows
+// the label instead), and one row's cells for them.
+void add_method_columns(Table& t);
+void add_method_cells(std::vector<TableCell>& cells, const MethodId& m);
 
 // A value sweep's point on dataset d over all bins (budgets are not value sweeps).
 bool is_sweep_point(const ReportRow& r, const std::string& d);

@@ -1,4 +1,5 @@
-// The report's tables and files: report.md, report.csv, report.json, differences.csv, slopes.csv, breakdown.csv.
+// The report's tables and files: report.md, report.csv, report.json, differences.csv, slopes.csv, breakdown.csv,
+// by_region.csv.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -21,6 +22,21 @@ using reporting::perturbation_strength;
 using reporting::sweep_families;
 using reporting::sweep_points;
 
+namespace reporting {
+void add_method_columns(Table& t) {
+  t.columns.insert(t.columns.end(), {{"method"}, {"sweep_key"}, {"budget"}, {"sweep_value", -1}});
+}
+
+void add_method_cells(std::vector<TableCell>& cells, const MethodId& m) {
+  auto text = [](const std::string& s) { return s.empty() ? TableCell() : TableCell(s); };
+  cells.insert(cells.end(), {m.name, text(m.sweep.key), text(m.sweep.budget),
+                             m.sweep.any() ? TableCell(m.sweep.value) : TableCell()});
+}
+}  // namespace reporting
+
+using reporting::add_method_cells;
+using reporting::add_method_columns;
+
 namespace {
 constexpr const char* kStages[] = {"prior", "sampler", "encoder", "decoder", "composer", "prune"};
 
@@ -36,18 +52,6 @@ std::string interval_text(const Interval& i, int digits) {
   return i.n == 0 ? std::string("n/a")
                   : cat(format_fixed(i.mean, digits), " [", format_fixed(i.lo, digits), ", ",
                         format_fixed(i.hi, digits), "]", i.excludes_zero() ? "" : " (no difference)");
-}
-
-// The columns that name a method in CSV and JSON: its name and its sweep point as typed fields (report.md shows
-// the label instead).
-void add_method_columns(Table& t) {
-  t.columns.insert(t.columns.end(), {{"method"}, {"sweep_key"}, {"budget"}, {"sweep_value", -1}});
-}
-
-void add_method_cells(std::vector<TableCell>& cells, const MethodId& m) {
-  auto text = [](const std::string& s) { return s.empty() ? TableCell() : TableCell(s); };
-  cells.insert(cells.end(), {m.name, text(m.sweep.key), text(m.sweep.budget),
-                             m.sweep.any() ? TableCell(m.sweep.value) : TableCell()});
 }
 
 // The scores of dataset d: one row per method and bin.
@@ -466,6 +470,14 @@ void write_reports(const std::string& out, const std::vector<ReportRow>& rows, c
     write_table_csv((dir / "differences.csv").string(), differences_table(differences));
   }
   if (!slopes.empty()) write_table_csv((dir / "slopes.csv").string(), slopes_table(slopes));
+  if (const Table regions = regions_table(rows, true); !regions.rows.empty()) {
+    md +=
+        "## By image region\n\nMeans over pairs (scoring.regions): each region's share of the scored pixels, "
+        "PSNR, LPIPS, detail (the render's Laplacian energy over the target's: below 1 is blurrier) and Gaussian "
+        "centres per pixel; source_view is the scene rendered from the source camera against the photo.\n\n" +
+        table_markdown(regions) + "\n";
+    write_table_csv((dir / "by_region.csv").string(), regions_table(rows, false));
+  }
   if (!notes.empty()) {
     md += "## Notes\n\n";
     for (const auto& n : notes) md += "- " + n + "\n";

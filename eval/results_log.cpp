@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/log.h"
@@ -31,6 +32,15 @@ nlohmann::json result_json(const PairResult& r) {
   for (const DisplayScore& d : r.display)
     j["display"].push_back({{"factor", d.factor}, {"psnr", num(d.psnr)}, {"hole_rate", num(d.hole_rate)}});
   // Written only when measured, so records of runs without them are as before.
+  auto region = [&](const RegionScore& g) {
+    return nlohmann::json{{"share", num(g.share)},
+                          {"psnr", num(g.psnr)},
+                          {"lpips", num(g.lpips)},
+                          {"detail", num(g.detail)},
+                          {"density", num(g.density)}};
+  };
+  for (const auto& [name, g] : r.regions) j["regions"][name] = region(g);
+  if (std::isfinite(r.source_view.share)) j["source_view"] = region(r.source_view);
   if (std::isfinite(r.scale)) j["scale"] = r.scale, j["scale_samples"] = r.scale_samples;
   for (const auto& [key, d] : {std::pair{"unprompted", &r.unprompted}, {"removed", &r.removed}})
     if (d->pixels > 0)
@@ -53,6 +63,19 @@ void check_range(const char* key, double v, double lo, double hi) {
   ISPLAT_CHECK(std::isfinite(v) && v >= lo && v <= hi, "'", key, "' = ", v, " is outside [", lo, ", ", hi, "]");
 }
 }  // namespace
+
+static RegionScore region_from_json(const nlohmann::json& o, const std::string& key) {
+  RegionScore g;
+  for (const auto& [field, value, hi] : {std::tuple{"share", &g.share, 1.0},
+                                         {"psnr", &g.psnr, 1000.0},
+                                         {"lpips", &g.lpips, 100.0},
+                                         {"detail", &g.detail, 1e9},
+                                         {"density", &g.density, 1e9}}) {
+    const nlohmann::json& v = o.at(field);
+    if (!v.is_null()) *value = v.get<double>(), check_range((key + "." + field).c_str(), *value, 0, hi);
+  }
+  return g;
+}
 
 PairResult result_from_json(const nlohmann::json& j) {
   PairResult r;
@@ -107,6 +130,10 @@ PairResult result_from_json(const nlohmann::json& j) {
         s.hole_rate = d.at("hole_rate").get<double>(), check_range("display.hole_rate", s.hole_rate, 0, 1);
       r.display.push_back(s);
     }
+  if (j.contains("regions"))
+    for (auto it = j.at("regions").begin(); it != j.at("regions").end(); ++it)
+      r.regions[it.key()] = region_from_json(it.value(), "regions." + it.key());
+  if (j.contains("source_view")) r.source_view = region_from_json(j.at("source_view"), "source_view");
   if (j.contains("scale")) {
     r.scale = j.at("scale").get<double>();
     check_range("scale", r.scale, 1e-12, 1e12);
