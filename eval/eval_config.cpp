@@ -219,7 +219,8 @@ void ScoringOptions::visit(ConfigVisitor& v) {
           "also score each pair by image region (near and far halves of the target's depth, textured and flat "
           "halves of its gradient energy, silhouettes within 2 px of a depth edge and interiors), with each region's "
           "detail (Laplacian energy against the target's: below 1 = blurrier) and Gaussian density, and render the "
-          "source view again against the photo (a pure test of the representation); report table by_region.md");
+          "source view again against the photo where it has depth (a pure test of the representation); the report gets "
+          "a section By image region and by_region.csv");
   v.field("align_scale", align_scale,
           "captures whose units are not metres (COLMAP): scale each method's prediction about the source camera by "
           "the median ratio of reference to rendered depth at the source view's samples before rendering the "

@@ -32,9 +32,12 @@ void score_regions(const MethodOutput& o, const ViewTensors& source, const ViewT
                                    pixels > 0 ? region.sum().item<double>() / pixels : 0.0);
   if (!o.scene.means.defined()) return;
   const RenderOutput back = render(o.scene, source.camera, render_options, RenderMaps::colour_only());
-  const auto whole = torch::ones({source.camera.height, source.camera.width});
-  r.source_view = region_score(rendered_srgb(back.rgb, o.linear_rgb), source.image, whole, o.scene, source.camera,
-                               lpips, 1.0);
+  // Where the source has depth: pixels without it (a sky, a window) get no supports by design in every method.
+  const auto scored_source = source.valid.defined() && source.valid.sum().item<double>() > 0
+                                 ? (source.valid > 0).to(torch::kFloat32)
+                                 : torch::ones({source.camera.height, source.camera.width});
+  r.source_view = region_score(rendered_srgb(back.rgb, o.linear_rgb), source.image, scored_source, o.scene,
+                               source.camera, lpips, 1.0);
 }
 
 }  // namespace isplat
