@@ -99,8 +99,8 @@ TEST_CASE("regions: Gaussian density counts the centres in front of the camera t
   camera.T_cw = torch::eye(4);
   camera.width = camera.height = 8;
   // Two centres on pixel (1, 1), one on (6, 6), one behind the camera (would land on (1, 1)), one outside the image.
-  const auto means = torch::tensor({-0.25f, -0.25f, 1.0f, -0.25f, -0.25f, 1.0f, 0.25f, 0.25f, 1.0f, 0.25f, 0.25f,
-                                    -1.0f, 5.0f, 0.0f, 1.0f})
+  const auto means = torch::tensor({-0.25f, -0.25f, 1.0f, -0.25f, -0.25f, 1.0f, 0.25f, 0.25f, 1.0f, 0.25f, 0.25f, -1.0f,
+                                    5.0f, 0.0f, 1.0f})
                          .view({5, 3});
   auto top_left = torch::zeros({8, 8});
   top_left.slice(0, 0, 4).slice(1, 0, 4).fill_(1);

@@ -13,7 +13,9 @@ namespace isplat {
 namespace {
 namespace F = torch::nn::functional;
 
-torch::Tensor grey(const torch::Tensor& image) { return image.to(torch::kFloat32).mean(0); }  // [H,W]
+torch::Tensor grey(const torch::Tensor& image) {
+  return image.to(torch::kFloat32).mean(0);
+}  // [H,W]
 
 // The median of `values` where `where` holds, or NaN when it holds nowhere.
 double masked_median(const torch::Tensor& values, const torch::Tensor& where) {
@@ -80,10 +82,9 @@ std::vector<std::pair<std::string, torch::Tensor>> image_regions(const torch::Te
 
   const auto g = grey(target);
   const auto dx = filter3(g, {0, 0, 0, -0.5f, 0, 0.5f, 0, 0, 0}), dy = filter3(g, {0, -0.5f, 0, 0, 0, 0, 0, 0.5f, 0});
-  const auto energy =
-      F::avg_pool2d((dx * dx + dy * dy).view({1, 1, H, W}),
-                    F::AvgPool2dFuncOptions(5).stride(1).padding(2).count_include_pad(false))
-          .view({H, W});
+  const auto energy = F::avg_pool2d((dx * dx + dy * dy).view({1, 1, H, W}),
+                                    F::AvgPool2dFuncOptions(5).stride(1).padding(2).count_include_pad(false))
+                          .view({H, W});
   const double median = masked_median(energy, scored);
   add("textured", scored & (energy > median));
   add("flat", scored & (energy <= median));
