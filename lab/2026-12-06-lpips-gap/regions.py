@@ -2,8 +2,9 @@
 """The LPIPS-gap study's diagnosis: each row against `full` by image region and in the source view, paired over
 pairs and seeds (the evaluator's scoring.regions records), with cluster-bootstrap 95% intervals over pairs.
 
-Writes regions.md (tables), regions.csv and regions.svg (LPIPS difference by region) next to this script.
-Usage: python3 lab/2026-12-06-lpips-gap/regions.py [EVAL_DIR]   (default out/experiments/lpips/eval)
+Writes regions.md (tables), regions.csv and regions.svg (LPIPS difference by region) next to this script; with
+rows named after EVAL_DIR (e.g. the candidate fixes), candidates.md, .csv and .svg for those rows instead.
+Usage: python3 lab/2026-12-06-lpips-gap/regions.py [EVAL_DIR [ROW ...]]   (default out/experiments/lpips/eval)
 """
 import csv
 import glob
@@ -14,6 +15,7 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROWS = ["pixel_supports", "dense_decoder"]
+OUT = "regions"  # the output files' name
 REGIONS = ["all", "near", "far", "textured", "flat", "silhouette", "interior", "source_view"]
 FIELDS = ["lpips", "psnr", "detail", "density"]
 SEEDS = [0, 1]
@@ -50,14 +52,18 @@ def interval(diffs, resamples=2000, seed=0):
 
 
 def results(eval_dir, dataset, row, seed):
-    paths = glob.glob(os.path.join(eval_dir, dataset, f"results_{row}-s{seed}_*.jsonl"))
+    paths = [p for pattern in (f"results_{row}-s{seed}_*.jsonl", f"results_{row}-s{seed}.jsonl")
+             for p in glob.glob(os.path.join(eval_dir, dataset, pattern))]
     if len(paths) != 1:
         sys.exit(f"{eval_dir}/{dataset}: expected one results file of {row} seed {seed}, found {paths}")
     return load(paths[0])
 
 
 def main():
+    global ROWS, OUT
     eval_dir = sys.argv[1] if len(sys.argv) > 1 else "out/experiments/lpips/eval"
+    if len(sys.argv) > 2:
+        ROWS, OUT = sys.argv[2:], "candidates"
     datasets = sorted(d for d in os.listdir(eval_dir) if os.path.isfile(os.path.join(eval_dir, d, "manifest.json")))
     if not datasets:
         sys.exit(f"{eval_dir}: no scored datasets")
@@ -93,7 +99,7 @@ def main():
                     iv = interval(diffs)
                     if iv:
                         table.append([dataset, row, region, field, *iv])
-    with open(os.path.join(HERE, "regions.csv"), "w", newline="") as f:
+    with open(os.path.join(HERE, OUT + ".csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["dataset", "row", "region", "field", "diff", "lo", "hi", "pairs"])
         w.writerows([[*r[:4], *(f"{x:.5f}" for x in r[4:7]), r[7]] for r in table])
@@ -141,7 +147,7 @@ def write_markdown(table, means, datasets):
                 cells += [f"{x:.{d}f}" if x is not None else "n/a" for x, d in [(lp, 4), (detail, 3), (density, 2)]]
             lines.append(f"| {region} | " + " | ".join(cells) + " |")
         lines.append("")
-    with open(os.path.join(HERE, "regions.md"), "w") as f:
+    with open(os.path.join(HERE, OUT + ".md"), "w") as f:
         f.write("\n".join(lines))
 
 
@@ -151,14 +157,15 @@ def write_svg(table, datasets):
     lo = min([v[1] for v in by.values()] + [0]) * 1.1
     hi = max([v[2] for v in by.values()] + [0]) * 1.1
     pw, ph, left, top = 300, 24 * len(REGIONS) + 50, 90, 30
-    width, height = left + len(datasets) * (pw + 20), ph + top + 40
-    colors = {"pixel_supports": "#1f77b4", "dense_decoder": "#ff7f0e"}
+    width, height = left + len(datasets) * (pw + 30), ph + top + 40
+    palette = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"]
+    colors = {row: palette[k % len(palette)] for k, row in enumerate(ROWS)}
     svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" '
            'font-size="11">', f'<rect width="{width}" height="{height}" fill="white"/>',
            f'<text x="{left}" y="16" font-size="13">LPIPS, row minus full (left of 0: the row is better), '
            '95% intervals</text>']
     for k, dataset in enumerate(datasets):
-        x0 = left + k * (pw + 20)
+        x0 = left + k * (pw + 30)
         sx = lambda v: x0 + (v - lo) / (hi - lo) * pw
         svg.append(f'<text x="{x0 + pw / 2}" y="{top + 10}" text-anchor="middle">{dataset}</text>')
         svg.append(f'<line x1="{sx(0)}" y1="{top + 18}" x2="{sx(0)}" y2="{top + ph - 20}" stroke="#888"/>')
@@ -170,17 +177,17 @@ def write_svg(table, datasets):
                 iv = by.get((dataset, row, region))
                 if not iv:
                     continue
-                yy = y - 4 + 8 * m
+                yy = y - 4 + 8 * m / max(1, len(ROWS) - 1)
                 svg.append(f'<line x1="{sx(iv[1]):.1f}" y1="{yy}" x2="{sx(iv[2]):.1f}" y2="{yy}" '
                            f'stroke="{colors[row]}" stroke-width="2"/>')
                 svg.append(f'<circle cx="{sx(iv[0]):.1f}" cy="{yy}" r="3" fill="{colors[row]}"/>')
-        for t in (lo, 0, hi):
-            svg.append(f'<text x="{sx(t):.1f}" y="{top + ph - 6}" text-anchor="middle">{t:+.3f}</text>')
+        for t, anchor in ((lo, "start"), (0, "middle"), (hi, "end")):
+            svg.append(f'<text x="{sx(t):.1f}" y="{top + ph - 6}" text-anchor="{anchor}">{t:+.3f}</text>')
     for m, row in enumerate(ROWS):
         svg.append(f'<circle cx="{left + 10 + 160 * m}" cy="{height - 12}" r="4" fill="{colors[row]}"/>'
                    f'<text x="{left + 18 + 160 * m}" y="{height - 8}">{row}</text>')
     svg.append("</svg>")
-    with open(os.path.join(HERE, "regions.svg"), "w") as f:
+    with open(os.path.join(HERE, OUT + ".svg"), "w") as f:
         f.write("\n".join(svg) + "\n")
 
 
