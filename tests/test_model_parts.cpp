@@ -255,35 +255,6 @@ TEST_CASE("composer: scale_floor_px widens Gaussians narrower than a share of a 
   CHECK(torch::equal(compose_camera(b, d, K, ComposerOptions{}).scales, plain.scales));
 }
 
-TEST_CASE("composer: footprint scales the base Gaussians' width, before the updates and the floor", "[composer]") {
-  BaseGaussians b;
-  b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}});
-  b.depth_factor = 0.5;
-  b.z_n = torch::tensor({1.0f, 2.5f});
-  b.scale_n = torch::tensor({0.02f, 0.5f});  // 4 cm and 1 m
-  b.color = torch::full({2, 3}, 0.5f);
-  b.opacity = torch::full({2}, 0.5f);
-  const auto K = make_K(50, 50, 32, 24, torch::kFloat64);
-  auto d = torch::zeros({2, 14}, torch::kFloat64);
-  d.select(1, 3).fill_(0.7);  // a scale update on the first axis
-  ComposerOptions o;
-  const Gaussians plain = compose_camera(b, d, K, o);
-  o.footprint = 0.6;
-  const Gaussians narrow = compose_camera(b, d, K, o);
-  CHECK(torch::allclose(narrow.scales, 0.6 * plain.scales, 1e-6, 0));  // the multiplier acts on 0.6x the base
-  CHECK(torch::equal(narrow.means, plain.means));
-  CHECK(torch::equal(narrow.colors, plain.colors));
-  // The floor still holds: a base far below it stays at the floor whatever the footprint.
-  o.scale_floor_px = 0.5;
-  b.scale_n = torch::tensor({1e-5f, 0.5f});
-  const double floor0 = 0.5 * 2.0 / 50.0;
-  CHECK(compose_camera(b, torch::zeros({2, 14}, torch::kFloat64), K, o).scales[0][1].item<double>() ==
-        Approx(floor0).epsilon(1e-3));
-  o.footprint = 0.05;
-  CHECK_THROWS_WITH(config_from_json<ComposerOptions>(config_to_json(o), "composer.json"),
-                    Catch::Contains("footprint"));
-}
-
 TEST_CASE("composer: orientation = surface turns each Gaussian's local z onto its support's normal", "[composer]") {
   BaseGaussians b;
   b.uv = torch::tensor({{10.5f, 20.5f}, {30.0f, 5.25f}, {3.0f, 4.0f}});

@@ -21,6 +21,7 @@ const std::vector<RetiredKey>& retired_keys() {
       {"model.prior.floor_rule", "best", "lab/2026-11-25-prior-scale"},
       {"model.prior.learned_backbone_lr", 0.0, "lab/2026-11-26-prior-tuned"},
       {"model.prior.learned_input_width", 0, "lab/2026-11-26-prior-tuned"},
+      {"model.composer.footprint", 1.0, "lab/2026-12-06-lpips-gap"},
       {"loss.smooth_normal", 0.0, "lab/2026-11-23-ablation-edges"},
       {"loss.depth_grad", 0.0, "lab/2026-11-25-cracks-edges"},
       {"loss.depth_grad_edge", nullptr, "lab/2026-11-25-cracks-edges"},

@@ -22,10 +22,6 @@ void ComposerOptions::visit(ConfigVisitor& v) {
   v.field("color_step", color_step, "colour logit update step", Range::at_least(0));
   v.field("scale_min", scale_min, "lower bound of the scale multiplier", Range::between(0, 1));
   v.field("scale_max", scale_max, "upper bound of the scale multiplier (> 1)", Range::above(1));
-  v.field("footprint", footprint,
-          "base Gaussian standard deviation as a share of the side (square root) of the surface area its support "
-          "stands for (1 = the release's: a pixel's support is one pixel wide at one standard deviation)",
-          Range::between(0.1, 4.0));
   v.field("linear_rgb", linear_rgb, "composite in linear RGB (sRGB -> linear on the colours)");
   v.field("orientation", orientation,
           "frame of the rotation update: camera (release, identity base) or surface (local z on the depth "
@@ -90,13 +86,12 @@ Gaussians compose_camera(const BaseGaussians& base, const torch::Tensor& delta, 
   auto inv_z = torch::softplus(inverse_softplus(1.0 / z_n) + o.lambda_z * dz);
   auto z2_n = 1.0 / inv_z;
   auto means_n = backproject_points(uv2, z2_n, K.to(dt));
-  // Scale: s = footprint * s_base * (z'/z) * [(smax - smin) * sigmoid(a*ds + b) + smin], footprint * s_base at
-  // ds = 0.
+  // Scale: s = s_base * (z'/z) * [(smax - smin) * sigmoid(a*ds + b) + smin], equal to s_base at ds = 0.
   const double span = o.scale_max - o.scale_min;
   const double a = span / ((1.0 - o.scale_min) * (o.scale_max - 1.0));
   const double p = (1.0 - o.scale_min) / span, b = std::log(p / (1.0 - p));
   auto factor = span * torch::sigmoid(a * ds + b) + o.scale_min;
-  auto scales_n = (o.footprint * s_n * (z2_n / z_n)).unsqueeze(1) * factor;
+  auto scales_n = (s_n * (z2_n / z_n)).unsqueeze(1) * factor;
   // Rotation, colour and opacity.
   auto identity = torch::tensor({1.0, 0.0, 0.0, 0.0}, delta.options());
   auto quats = identity + dq;

@@ -19,9 +19,6 @@ struct ComposerOptions {
   double lambda_z = 1e-3;   // inverse-depth step per unit dz
   double color_step = 0.1;  // logit colour step per unit dc
   double scale_min = 0.0, scale_max = 4.0;
-  // Base standard deviation as a share of the side of the area a support stands for (sqrt of it): 1 (release) draws a
-  // pixel's support with a one-pixel standard deviation, a blur the bounded updates can hardly undo.
-  double footprint = 1.0;
   bool linear_rgb = true;  // convert colours sRGB -> linear for compositing (release behaviour)
   // The frame the rotation update dq acts in: "camera" (release: the identity) or "surface" (the Gaussian's local
   // z axis starts on the support's surface normal, so a Gaussian flattened along z lies in the surface).
