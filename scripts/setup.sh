@@ -11,6 +11,7 @@ PACKAGES=(
   libgloo-dev  # Gloo headers for c10d ProcessGroupGloo (data-parallel training)
   chromium  # opens the exported HTML viewer headless in the tests
   python3-torch  # scripts/get_weights.sh converts the published torch.save weights with torch.load
+  python3-dev python3-pybind11 python3-pytest python3-venv python3-wheel  # python/: build, tests, pip install
   curl  # scripts/get_weights.sh downloads them
 )
 
