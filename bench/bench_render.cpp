@@ -25,6 +25,7 @@
 #include "decoder/composer.h"
 #include "geometry/camera.h"
 #include "geometry/camera_torch.h"
+#include "io/safetensors.h"
 #include "io/tensor_image.h"
 #include "render/kernels.h"
 #include "render/render.h"
@@ -97,6 +98,8 @@ double median(std::vector<double> v) {
 // The statistic of the timed runs (--stat): the median, or the minimum, which a machine shared with other
 // tenants disturbs least (a run is only ever slowed down by them).
 bool g_use_min = false;
+// --save-scene: the folder each case's Gaussians and camera are written to (bench/bench_python_render.py reads them).
+std::string g_save_scene;
 double stat(const std::vector<double>& v) {
   return g_use_min ? (v.empty() ? 0.0 : *std::min_element(v.begin(), v.end())) : median(v);
 }
@@ -125,6 +128,19 @@ void run(const Case& cs) {
   const Gaussians& g = scene.gaussians;
   const Camera& cam = scene.target;
   const double build_ms = now_ms() - t_build;
+  if (!g_save_scene.empty()) {
+    std::string file = cs.name;
+    std::replace(file.begin(), file.end(), ' ', '_');
+    write_safetensors(g_save_scene + "/" + file + ".safetensors",
+                      {{"means", g.means},
+                       {"quats", g.quats},
+                       {"scales", g.scales},
+                       {"opacities", g.opacities},
+                       {"colors", g.colors},
+                       {"K", cam.K},
+                       {"T_cw", cam.T_cw},
+                       {"size", torch::tensor({int64_t(cs.W), int64_t(cs.H)})}});
+  }
   const double rss0 = resident_mb();  // also resets the peak, so each case reports its own
 
   // Forward + backward as the trainer renders (no loss reads the normal map): an L1 loss on rgb plus light depth and
@@ -244,6 +260,9 @@ int main(int argc, char** argv) {
                   "LEVEL");
     parser.option("--stat", statistic, "statistic of the timed runs: median, or min (steadier on a shared machine)",
                   "STAT");
+    parser.option("--save-scene", g_save_scene,
+                  "write each case's Gaussians and camera to DIR/<case>.safetensors (for bench_python_render.py)",
+                  "DIR");
     if (!parser.parse(argc, argv)) return 0;
     ISPLAT_CHECK(statistic == "median" || statistic == "min", "bench_render: --stat: '", statistic,
                  "' is not median or min");
