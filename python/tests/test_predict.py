@@ -2,6 +2,7 @@
 import os
 import subprocess
 
+import pytest
 import torch
 
 import infinisplat
@@ -56,3 +57,22 @@ def test_image_round_trip(tmp_path):
     infinisplat.save_image(path, image)
     back = infinisplat.load_image(path)
     assert back.shape == (3, 5, 7) and (back - image).abs().max() <= 0.5 / 255 + 1e-6
+
+
+def test_predictor_bad_inputs(tiny):
+    predictor = infinisplat.Predictor(tiny["checkpoint"])
+    depth = infinisplat.load_depth(tiny["depth"])
+    image = infinisplat.load_image(tiny["image"])
+    nan = image.clone()
+    nan[0, 1, 1] = float("nan")
+    for kwargs, error, words in (
+            (dict(image=image[:2]), ValueError, "image"),
+            (dict(image=nan, depth=depth), infinisplat.Error, "image"),
+            (dict(image=[1, 2]), TypeError, "image"),
+            (dict(image=image, depth=depth[:, :10]), infinisplat.Error, "depth"),
+            (dict(image=image, depth=depth.tolist()), TypeError, "depth"),
+            (dict(image=image, depth=depth, fx=-3.0), infinisplat.Error, "fx"),
+            (dict(image=image, depth=depth, width=40, height=32), infinisplat.Error, "width"),
+            (dict(image=image, depth=depth, prune_views=3), infinisplat.Error, "prune_views")):
+        with pytest.raises(error, match=words):
+            predictor.predict(**kwargs)
