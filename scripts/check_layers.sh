@@ -2,7 +2,7 @@
 # Fails when a folder under src/ includes a folder that comes later in the data flow (README, "What is here").
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-order=(core geometry io nets data prior sampler encoder decoder model render loss metrics export)
+order=(core geometry io nets data prior sampler encoder decoder model render loss metrics predict export)
 rank() { local i; for i in "${!order[@]}"; do [ "${order[$i]}" = "$1" ] && { echo "$i"; return; }; done; echo -1; }
 bad=0
 for dir in "$root"/src/*/; do
