@@ -24,17 +24,13 @@
 #include "core/progress.h"
 #include "core/runtime.h"
 #include "geometry/camera_torch.h"
-#include "geometry/image_ops.h"
 #include "io/atomic_file.h"
-#include "io/checkpoint.h"
 #include "io/csv.h"
 #include "io/depth_io.h"
-#include "io/exif.h"
 #include "io/image_io.h"
 #include "io/ply.h"
-#include "io/tensor_image.h"
 #include "metrics/display.h"
-#include "model/model_io.h"
+#include "predict/photo.h"
 #include "render/prune.h"
 #include "render/scale_align.h"
 #include "sampler/sampler.h"
@@ -43,55 +39,8 @@ namespace isplat::cli {
 namespace fs = std::filesystem;
 
 namespace {
-// The working size: the training resolution's area at the photo's aspect, in multiples of 16 (the size the model
-// was trained at); with photo_size, the photo's own size in multiples of 16.
-std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, int64_t override_w, int64_t override_h,
-                                 bool photo_size) {
-  auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
-  if (photo_size) {
-    const int w = r16(width), h = r16(height);
-    ISPLAT_CHECK(w <= max_image_pixels() / h, "predict: --photo-size ", w, "x", h,
-                 " is above runtime.max_image_pixels = ", max_image_pixels(), " (give --width and --height)");
-    return {w, h};
-  }
-  if (override_w > 0 && override_h > 0) {
-    ISPLAT_CHECK(override_w <= max_image_pixels() / override_h, "predict: --width x --height = ", override_w, "x",
-                 override_h, " is above runtime.max_image_pixels");
-    return {static_cast<int>(override_w), static_cast<int>(override_h)};
-  }
-  int64_t tw = 256, th = 192;
-  try {
-    const auto cfg = parse_json(ck.config_json(), "stored config");
-    tw = cfg.at("data").at("tuples").at("width").get<int64_t>();
-    th = cfg.at("data").at("tuples").at("height").get<int64_t>();
-  } catch (const std::exception&) {  // no training size stored (e.g. a converted checkpoint): the default
-  }
-  if (tw < 16 || th < 16 || tw > max_image_pixels() / th) tw = 256, th = 192;
-  const double area = static_cast<double>(tw) * th, aspect = static_cast<double>(width) / height;
-  return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
-}
 // The CLI's bounds on intrinsics and sizes: a focal length of 1e-3 or 1e9 pixels is a typo, not a lens.
 constexpr double kMinFocal = 1e-2, kMaxFocal = 1e7, kMaxSide = 65536;
-// --view-floor's default: the smallest floor (in steps of 0.05 px) with at most 0.1% gaps at 4x on every development
-// frame, for both seeds of the recipe (lab/2026-12-06-display-holes).
-constexpr double kViewFloorPx = 0.45;
-
-// Options that only mean something together: a value given without its partner would be ignored in silence.
-void check_intrinsics_options(double fx, double fy, double cx, double cy, int64_t width, int64_t height) {
-  ISPLAT_CHECK(fx > 0 || (fy <= 0 && cx < 0 && cy < 0), "predict: --fy, --cx and --cy refine --fx; give --fx too ",
-               "(without --fx the intrinsics come from EXIF or --hfov, which they would not change)");
-  ISPLAT_CHECK((width > 0) == (height > 0), "predict: give --width and --height together (got ", width, "x", height,
-               ")");
-  ISPLAT_CHECK(width % 16 == 0 && height % 16 == 0, "predict: --width ", width, " and --height ", height,
-               " must be multiples of 16 (the encoder's patch)");
-}
-
-// A depth map must show the photo's view: a resized copy is fine, another aspect is another framing.
-void check_depth_aspect(const std::string& depth_path, int dw, int dh, const std::string& photo, int w, int h) {
-  const double ratio = (static_cast<double>(dw) / dh) / (static_cast<double>(w) / h);
-  ISPLAT_CHECK(std::fabs(ratio - 1.0) <= 0.01, "predict: --depth ", depth_path, " is ", dw, "x", dh,
-               ", not a resized copy of the photo ", photo, " (", w, "x", h, "): the aspects differ");
-}
 
 enum class InputKind { Image, Folder, List, Video };
 
@@ -185,12 +134,11 @@ bool outputs_complete(const std::string& ply) {
 
 int run_predict(int argc, char** argv) {
   std::string checkpoint, image_path, depth_model, depth_path, prompts_path, align_path, out;
-  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0, prune_opacity = 0.02, prune_contribution = 0;
-  double view_floor = kViewFloorPx;
-  MergeOptions merge;  // off unless --merge-cell
-  int64_t threads = 0, width = 0, height = 0, seed = 0, prune_views = 4, fill_px = -1;
+  double fx = 0, fy = 0, cx = -1, cy = -1, hfov = 0;  // 0 and -1: not given
+  PhotoPredictOptions photo_options;                  // the one-photo steps' options, at their defaults
+  MergeOptions& merge = photo_options.merge;          // off unless --merge-cell
+  int64_t threads = 0, seed = 0, fill_px = -1;
   std::string precision = "fp32";
-  bool keep_outside = false, photo_size = false;
   std::vector<std::string> sets;
   int64_t max_gaussians = 0, every = 1;
   ArgParser args("infinisplat predict",
@@ -235,28 +183,31 @@ int run_predict(int argc, char** argv) {
               "fill invalid depth within this many pixels of valid depth before sampling, so small holes in --depth "
               "get Gaussians (0 = off; -1, the default: the checkpoint's sampler.fill_px)",
               "N");  // the config schema's bounds on sampler.fill_px check it, naming the key
-  args.option("--width", width,
+  args.option("--width", photo_options.width,
               "working width, a multiple of 16, with --height (default: the training resolution's area at the "
               "photo's aspect, in multiples of 16: the size the model was trained at, fastest and best scored; a "
               "viewer far above it sees gaps, which predict reports at 4x)")
       .range(16, kMaxSide, "pixels");
-  args.option("--height", height, "working height, a multiple of 16, with --width").range(16, kMaxSide, "pixels");
-  args.flag("--photo-size", photo_size,
+  args.option("--height", photo_options.height, "working height, a multiple of 16, with --width")
+      .range(16, kMaxSide, "pixels");
+  args.flag("--photo-size", photo_options.photo_size,
             "predict at the photo's own resolution (in multiples of 16) instead of the working size: more Gaussians, "
             "fewer gaps in large views, slower");
-  args.option("--view-floor", view_floor,
+  args.option("--view-floor", photo_options.view_floor,
               cat("no written Gaussian narrower than this many working-size pixels at its depth (the composer's scale "
                   "floor, raised for viewers, who render above the working size: at ",
                   kViewFloorPx,
                   ", the default, a viewer at 4x sees almost no gaps, at a small cost at the working size); 0 = the "
                   "checkpoint's own composer.scale_floor_px"))
       .range(0, 4, "pixels");
-  args.option("--prune-opacity", prune_opacity, "drop Gaussians below this opacity (0 = keep all)").range(0, 1);
-  args.option("--prune-contribution", prune_contribution,
+  args.option("--prune-opacity", photo_options.prune_opacity, "drop Gaussians below this opacity (0 = keep all)")
+      .range(0, 1);
+  args.option("--prune-contribution", photo_options.prune_contribution,
               "drop Gaussians whose largest rendered weight (alpha x transmittance) in the source view and "
               "--prune-views nearby views stays below this (0 = off; 0.01 is a good start)")
       .range(0, 1);
-  args.option("--prune-views", prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6").range(0, 6);
+  args.option("--prune-views", photo_options.prune_views, "virtual views for --prune-contribution: 0, 2, 4 or 6")
+      .range(0, 6);
   args.option("--merge-cell", merge.cell_px,
               "merge the flat, single-coloured Gaussians of each cell of this many pixels into one (0 = off)");
   args.option("--merge-color", merge.max_color, "largest colour difference within a merged cell (stored colours)");
@@ -264,7 +215,7 @@ int run_predict(int argc, char** argv) {
   args.option("--merge-normal-cos", merge.min_normal_cos,
               "smallest cosine between a flat member's normal and the merged normal (0 = any)");
   args.flag("--merge-split", merge.split, "merge each single-coloured part of a cell that cannot merge whole");
-  args.flag("--keep-outside", keep_outside, "keep Gaussians whose centre leaves the source view");
+  args.flag("--keep-outside", photo_options.keep_outside, "keep Gaussians whose centre leaves the source view");
   args.repeated("--set", sets, "override a key of the checkpoint's model config, e.g. prior.sparse.noise=0.01",
                 "KEY=VALUE");
   args.option("--seed", seed, "sampler seed").range(0, 9.2e18);
@@ -280,7 +231,15 @@ int run_predict(int argc, char** argv) {
                "predict: give at most one of --depth-model, --depth, --prompts");
   ISPLAT_CHECK(max_gaussians >= 0 && max_gaussians <= kMaxSupports, "predict: --max-gaussians ", max_gaussians,
                " is outside [0, ", kMaxSupports, "] (0 = no limit)");
-  check_intrinsics_options(fx, fy, cx, cy, width, height);
+  // Options that only mean something together (a value without its partner would be ignored in silence), before
+  // anything loads.
+  if (fx > 0) photo_options.intrinsics.fx = fx;
+  if (fy > 0) photo_options.intrinsics.fy = fy;
+  if (cx >= 0) photo_options.intrinsics.cx = cx;
+  if (cy >= 0) photo_options.intrinsics.cy = cy;
+  if (hfov > 0) photo_options.intrinsics.hfov = hfov;
+  photo_options.seed = static_cast<uint64_t>(seed);
+  check_photo_options(photo_options);
   const InputKind kind = input_kind(image_path);
   const std::vector<NamedPath> inputs = {{"--checkpoint", checkpoint},   {"--image", image_path},
                                          {"--depth", depth_path},        {"--prompts", prompts_path},
@@ -307,148 +266,106 @@ int run_predict(int argc, char** argv) {
   if (!depth_model.empty()) sets.insert(sets.end(), {"prior.type=torchscript", "prior.torchscript=" + depth_model});
   if (!depth_path.empty()) sets.push_back("prior.type=dataset");
   if (!prompts_path.empty()) sets.push_back("prior.type=sparse");
-  const Checkpoint ck = load_checkpoint(checkpoint);
-  auto pipeline = load_pipeline(ck, checkpoint, sets);
-
-  // The floor the Gaussians are written with: the checkpoint's, raised to --view-floor for viewers.
-  double& floor_px = pipeline->model()->options.composer.scale_floor_px;
-  const double trained_floor_px = floor_px;
-  floor_px = std::max(floor_px, view_floor);
-  const SamplerOptions configured = pipeline->model()->options.sampler;
+  PhotoPredictor predictor(checkpoint, sets);
+  Pipeline& pipeline = predictor.pipeline();
+  const SamplerOptions configured = pipeline.model()->options.sampler;
   // One photo -> its PLY and camera JSON at `ply_out`. `exif_from`: the file whose EXIF may give the focal length.
   const auto predict_one = [&](const cv::Mat& photo, const std::string& exif_from, const std::string& label,
                                const std::string& ply_out, bool verbose) {
     const int W0 = photo.cols, H0 = photo.rows;
     ErrorContext context("predicting ", label);
-    ISPLAT_CHECK(cx <= W0, "predict: --cx ", cx, " lies outside the photo ", label, " (", W0, "x", H0,
-                 "): the principal point's x is in [0, ", W0, "]");
-    ISPLAT_CHECK(cy <= H0, "predict: --cy ", cy, " lies outside the photo ", label, " (", W0, "x", H0,
-                 "): the principal point's y is in [0, ", H0, "]");
-    Intrinsics intr;
-    std::string k_source;
-    if (fx > 0) {
-      intr = {fx, fy > 0 ? fy : fx, cx >= 0 ? cx : W0 / 2.0, cy >= 0 ? cy : H0 / 2.0, W0, H0};
-      k_source = "given";
-    } else {
-      const ExifFocal exif = exif_from.empty() ? ExifFocal{} : read_exif_focal(read_file_bytes(exif_from));
-      if (exif.focal_35mm) {
-        const double f = fx_from_35mm(*exif.focal_35mm, W0, H0);
-        intr = {f, f, W0 / 2.0, H0 / 2.0, W0, H0};
-        k_source = cat("EXIF (", *exif.focal_35mm, " mm, 35 mm equivalent)");
-      } else {
-        const double fov = hfov > 0 ? hfov : pipeline->model()->options.prior.hfov_deg;
-        intr = Intrinsics::from_hfov(fov * M_PI / 180.0, W0, H0);
-        k_source = cat("estimated from a ", fov, " degree field of view");
-      }
-    }
-    const auto [Wm, Hm] = working_size(ck, W0, H0, width, height, photo_size);
-    cv::Mat image = resize_image(photo, Wm, Hm);
-    const Intrinsics work = intr.resized(Wm, Hm);
-    View view{work, Pose::Identity()};
-    PriorInput in;
-    in.image = image_to_tensor(image);
-    in.K = to_camera(view).K;
-    in.seed = static_cast<uint64_t>(seed);
+    PhotoInput input;
+    input.photo = photo;
+    input.label = label;
+    input.exif_from = exif_from;
     if (!depth_path.empty()) {
-      const DepthMap d = read_depth_exr(depth_path);
-      check_depth_aspect(depth_path, d.depth.cols, d.depth.rows, label, W0, H0);
-      in.depth = map_to_tensor(resize_depth(d.depth, Wm, Hm));
-      in.valid = (in.depth > 0).to(torch::kFloat32);
+      input.depth = read_depth_exr(depth_path).depth;
+      input.depth_label = depth_path;
     }
     if (!prompts_path.empty()) {
       const CsvTable t = read_csv(prompts_path);
       ISPLAT_CHECK(t.size() >= 3, prompts_path, ": ", t.size(), " prompts; the sparse prior needs at least 3");
-      auto p = torch::empty({static_cast<int64_t>(t.size()), 3});
       for (size_t r = 0; r < t.size(); ++r) {  // a prompt off the photo or at no depth contradicts the photo
         const double u = t.number(r, "u"), v = t.number(r, "v"), z = t.number(r, "z");
         ISPLAT_CHECK(u >= 0 && u <= W0 && v >= 0 && v <= H0 && std::isfinite(z) && z > 0, prompts_path, ": row ", r + 1,
                      ": prompt (u ", u, ", v ", v, ", z ", z, ") is off the ", W0, "x", H0,
                      " photo or not at a positive depth");
-        p[r][0] = u * Wm / W0;
-        p[r][1] = v * Hm / H0;
-        p[r][2] = z;
+        input.prompts.push_back({u, v, z});
       }
-      in.prompts = p;
     }
+    PhotoHooks hooks;
     // --max-gaussians: the supports the checkpoint's sampler would place on this photo's prior depth, counted before
-    // decoding; above the limit, the sampler places exactly the limit (pruning below only removes).
-    pipeline->model()->options.sampler = configured;
+    // decoding; above the limit, the sampler places exactly the limit (pruning only removes).
     int64_t would_place = 0;
-    const auto cap_budget = [&](PriorOutput& prior) {
+    hooks.after_prior = [&](PriorOutput& prior, const PhotoFrame& frame) {
       if (max_gaussians <= 0) return;
-      would_place = sample_supports(prior.depth, prior.valid, prior.K, in.image, configured, in.seed, false).count();
+      would_place =
+          sample_supports(prior.depth, prior.valid, prior.K, frame.input.image, configured, frame.input.seed, false)
+              .count();
       if (would_place <= max_gaussians) return;
-      SamplerOptions& capped = pipeline->model()->options.sampler;
+      SamplerOptions& capped = pipeline.model()->options.sampler;
       capped.budget_mode = "fixed";
       capped.budget = max_gaussians;
       if (capped.mode == "pixel") capped.mode = "area";  // pixel mode has no budget: one support per valid pixel
     };
-    const Prediction pred = pipeline->run(in, torch::eye(4), false, cap_budget);
-    pipeline->model()->options.sampler = configured;
-    ISPLAT_CHECK(max_gaussians <= 0 || pred.gaussians.count() <= max_gaussians, "predict: ", label,
-                 ": the sampler placed ", pred.supports.count(), " supports for --max-gaussians ", max_gaussians,
-                 " (sampler.mode ", configured.mode, ")");
-    Gaussians g = pred.gaussians;
     ScaleFit aligned;
-    if (!align_path.empty()) {  // the evaluator's scoring.align_scale, from the user's points
+    hooks.after_decode = [&](Gaussians& g, const PhotoFrame& frame) {
+      if (align_path.empty()) return;  // the evaluator's scoring.align_scale, from the user's points
       const CsvTable t = read_csv(align_path);
       auto samples = torch::empty({static_cast<int64_t>(t.size()), 3});
       for (size_t r = 0; r < t.size(); ++r) {
-        samples[r][0] = t.number(r, "u") * Wm / W0;
-        samples[r][1] = t.number(r, "v") * Hm / H0;
+        samples[r][0] = t.number(r, "u") * frame.width / W0;
+        samples[r][1] = t.number(r, "v") * frame.height / H0;
         samples[r][2] = t.number(r, "z");
       }
-      aligned = fit_scene_scale(g, to_camera(view), samples);
+      aligned = fit_scene_scale(g, to_camera(frame.view), samples);
       ISPLAT_CHECK(aligned.samples > 0, "predict: --align-points ", align_path, ": none of its ", t.size(),
                    " points falls on the predicted surface of ", label);
-      g = scale_about_camera(g, to_camera(view), aligned.factor);
-    }
-    const int64_t made = g.count();
-    int64_t outside = 0;
-    if (!keep_outside) {
-      auto uv = project_points(g.means, in.K);
-      auto keep = (g.means.select(1, 2) > 0) & (uv.select(1, 0) >= 0) & (uv.select(1, 0) < Wm) &
-                  (uv.select(1, 1) >= 0) & (uv.select(1, 1) < Hm);
-      outside = made - keep.sum().item<int64_t>();
-      g = g.index(keep);
-    }
-    PruneOptions po;
-    po.enabled = true;
-    po.min_opacity = prune_opacity;
-    po.min_contribution = prune_contribution;
-    po.views = prune_views;
-    po.merge = merge;
-    const auto t_prune = Clock::now();
-    const PruneResult pruned = prune_gaussians(g, to_camera(view), po);
-    const double prune_ms = ms_since(t_prune);
-    g = pruned.kept;
+      g = scale_about_camera(g, to_camera(frame.view), aligned.factor);
+    };
+    pipeline.model()->options.sampler = configured;
+    const PhotoPrediction result = predictor.predict(input, photo_options, hooks);
+    pipeline.model()->options.sampler = configured;
+    const Prediction& pred = result.prediction;
+    ISPLAT_CHECK(max_gaussians <= 0 || pred.gaussians.count() <= max_gaussians, "predict: ", label,
+                 ": the sampler placed ", pred.supports.count(), " supports for --max-gaussians ", max_gaussians,
+                 " (sampler.mode ", configured.mode, ")");
+    const int Wm = result.frame.width, Hm = result.frame.height;
+    const View& view = result.frame.view;
+    const Gaussians& g = result.gaussians;
+    const PruneResult& pruned = result.pruned;
+    const int64_t made = result.decoded, outside = result.outside;
+    const double prune_ms = result.prune_ms;
     const int64_t faint = pruned.low_opacity;
     ISPLAT_CHECK(g.count() > 0, "predict: no Gaussian is left of ", made, " (", outside, " outside the view, ", faint,
-                 " below opacity ", prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
+                 " below opacity ", photo_options.prune_opacity, ", ", pruned.low_contribution, " below contribution, ",
                  pruned.merge.removed(), " merged); not writing an empty scene to ", ply_out, " (", label, ")");
     PlyOptions ply;  // what pruning removed travels with the scene
     std::ostringstream pruning;
     pruning << "pruning: decoded " << made << ", outside_view " << outside << ", low_opacity " << faint
-            << " (min_opacity " << prune_opacity << "), low_contribution " << pruned.low_contribution
-            << " (min_contribution " << prune_contribution << ", views " << (prune_contribution > 0 ? prune_views : 0)
-            << "), merged_away " << pruned.merge.removed() << ", kept " << g.count();
+            << " (min_opacity " << photo_options.prune_opacity << "), low_contribution " << pruned.low_contribution
+            << " (min_contribution " << photo_options.prune_contribution << ", views "
+            << (photo_options.prune_contribution > 0 ? photo_options.prune_views : 0) << "), merged_away "
+            << pruned.merge.removed() << ", kept " << g.count();
     ply.comments.push_back(pruning.str());
     ply.comments.push_back(cat("working_size ", Wm, "x", Hm, " (photo ", W0, "x", H0, ")"));
-    ply.comments.push_back(cat("scale_floor_px ", floor_px, " (the checkpoint's: ", trained_floor_px, ")"));
+    ply.comments.push_back(
+        cat("scale_floor_px ", result.scale_floor_px, " (the checkpoint's: ", predictor.trained_floor_px(), ")"));
     if (aligned.samples > 0)
       ply.comments.push_back(
           cat("scale_aligned ", aligned.factor, " (median over ", aligned.samples, " points of ", align_path, ")"));
     {  // Both files new or neither: each is written whole to its temporary, then both are renamed together.
       AtomicPath ply_file(ply_out), camera_file(camera_sidecar_path(ply_out));
-      write_ply(ply_file.temp(), g, pipeline->model()->options.composer.linear_rgb, ply);
+      write_ply(ply_file.temp(), g, pipeline.model()->options.composer.linear_rgb, ply);
       write_scene_camera(camera_file.temp(), view, pred.supports.depth.median().item<double>() * aligned.factor);
       commit_together({&camera_file, &ply_file});
     }
 
     if (!verbose) return g.count();
     std::cout << "photo        " << label << " (" << W0 << "x" << H0 << "), working size " << Wm << "x" << Hm << "\n";
-    std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << intr.fx << " px, " << k_source << "\n";
-    std::cout << "depth prior  " << pipeline->prior().describe() << "\n";
+    std::cout << "intrinsics   fx " << std::fixed << std::setprecision(1) << result.frame.intrinsics.fx << " px, "
+              << result.frame.intrinsics_source << "\n";
+    std::cout << "depth prior  " << pipeline.prior().describe() << "\n";
     if (aligned.samples > 0)
       std::cout << "scale        x" << aligned.factor << " to the units of " << align_path << " (median over "
                 << aligned.samples << " points)\n";
@@ -460,8 +377,9 @@ int run_predict(int argc, char** argv) {
               << "\n";
     std::cout << "Gaussians    " << g.count() << " written of " << made << " decoded (pruned: " << outside
               << " outside the view, " << faint << " below opacity " << std::setprecision(3) << std::defaultfloat
-              << prune_opacity << ", " << pruned.low_contribution << " below contribution " << prune_contribution
-              << " over the source and " << (prune_contribution > 0 ? prune_views : 0) << " nearby views, "
+              << photo_options.prune_opacity << ", " << pruned.low_contribution << " below contribution "
+              << photo_options.prune_contribution << " over the source and "
+              << (photo_options.prune_contribution > 0 ? photo_options.prune_views : 0) << " nearby views, "
               << pruned.merge.removed() << " merged into neighbours)\n";
     if (const Camera source = to_camera(view); source.width * 4 <= max_image_pixels() / (source.height * 4))
       std::cout << "display      " << std::setprecision(2) << std::fixed
