@@ -1,48 +1,21 @@
-// The predictor for Python (one photo -> Gaussians, as `infinisplat predict` makes them) and the PLY, image and
-// depth readers and writer it needs.
-#include <algorithm>
-#include <cmath>
+// The predictor for Python (one photo -> Gaussians through src/predict/, as `infinisplat predict` makes them) and
+// the PLY, image and depth readers and writer it needs.
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "bindings.h"
-#include "core/config.h"
 #include "core/error.h"
-#include "core/runtime.h"
-#include "geometry/camera_torch.h"
-#include "geometry/image_ops.h"
-#include "io/atomic_file.h"
-#include "io/checkpoint.h"
 #include "io/depth_io.h"
-#include "io/exif.h"
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "io/tensor_image.h"
-#include "model/model_io.h"
-#include "render/prune.h"
+#include "predict/photo.h"
 
 namespace isplat::python {
 namespace py = pybind11;
 namespace {
-
-// The same defaults and rules as cli/cmd_predict.cpp's for one photo: the working size is the training
-// resolution's area at the photo's aspect in multiples of 16, unless width and height are given.
-std::pair<int, int> working_size(const Checkpoint& ck, int width, int height, int64_t override_w, int64_t override_h) {
-  if (override_w > 0 && override_h > 0) return {static_cast<int>(override_w), static_cast<int>(override_h)};
-  int64_t tw = 256, th = 192;
-  try {
-    const auto cfg = parse_json(ck.config_json(), "stored config");
-    tw = cfg.at("data").at("tuples").at("width").get<int64_t>();
-    th = cfg.at("data").at("tuples").at("height").get<int64_t>();
-  } catch (const std::exception&) {  // no training size stored (a converted checkpoint): the CLI's default
-  }
-  if (tw < 16 || th < 16 || tw > max_image_pixels() / th) tw = 256, th = 192;
-  auto r16 = [](double x) { return std::max(16, static_cast<int>(std::lround(x / 16.0)) * 16); };
-  const double area = static_cast<double>(tw) * th, aspect = static_cast<double>(width) / height;
-  return {r16(std::sqrt(area * aspect)), r16(std::sqrt(area / aspect))};
-}
 
 // An sRGB image as float [3, H, W] on the CPU (values are clamped to [0, 1] where they are written).
 torch::Tensor checked_image(const torch::Tensor& image) {
@@ -54,119 +27,57 @@ torch::Tensor checked_image(const torch::Tensor& image) {
   return image.detach().to(torch::kFloat32).contiguous();
 }
 
+// A checkpoint loaded once; predict() makes `infinisplat predict`'s Gaussians (src/predict/photo.h, which both call).
 class Predictor {
  public:
-  Predictor(const std::string& checkpoint, const std::vector<std::string>& overrides) : path_(checkpoint) {
-    ck_ = std::make_unique<Checkpoint>(load_checkpoint(checkpoint));
-    pipeline_ = load_pipeline(*ck_, checkpoint, overrides);
-    trained_floor_px_ = pipeline_->model()->options.composer.scale_floor_px;
-  }
+  Predictor(const std::string& checkpoint, const std::vector<std::string>& overrides)
+      : predictor_(std::make_unique<PhotoPredictor>(checkpoint, overrides)) {}
 
-  bool linear_rgb() { return pipeline_->model()->options.composer.linear_rgb; }
-  double hfov_deg() { return pipeline_->model()->options.prior.hfov_deg; }
-  std::string prior_type() { return pipeline_->model()->options.prior.type; }
+  bool linear_rgb() { return model().options.composer.linear_rgb; }
+  double hfov_deg() { return model().options.prior.hfov_deg; }
+  std::string prior_type() { return model().options.prior.type; }
 
   // (means, quats, scales, opacities, colors, K [3,3] of the working size, width, height).
   py::tuple predict(const py::object& image_or_path, std::optional<double> fx, std::optional<double> fy,
                     std::optional<double> cx, std::optional<double> cy, std::optional<double> hfov,
                     std::optional<torch::Tensor> depth, int64_t width, int64_t height, int64_t seed, double view_floor,
                     double prune_opacity, double prune_contribution, int64_t prune_views, bool keep_outside) {
-    cv::Mat photo;
-    std::string exif_from;
+    PhotoInput input;
     if (py::isinstance<py::str>(image_or_path)) {
-      exif_from = image_or_path.cast<std::string>();
-      photo = read_image(exif_from);
+      input.exif_from = input.label = image_or_path.cast<std::string>();
+      input.photo = read_image(input.label);
     } else {
-      photo = tensor_to_image(checked_image(image_or_path.cast<torch::Tensor>()));
+      input.photo = tensor_to_image(checked_image(image_or_path.cast<torch::Tensor>()));
+      input.label = "tensor";
     }
-    ISPLAT_CHECK((width > 0) == (height > 0), "predict: give width and height together (got ", width, "x", height, ")");
-    ISPLAT_CHECK(width % 16 == 0 && height % 16 == 0 && width >= 0 && height >= 0, "predict: width ", width,
-                 " and height ", height, " must be multiples of 16 (the encoder's patch)");
-    ISPLAT_CHECK(fx || (!fy && !cx && !cy), "predict: fy, cx and cy refine fx; give fx too");
-    ISPLAT_CHECK(!fx || (*fx > 0 && std::isfinite(*fx)), "predict: fx must be a positive focal length in pixels");
-    ISPLAT_CHECK(!fy || (*fy > 0 && std::isfinite(*fy)), "predict: fy must be a positive focal length in pixels");
-    ISPLAT_CHECK(!hfov || (*hfov >= 1 && *hfov <= 179), "predict: hfov must be in [1, 179] degrees");
-    ISPLAT_CHECK(view_floor >= 0 && view_floor <= 4, "predict: view_floor must be in [0, 4] pixels");
-    ISPLAT_CHECK(prune_opacity >= 0 && prune_opacity <= 1, "predict: prune_opacity must be in [0, 1]");
-    ISPLAT_CHECK(prune_contribution >= 0 && prune_contribution <= 1, "predict: prune_contribution must be in [0, 1]");
-    ISPLAT_CHECK(prune_views == 0 || prune_views == 2 || prune_views == 4 || prune_views == 6,
-                 "predict: prune_views must be 0, 2, 4 or 6");
-    const int W0 = photo.cols, H0 = photo.rows;
-    ISPLAT_CHECK(!cx || (*cx >= 0 && *cx <= W0), "predict: cx must lie in the photo, [0, ", W0, "]");
-    ISPLAT_CHECK(!cy || (*cy >= 0 && *cy <= H0), "predict: cy must lie in the photo, [0, ", H0, "]");
-
-    Result r;
+    if (depth) {  // metric planar depth in metres, the photo's own view at any size of its aspect
+      const torch::Tensor& d = *depth;
+      ISPLAT_CHECK(d.device().is_cpu() && d.dim() == 2 && d.numel() > 0 && d.is_floating_point(),
+                   "predict: depth must be a float CPU tensor [H, W], got ", d.sizes());
+      input.depth = tensor_to_map(d.detach().to(torch::kFloat32).contiguous());
+    }
+    PhotoPredictOptions options;
+    options.names = OptionNames::Keywords;
+    options.intrinsics = {fx, fy, cx, cy, hfov};
+    options.width = width, options.height = height, options.seed = static_cast<uint64_t>(seed);
+    options.view_floor = view_floor;
+    options.prune_opacity = prune_opacity, options.prune_contribution = prune_contribution;
+    options.prune_views = prune_views;
+    options.keep_outside = keep_outside;
+    PhotoPrediction r;
     {
       py::gil_scoped_release no_gil;
-      r = run(photo, exif_from, fx, fy, cx, cy, hfov, depth, width, height, seed, view_floor, prune_opacity,
-              prune_contribution, prune_views, keep_outside);
+      r = predictor_->predict(input, options);
     }
-    const Gaussians& g = r.g;
-    return py::make_tuple(g.means, g.quats, g.scales, g.opacities, g.colors, r.K, r.width, r.height);
+    const Gaussians& g = r.gaussians;
+    return py::make_tuple(g.means, g.quats, g.scales, g.opacities, g.colors, r.frame.input.K, r.frame.width,
+                          r.frame.height);
   }
 
  private:
-  struct Result {
-    Gaussians g;
-    torch::Tensor K;
-    int width = 0, height = 0;
-  };
+  InfiniSplatImpl& model() { return *predictor_->pipeline().model(); }
 
-  // The prediction itself, without the GIL.
-  Result run(const cv::Mat& photo, const std::string& exif_from, std::optional<double> fx, std::optional<double> fy,
-             std::optional<double> cx, std::optional<double> cy, std::optional<double> hfov,
-             const std::optional<torch::Tensor>& depth, int64_t width, int64_t height, int64_t seed, double view_floor,
-             double prune_opacity, double prune_contribution, int64_t prune_views, bool keep_outside) {
-    const int W0 = photo.cols, H0 = photo.rows;
-    Intrinsics intr;
-    const ExifFocal exif = exif_from.empty() || fx ? ExifFocal{} : read_exif_focal(read_file_bytes(exif_from));
-    if (fx) {
-      intr = {*fx, fy ? *fy : *fx, cx ? *cx : W0 / 2.0, cy ? *cy : H0 / 2.0, W0, H0};
-    } else if (exif.focal_35mm) {
-      const double f = fx_from_35mm(*exif.focal_35mm, W0, H0);
-      intr = {f, f, W0 / 2.0, H0 / 2.0, W0, H0};
-    } else {
-      intr = Intrinsics::from_hfov((hfov ? *hfov : hfov_deg()) * M_PI / 180.0, W0, H0);
-    }
-    const auto [Wm, Hm] = working_size(*ck_, W0, H0, width, height);
-    const View view{intr.resized(Wm, Hm), Pose::Identity()};
-    PriorInput in;
-    in.image = image_to_tensor(resize_image(photo, Wm, Hm));
-    in.K = to_camera(view).K;
-    in.seed = static_cast<uint64_t>(seed);
-    if (depth) {  // metric planar depth in metres, the photo's own view at any size of its aspect
-      const torch::Tensor d = *depth;
-      ISPLAT_CHECK(d.device().is_cpu() && d.dim() == 2 && d.is_floating_point(),
-                   "predict: depth must be a float CPU tensor [H, W], got ", d.sizes());
-      const double ratio = (static_cast<double>(d.size(1)) / d.size(0)) / (static_cast<double>(W0) / H0);
-      ISPLAT_CHECK(std::fabs(ratio - 1.0) <= 0.01, "predict: depth is ", d.size(1), "x", d.size(0),
-                   ", not a resized copy of the photo's view (", W0, "x", H0, "): the aspects differ");
-      in.depth = map_to_tensor(resize_depth(tensor_to_map(d.detach().to(torch::kFloat32).contiguous()), Wm, Hm));
-      in.valid = (in.depth > 0).to(torch::kFloat32);
-    }
-    double& floor_px = pipeline_->model()->options.composer.scale_floor_px;
-    floor_px = std::max(trained_floor_px_, view_floor);
-    const Prediction pred = pipeline_->run(in, torch::eye(4), false);
-    Gaussians g = pred.gaussians;
-    if (!keep_outside) {  // centres that leave the source view go, as the CLI drops them
-      auto uv = project_points(g.means, in.K);
-      auto keep = (g.means.select(1, 2) > 0) & (uv.select(1, 0) >= 0) & (uv.select(1, 0) < Wm) &
-                  (uv.select(1, 1) >= 0) & (uv.select(1, 1) < Hm);
-      g = g.index(keep);
-    }
-    PruneOptions po;
-    po.enabled = true;
-    po.min_opacity = prune_opacity;
-    po.min_contribution = prune_contribution;
-    po.views = prune_views;
-    g = prune_gaussians(g, to_camera(view), po).kept;
-    return {g, in.K, Wm, Hm};
-  }
-
-  std::string path_;
-  std::unique_ptr<Checkpoint> ck_;
-  std::unique_ptr<Pipeline> pipeline_;
-  double trained_floor_px_ = 0;
+  std::unique_ptr<PhotoPredictor> predictor_;
 };
 
 }  // namespace
