@@ -72,7 +72,10 @@ def test_predictor_bad_inputs(tiny):
             (dict(image=image, depth=depth[:, :10]), infinisplat.Error, "depth"),
             (dict(image=image, depth=depth.tolist()), TypeError, "depth"),
             (dict(image=image, depth=depth, fx=-3.0), infinisplat.Error, "fx"),
+            (dict(image=image, depth=depth, cy=3.0), infinisplat.Error, "give fx too"),
+            (dict(image=image, depth=depth, fx=50.0, cx=1000.0), infinisplat.Error, "cx 1000 lies outside the photo"),
             (dict(image=image, depth=depth, width=40, height=32), infinisplat.Error, "width"),
             (dict(image=image, depth=depth, prune_views=3), infinisplat.Error, "prune_views")):
-        with pytest.raises(error, match=words):
+        with pytest.raises(error, match=words) as raised:
             predictor.predict(**kwargs)
+        assert "--" not in str(raised.value), str(raised.value)  # Python's keywords, never the CLI's flags
