@@ -35,11 +35,7 @@ namespace fs = std::filesystem;
 namespace {
 
 EvalDatasetOptions colmap_set(const GenerateOptions& g) {
-  EvalDatasetOptions d;
-  d.name = "courtyard";
-  d.format = "colmap";
-  d.root = generated_eval_root(g.out, "courtyard_colmap");
-  return d;
+  return test::tiny_courtyard_set(g);
 }
 }  // namespace
 

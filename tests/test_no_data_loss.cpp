@@ -158,11 +158,7 @@ TEST_CASE("no data loss: a method's gallery cleanup leaves another method's pane
 
   const auto g = test::make_tiny_dataset("ndl_gallery", 16);
   EvalConfig c;
-  EvalDatasetOptions d;
-  d.name = "courtyard";
-  d.format = "colmap";
-  d.root = generated_eval_root(g.out, "courtyard_colmap");
-  c.datasets = {d};
+  c.datasets = {test::tiny_courtyard_set(g)};
   // "m_worst_a" first: before the fix, "m"'s cleanup (prefix "m_worst_") then deleted its panels.
   c.methods = {named_method("m_worst_a", "lift"), named_method("m", "lift")};
   c.protocol.pairs_per_bin = 2;

@@ -115,11 +115,7 @@ TEST_CASE("eval: scoring.regions records each pair by region and in its source v
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_regions", 16);
   EvalConfig c;
-  EvalDatasetOptions d;
-  d.name = "courtyard";
-  d.format = "colmap";
-  d.root = generated_eval_root(g.out, "courtyard_colmap");
-  c.datasets = {d};
+  c.datasets = {test::tiny_courtyard_set(g)};
   c.protocol.pairs_per_bin = 2;
   c.scoring.out = test::temp_dir("eval_regions_out");
   c.scoring.lpips = {};

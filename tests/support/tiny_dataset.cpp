@@ -52,4 +52,12 @@ GenerateOptions make_tiny_dataset(const std::string& tag, int frames) {
   return o;
 }
 
+EvalDatasetOptions tiny_courtyard_set(const GenerateOptions& g) {
+  EvalDatasetOptions d;
+  d.name = "courtyard";
+  d.format = "colmap";
+  d.root = generated_eval_root(g.out, "courtyard_colmap");
+  return d;
+}
+
 }  // namespace isplat::test

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "data/synth/generate.h"
+#include "eval/datasets.h"
 
 namespace isplat::test {
 
@@ -18,5 +19,7 @@ GenerateOptions style_dataset_options(const std::string& out, int frames, const 
 GenerateOptions eval_dataset_options(const std::string& out, int frames, const std::vector<std::string>& datasets);
 // Generates into a fresh temp folder and returns GenerateOptions used (options.out is the folder).
 GenerateOptions make_tiny_dataset(const std::string& tag, int frames = 8);
+// The generated courtyard (COLMAP layout) of `g` as an evaluation dataset named "courtyard".
+EvalDatasetOptions tiny_courtyard_set(const GenerateOptions& g);
 
 }  // namespace isplat::test
