@@ -2,19 +2,22 @@
 #include "eval/region_scores.h"
 
 #include <limits>
+#include <vector>
 
 #include "metrics/regions.h"
 
 namespace isplat {
 
 namespace {
+// lpips_maps: Lpips::distance_maps of image and target, computed once for all of a view's regions (empty: no LPIPS).
 RegionScore region_score(const torch::Tensor& image, const torch::Tensor& target, const torch::Tensor& region,
-                         const Gaussians& scene, const Camera& camera, const Lpips* lpips, double share) {
+                         const Gaussians& scene, const Camera& camera, const std::vector<torch::Tensor>& lpips_maps,
+                         double share) {
   RegionScore g;
   g.share = share;
   if (!(region.sum().item<double>() > 0)) return g;
   g.psnr = psnr(image, target, region);
-  if (lpips) g.lpips = (*lpips)(image, target, region);
+  if (!lpips_maps.empty()) g.lpips = Lpips::mean_distance(lpips_maps, region);
   g.detail = detail_ratio(image, target, region);
   if (scene.means.defined()) g.density = centre_density(scene.means, camera, region);
   return g;
@@ -26,9 +29,10 @@ void score_regions(const MethodOutput& o, const ViewTensors& source, const ViewT
                    const RenderOptions& render_options, PairResult& r) {
   const auto scored = (mask > 0).to(torch::kFloat32);
   const double pixels = scored.sum().item<double>();
-  r.regions["all"] = region_score(o.image, target.image, scored, o.scene, target.camera, lpips, 1.0);
+  const auto maps = lpips ? lpips->distance_maps(o.image, target.image) : std::vector<torch::Tensor>{};
+  r.regions["all"] = region_score(o.image, target.image, scored, o.scene, target.camera, maps, 1.0);
   for (const auto& [name, region] : image_regions(target.image, ref_depth, scored))
-    r.regions[name] = region_score(o.image, target.image, region, o.scene, target.camera, lpips,
+    r.regions[name] = region_score(o.image, target.image, region, o.scene, target.camera, maps,
                                    pixels > 0 ? region.sum().item<double>() / pixels : 0.0);
   if (!o.scene.means.defined()) return;
   const RenderOutput back = render(o.scene, source.camera, render_options, RenderMaps::colour_only());
@@ -36,8 +40,9 @@ void score_regions(const MethodOutput& o, const ViewTensors& source, const ViewT
   const auto scored_source = source.valid.defined() && source.valid.sum().item<double>() > 0
                                  ? (source.valid > 0).to(torch::kFloat32)
                                  : torch::ones({source.camera.height, source.camera.width});
-  r.source_view = region_score(rendered_srgb(back.rgb, o.linear_rgb), source.image, scored_source, o.scene,
-                               source.camera, lpips, 1.0);
+  const auto image = rendered_srgb(back.rgb, o.linear_rgb);
+  const auto source_maps = lpips ? lpips->distance_maps(image, source.image) : std::vector<torch::Tensor>{};
+  r.source_view = region_score(image, source.image, scored_source, o.scene, source.camera, source_maps, 1.0);
 }
 
 }  // namespace isplat

@@ -113,6 +113,13 @@ TEST_CASE("metrics: LPIPS-squeeze is zero on identical images, symmetric and mon
   const double b1 = (*lp)(a, blur(a, 1)), b2 = (*lp)(a, blur(a, 2)), b3 = (*lp)(a, blur(a, 4));
   CHECK(b1 < b2);
   CHECK(b2 < b3);
+  // One network pass, many masks: the two-step form gives exactly the one-call scores, masked or not.
+  const auto maps = lp->distance_maps(a, n2);
+  auto left = torch::zeros({64, 64});
+  left.narrow(1, 0, 32).fill_(1);
+  CHECK(Lpips::mean_distance(maps) == (*lp)(a, n2));
+  CHECK(Lpips::mean_distance(maps, left) == (*lp)(a, n2, left));
+  CHECK(std::isnan(Lpips::mean_distance(maps, torch::zeros({64, 64}))));
   std::string why2;
   CHECK(Lpips::from_folder("alex", test::project_weights_dir(), why2) == nullptr);  // no AlexNet backbone here
   CHECK_THAT(why2, Catch::Contains("alexnet_features.safetensors"));

@@ -120,15 +120,26 @@ Lpips::Lpips(const std::string& net, const std::string& backbone, const std::str
 }
 
 double Lpips::operator()(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor& mask) const {
+  return mean_distance(distance_maps(a, b), mask);
+}
+
+std::vector<torch::Tensor> Lpips::distance_maps(const torch::Tensor& a, const torch::Tensor& b) const {
   check_pair(a, b, "LPIPS");
   torch::NoGradGuard g;
   auto shift = torch::tensor({-0.030f, -0.088f, -0.188f}).view({1, 3, 1, 1});
   auto scale = torch::tensor({0.458f, 0.448f, 0.450f}).view({1, 3, 1, 1});
   auto prep = [&](const torch::Tensor& x) { return ((x.unsqueeze(0).to(torch::kFloat32) * 2 - 1) - shift) / scale; };
   const auto fa = features_->forward(prep(a)), fb = features_->forward(prep(b));
+  std::vector<torch::Tensor> maps;
+  for (size_t l = 0; l < fa.size(); ++l)
+    maps.push_back(F::conv2d((normalize_channels(fa[l]) - normalize_channels(fb[l])).pow(2), heads_[l]));
+  return maps;
+}
+
+double Lpips::mean_distance(const std::vector<torch::Tensor>& maps, const torch::Tensor& mask) {
+  torch::NoGradGuard g;
   double total = 0;
-  for (size_t l = 0; l < fa.size(); ++l) {
-    auto d = F::conv2d((normalize_channels(fa[l]) - normalize_channels(fb[l])).pow(2), heads_[l]);  // [1,1,h,w]
+  for (const auto& d : maps) {  // [1,1,h,w]
     if (mask.defined()) {
       auto m = F::interpolate(
           mask.to(torch::kFloat32).view({1, 1, mask.size(0), mask.size(1)}),

@@ -29,6 +29,10 @@ class Lpips {
   // lpips_v0.1_<net>_lin.safetensors; "" = the weights lookup (core/weights.h).
   Lpips(const std::string& net, const std::string& backbone, const std::string& heads);
   double operator()(const torch::Tensor& a, const torch::Tensor& b, const torch::Tensor& mask = torch::Tensor()) const;
+  // The same in two steps, for many masks on one pair: the per-layer distance maps [1,1,h,w] (the networks run once),
+  // then their mean over a mask. mean_distance(distance_maps(a, b), mask) == (*this)(a, b, mask).
+  std::vector<torch::Tensor> distance_maps(const torch::Tensor& a, const torch::Tensor& b) const;
+  static double mean_distance(const std::vector<torch::Tensor>& maps, const torch::Tensor& mask = torch::Tensor());
   const std::string& net() const { return net_; }
 
   // Finds the backbone and heads for `net` in a weights folder (e.g. weights); returns nullptr
