@@ -40,8 +40,9 @@ class Predictor {
   // (means, quats, scales, opacities, colors, K [3,3] of the working size, width, height).
   py::tuple predict(const py::object& image_or_path, std::optional<double> fx, std::optional<double> fy,
                     std::optional<double> cx, std::optional<double> cy, std::optional<double> hfov,
-                    std::optional<torch::Tensor> depth, int64_t width, int64_t height, int64_t seed, double view_floor,
-                    double prune_opacity, double prune_contribution, int64_t prune_views, bool keep_outside) {
+                    std::optional<torch::Tensor> depth, int64_t width, int64_t height, int64_t seed,
+                    std::optional<double> view_floor, std::optional<double> prune_opacity,
+                    std::optional<double> prune_contribution, std::optional<int64_t> prune_views, bool keep_outside) {
     PhotoInput input;
     if (py::isinstance<py::str>(image_or_path)) {
       input.exif_from = input.label = image_or_path.cast<std::string>();
@@ -60,9 +61,11 @@ class Predictor {
     options.names = OptionNames::Keywords;
     options.intrinsics = {fx, fy, cx, cy, hfov};
     options.width = width, options.height = height, options.seed = static_cast<uint64_t>(seed);
-    options.view_floor = view_floor;
-    options.prune_opacity = prune_opacity, options.prune_contribution = prune_contribution;
-    options.prune_views = prune_views;
+    // Not given: PhotoPredictOptions' defaults, which are the CLI's (one place holds them).
+    if (view_floor) options.view_floor = *view_floor;
+    if (prune_opacity) options.prune_opacity = *prune_opacity;
+    if (prune_contribution) options.prune_contribution = *prune_contribution;
+    if (prune_views) options.prune_views = *prune_views;
     options.keep_outside = keep_outside;
     PhotoPrediction r;
     {

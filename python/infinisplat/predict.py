@@ -63,15 +63,16 @@ class Predictor:
         width: int = 0,
         height: int = 0,
         seed: int = 0,
-        view_floor: float = 0.45,
-        prune_opacity: float = 0.02,
-        prune_contribution: float = 0.0,
-        prune_views: int = 4,
+        view_floor: Optional[float] = None,
+        prune_opacity: Optional[float] = None,
+        prune_contribution: Optional[float] = None,
+        prune_views: Optional[int] = None,
         keep_outside: bool = False,
     ) -> Gaussians:
         """Predicts the Gaussians of one photo, in its camera's frame (OpenCV axes, metres).
 
-        The defaults are `infinisplat predict`'s, which gives the same Gaussians on the same photo.
+        The defaults are `infinisplat predict`'s, which gives the same Gaussians on the same photo; None takes them from
+        the C++ side, where the CLI's are defined (`infinisplat predict --help` lists them).
 
         Args:
             image: the photo: a path (PNG/JPG/..., its EXIF may give the focal length) or sRGB in [0, 1] as a float
