@@ -1,6 +1,7 @@
-// Benchmark: one prediction (no autograd) from image + depth to Gaussians, and where its time and memory go:
-// the quickstart setting (ViT-S, 100k supports, 256x192) and, with --paper, the paper's (ViT-L, 1.5M supports,
-// 1536x1152). Untrained weights: the time does not depend on their values.
+// Benchmark: one prediction (no autograd) from image + depth to Gaussians, and where its time and memory go: the
+// defaults (ViT-S at 256x192: a support per pixel and behind silhouettes, the dense head), the paper's layout at the
+// quickstart's size (100k and 40k area supports, the implicit decoder) and, with --paper, the paper's setting (ViT-L,
+// 1.5M supports, 1536x1152). Untrained weights: the time does not depend on their values.
 // usage: bench_predict [--paper] [--threads N] [--runs N] (--help)
 #include <algorithm>
 #include <chrono>
@@ -43,8 +44,8 @@ std::pair<torch::Tensor, torch::Tensor> scene(int64_t W, int64_t H) {
 }
 
 // The stages' analytic counts, the rates they achieve, and this machine's matmul rates at their dominant shapes.
-void print_counts(const ModelOptions& o, int64_t W, int64_t H, double encoder_ms, double decoder_ms) {
-  const bench::StageFlops f = bench::count_flops(o, W, H, o.sampler.budget);
+void print_counts(const ModelOptions& o, int64_t W, int64_t H, int64_t supports, double encoder_ms, double decoder_ms) {
+  const bench::StageFlops f = bench::count_flops(o, W, H, supports);
   std::printf(
       "  counted: encoder %.1f GFLOP (ViT linears %.1f, attention %.1f, CNN %.1f) at %.0f GFLOP/s; decoder %.1f "
       "GFLOP (maps %.2f, MLP %.1f) at %.0f GFLOP/s\n",
@@ -53,7 +54,7 @@ void print_counts(const ModelOptions& o, int64_t W, int64_t H, double encoder_ms
   const int64_t C = o.encoder.vit.dim(), heads = o.encoder.vit.num_heads();
   const int64_t N = (H / 16) * (W / 16) + 1 + o.encoder.vit.registers;
   const int64_t rows = std::max<int64_t>(1, (o.encoder.vit.attention_chunk_mb << 20) / (heads * N * 4));
-  const int64_t chunk = std::min(o.decoder.chunk, o.sampler.budget);
+  const int64_t chunk = std::min(o.decoder.chunk, supports);
   const bool bf16 = cpu_has_bf16();
   auto both = [&](const char* what, const std::function<double(torch::Dtype)>& rate) {
     std::printf("  machine: %-44s fp32 %6.0f GFLOP/s", what, rate(torch::kFloat32));
@@ -66,8 +67,9 @@ void print_counts(const ModelOptions& o, int64_t W, int64_t H, double encoder_ms
        [&](torch::Dtype t) { return bench::linear_gflops(N, C, 4 * C, t); });
   both(cat("attention scores, ", heads, " heads x ", N, "^2 x ", C / heads).c_str(),
        [&](torch::Dtype t) { return bench::attention_gflops(heads, N, C / heads, rows, t); });
-  both(cat("decoder MLP linear [", chunk, " x ", C, "] -> ", C).c_str(),
-       [&](torch::Dtype t) { return bench::linear_gflops(chunk, C, C, t); });
+  if (o.decoder.mode == "implicit")
+    both(cat("decoder MLP linear [", chunk, " x ", C, "] -> ", C).c_str(),
+         [&](torch::Dtype t) { return bench::linear_gflops(chunk, C, C, t); });
 }
 
 void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int runs, bool warm_up = true) {
@@ -78,12 +80,14 @@ void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int run
   const auto valid = torch::ones({H, W});
   std::map<std::string, std::vector<double>> ms;
   double peak = 0;
+  int64_t supports = 0;
   for (int r = warm_up ? 0 : 1; r < runs + 1; ++r) {  // run 0 warms up
     reset_peak_memory();
     const auto t0 = Clock::now();
     const Prediction p = model->predict(image, K, torch::eye(4), depth, valid);
     const double total = ms_since(t0);
     if (r == 0) continue;
+    supports = p.supports.count();
     peak = std::max(peak, peak_memory_mb());
     for (const auto& [k, v] : p.timings_ms) ms[k].push_back(v);
     ms["total"].push_back(total);
@@ -92,11 +96,11 @@ void run(const char* label, const ModelOptions& o, int64_t W, int64_t H, int run
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
-  std::printf("%-40s %5lldx%-5lld supports %8lld |", label, (long long)W, (long long)H, (long long)o.sampler.budget);
+  std::printf("%-40s %5lldx%-5lld supports %8lld |", label, (long long)W, (long long)H, (long long)supports);
   for (const char* k : {"sampler", "encoder", "decoder", "composer", "total"})
     std::printf(" %s %8.1f", k, median(ms[k]));
   std::printf(" ms | peak %7.0f MB\n", peak);
-  print_counts(o, W, H, median(ms["encoder"]), median(ms["decoder"]));
+  print_counts(o, W, H, supports, median(ms["encoder"]), median(ms["decoder"]));
   if (!model->decoder || !warm_up) return;
   // The decoder's parts on the same supports: one plain feature query, the whole decoder, and its MLP alone; the
   // decoder minus the MLP (medians over the runs) is the fused query of both branches with the gate. A per-run
@@ -137,9 +141,10 @@ int main(int argc, char** argv) {
     bool paper = false;
     int64_t threads = 0, runs = 5;
     std::string precision = "fp32";
-    ArgParser parser("bench_predict",
-                     "Times one prediction (no autograd) from image and depth to Gaussians, stage by stage, with "
-                     "untrained weights: ViT-S with 100k and 40k supports at 256x192.");
+    ArgParser parser(
+        "bench_predict",
+        "Times one prediction (no autograd) from image and depth to Gaussians, stage by stage, with "
+        "untrained weights at 256x192 with ViT-S: the defaults, and the paper's layout with 100k and 40k supports.");
     parser.flag("--paper", paper, "also the paper's setting: ViT-L, 1.5M supports, 1536x1152 (one cold run)");
     parser.option("--threads", threads, "threads (0 = all cores)");
     parser.option("--runs", runs, "timed runs per setting (after one warm-up)");
@@ -154,10 +159,13 @@ int main(int argc, char** argv) {
     std::printf("predict benchmark (median of %lld runs after one warm-up), %d threads, %s, BLAS: %s\n",
                 (long long)runs, at::get_num_threads(), precision_name(compute_precision()), loaded_blas().c_str());
     ModelOptions o;
+    o.encoder.vit.size = "S";
+    run("default: ViT-S, pixels+edges, dense head", o, 256, 192, static_cast<int>(runs));
+    o.sampler.mode = "area";  // the paper's layout at a fixed budget
     o.sampler.budget_mode = "fixed";
     o.sampler.budget = 100000;
-    o.encoder.vit.size = "S";
-    run("quickstart: ViT-S, 100k supports", o, 256, 192, static_cast<int>(runs));
+    o.decoder.mode = "implicit";
+    run("paper's layout: ViT-S, 100k supports", o, 256, 192, static_cast<int>(runs));
     o.sampler.budget = 40000;
     run("ViT-S, 40k supports (0.85 per pixel)", o, 256, 192, static_cast<int>(runs));
     if (paper) {

@@ -1,5 +1,5 @@
-// Benchmark: one training step at the quickstart settings (configs/quickstart.json: ViT-S, 100k
-// supports, 256x192, 1 context + 3 targets), and where its time goes.
+// Benchmark: one training step at the quickstart settings (configs/quickstart.json: ViT-S, the default model,
+// 256x192, 1 context + 3 targets), and where its time goes.
 // usage: bench_train_step [hypersim_root] [threads] [config] (--help); without a root (or with "") a small scene is
 // generated first; config defaults to configs/quickstart.json (e.g. configs/recipe/recipe.json).
 #include <chrono>

@@ -17,7 +17,7 @@ struct StageFlops {
   double vit_linear = 0;     // patch embedding, qkv, projection, MLP of every block
   double vit_attention = 0;  // Q K^T and P V over all heads
   double cnn = 0;            // every convolution of the CNN branch
-  double decoder_maps = 0;   // the per-texel projections and gate inputs (the decoder's precomputation)
+  double decoder_maps = 0;   // the per-texel projections and gate inputs (implicit), or the dense head's convolutions
   double decoder_mlp = 0;    // the update MLP and head over every support
   double encoder() const { return vit_linear + vit_attention + cnn; }
   double decoder() const { return decoder_maps + decoder_mlp; }
@@ -61,6 +61,10 @@ inline StageFlops count_flops(const ModelOptions& o, int64_t W, int64_t H, int64
     for (int64_t width : widths) macs += static_cast<double>(in) * width, in = width;
     macs += static_cast<double>(in) * kDeltaDim;
     f.decoder_mlp = 2.0 * macs * supports;
+  } else if (o.decoder.mode == "dense") {  // decoder/dense_head.h at its width of 64; the supports read its maps
+    const double w = 64, H2 = static_cast<double>((H + 1) / 2), W2 = static_cast<double>((W + 1) / 2);
+    f.decoder_maps = 2.0 * H4 * W4 * (dd + cd) * w * 9 + 2.0 * H2 * W2 * w * w * 9 + 2.0 * H * W * w * (w / 2) * 9 +
+                     2.0 * H * W * (w / 2) * kDeltaDim;
   }
   return f;
 }

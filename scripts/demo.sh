@@ -33,24 +33,24 @@ stamp "3. the learned depth prior (task: depth)"
 "$bin/infinisplat-train" --config configs/depth_quickstart.json \
   --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/depth" --resume auto
 
-stamp "4. the quickstart model (ViT-S, the recipe's sampler: 0.85 supports per pixel at 256x192, 1 context + 3 targets)"
+stamp "4. the quickstart model (ViT-S, the defaults: a support per pixel and at silhouettes, the dense head; 256x192, 1 context + 3 targets)"
 "$bin/infinisplat-train" --config configs/quickstart.json \
   --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart" \
   --set model.prior.learned_weights="$out/depth/depth_net.safetensors" --resume auto
 
-stamp "4b. the same model with the release's sampler and composer (the defaults before config_version 2), to compare"
-"$bin/infinisplat-train" --config configs/quickstart_release.json \
-  --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart_release" \
+stamp "4b. the same model with the paper's area sampling and implicit decoder (the defaults of config_version 2), to compare"
+"$bin/infinisplat-train" --config configs/quickstart_paper.json \
+  --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart_paper" \
   --set model.prior.learned_weights="$out/depth/depth_net.safetensors" --resume auto
 
-stamp "5. evaluation: trained vs the release's defaults vs step 0 vs baselines on the pair protocol (held-out rooms, then two other styles)"
+stamp "5. evaluation: trained vs the paper's method vs step 0 vs baselines on the pair protocol (held-out rooms, then two other styles)"
 "$bin/infinisplat-eval" --config configs/eval_synthetic.json \
   --set "datasets[0].root=$out/data/hypersim" \
   --set "datasets[1].root=$out/data/eval/courtyard_colmap" --set "datasets[2].root=$out/data/eval/atrium_nerfstudio" \
   --set "methods[0].checkpoint=$out/quickstart/checkpoints/last.safetensors" \
   --set "methods[1].checkpoint=$out/quickstart/checkpoints/last.safetensors" \
   --set "methods[2].checkpoint=$out/quickstart/checkpoints/init.safetensors" \
-  --set "methods[3].checkpoint=$out/quickstart_release/checkpoints/last.safetensors" \
+  --set "methods[3].checkpoint=$out/quickstart_paper/checkpoints/last.safetensors" \
   --set scoring.out="$out/eval" --set scoring.max_per_bin=4
 
 stamp "6. one photo -> Gaussians (PLY) -> orbit video"
@@ -70,6 +70,6 @@ echo "training:      $out/quickstart (train_log.jsonl, val/*.png, checkpoints/)"
 echo "scene + video: $out/predict/scene.ply, $out/predict/orbit/video.mp4"
 echo "onnx:          $out/export/model.onnx"
 echo
-sed -n '/^## /,$p' "$out/eval/report.md" | grep -E "^## |\| (trained|trained-lidar|trained-release|step0|lift|identity) \| all" || true
+sed -n '/^## /,$p' "$out/eval/report.md" | grep -E "^## |\| (trained|trained-lidar|trained-paper|step0|lift|identity) \| all" || true
 echo
 echo "demo.sh: everything is under $(cd "$out" && pwd)"

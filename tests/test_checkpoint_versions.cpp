@@ -106,3 +106,26 @@ TEST_CASE("checkpoint versions: a v1 checkpoint predicts the Gaussians it predic
     }
   }
 }
+
+TEST_CASE("checkpoint versions: a stored config without the sampler and decoder keys takes its version's defaults",
+          "[checkpoint][model]") {
+  Checkpoint ck;
+  ck.metadata["config"] = R"({"model": {"encoder": {"dino": false}}})";
+  const auto options = [&](const char* version) {
+    ck.metadata["config_version"] = version;
+    return model_options_from_checkpoint(ck, "ck.safetensors");
+  };
+  const ModelOptions v2 = options("2"), v3 = options("3");
+  CHECK(v2.sampler.mode == "area");  // 2026-12-06 to 2026-12-07: area sampling, edge supports, implicit decoder
+  CHECK(v2.sampler.edge_supports);
+  CHECK(v2.sampler.edge_band == 2);
+  CHECK(v2.decoder.mode == "implicit");
+  CHECK(v3.sampler.mode == "pixel");  // since: pixel centres and silhouettes, the dense head
+  CHECK(v3.sampler.edge_behind == 3);
+  CHECK(v3.decoder.mode == "dense");
+  const auto now = config_to_json(ModelOptions{}), stored = config_to_json(v3);
+  CHECK(stored["sampler"] == now["sampler"]);
+  CHECK(stored["decoder"] == now["decoder"]);
+  CHECK_FALSE(v2.encoder.dino);  // a stored key keeps its value
+  CHECK_THROWS_WITH(options("4"), Catch::Contains("ck.safetensors: config_version '4' is not one this build knows"));
+}

@@ -159,3 +159,35 @@ TEST_CASE("model: the pipeline's after_prior hook changes the depth the model se
   REQUIRE(plain.supports.depth.numel() == scaled.supports.depth.numel());
   CHECK(torch::allclose(scaled.supports.depth, plain.supports.depth * 2, 1e-4, 1e-5));
 }
+
+TEST_CASE(
+    "model: the defaults put a support on every valid pixel and hidden surface behind silhouettes, decoded by "
+    "the dense head",
+    "[model]") {
+  torch::manual_seed(2);
+  ModelOptions o;  // the defaults, with the tiny encoder
+  o.encoder = test::tiny_model_options().encoder;
+  REQUIRE(o.sampler.mode == "pixel");
+  REQUIRE(o.decoder.mode == "dense");
+  InfiniSplat model(o);
+  REQUIRE(model->dense);
+  CHECK_FALSE(model->decoder);
+  {
+    torch::NoGradGuard g;  // a trained head: the zero-initialized one passes no gradient upstream
+    model->dense->out->weight.normal_(0, 0.1);
+  }
+  auto image = torch::rand({3, H, W});
+  const Camera cam = camera(0.0);
+  Prediction p = model->forward(image, cam.K, cam.T_cw, scene_depth(), torch::ones({H, W}), 3);
+  CHECK(p.supports.count() == H * W + p.supports.behind);  // one per pixel, plus the box's hidden wall
+  CHECK(p.supports.behind > 0);
+  CHECK(p.delta.abs().sum().item<double>() > 0);
+  render(p.gaussians, camera(0.2)).rgb.mean().backward();
+  for (const char* name :
+       {"encoder.vit.patch_embed.proj.weight", "encoder.cnn.stem.weight", "dense.reduce.weight", "dense.out.bias"}) {
+    auto g = model->named_parameters()[name].grad();
+    INFO(name);
+    REQUIRE(g.defined());
+    CHECK(g.abs().sum().item<double>() > 0);
+  }
+}

@@ -7,6 +7,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "decoder/composer.h"
+#include "decoder/dense_head.h"
 #include "decoder/feature_sampler.h"
 #include "decoder/implicit_decoder.h"
 #include "encoder/dual_encoder.h"

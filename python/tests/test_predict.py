@@ -9,8 +9,11 @@ import infinisplat
 
 
 def cli_predict(tiny, out, *extra):
+    # With this process's thread count: the dense head's convolutions (oneDNN) split their sums by threads, so
+    # another count differs in the last bit. Debian's torch starts Python with half the cores, the CLI with all.
     subprocess.run([tiny["cli"], "predict", "--checkpoint", tiny["checkpoint"], "--image", tiny["image"], "--depth",
-                    tiny["depth"], "--out", out, *extra], check=True, stdout=subprocess.DEVNULL)
+                    tiny["depth"], "--out", out, "--threads", str(infinisplat.num_threads()), *extra], check=True,
+                   stdout=subprocess.DEVNULL)
     return infinisplat.load_ply(out)
 
 

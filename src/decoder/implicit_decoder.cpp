@@ -1,4 +1,4 @@
-// Feature query, gated fusion and the update MLP; the dense ablation head.
+// Feature query, gated fusion and the update MLP; the decoder options.
 #include "decoder/implicit_decoder.h"
 
 #include <torch/torch.h>
@@ -11,7 +11,6 @@
 #include "core/precision.h"
 #include "decoder/composer.h"
 #include "decoder/feature_sampler.h"
-#include "geometry/camera_torch.h"
 
 namespace isplat {
 namespace nn = torch::nn;
@@ -19,8 +18,8 @@ namespace F = torch::nn::functional;
 
 void DecoderOptions::visit(ConfigVisitor& v) {
   v.field("mode", mode,
-          "implicit (paper), dense (pixel-aligned conv head: 'w/o implicit decoder'), none "
-          "(base Gaussians only: 'w/o learned updates')",
+          "dense (a per-pixel conv head whose maps each support reads; the default, lab/2026-12-06-lpips-gap), "
+          "implicit (the paper's feature queries and MLP), none (base Gaussians only: 'w/o learned updates')",
           {"implicit", "dense", "none"});
   v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C",
           Range::between(1, 16384));
@@ -119,28 +118,6 @@ torch::Tensor ImplicitDecoderImpl::forward(const torch::Tensor& uv, int64_t widt
     out.push_back(mlp_head(fused(uv.narrow(0, s, n))));
   }
   return out.size() == 1 ? out[0] : torch::cat(out, 0);
-}
-
-DenseHeadImpl::DenseHeadImpl(int64_t dd, int64_t cd, int64_t width) : dino_dim(dd), cnn_dim(cd) {
-  reduce = register_module("reduce", nn::Conv2d(nn::Conv2dOptions(dd + cd, width, 3).padding(1)));
-  refine1 = register_module("refine1", nn::Conv2d(nn::Conv2dOptions(width, width, 3).padding(1)));
-  refine2 = register_module("refine2", nn::Conv2d(nn::Conv2dOptions(width, width / 2, 3).padding(1)));
-  out = register_module("out", nn::Conv2d(nn::Conv2dOptions(width / 2, kDeltaDim, 1)));
-  torch::NoGradGuard g;
-  out->weight.zero_();
-  out->bias.zero_();
-}
-
-torch::Tensor DenseHeadImpl::forward(const EncoderFeatures& f, int64_t width, int64_t height) {
-  auto up = [](const torch::Tensor& x, int64_t h, int64_t w) { return resize_bilinear(x, h, w); };
-  const int64_t h4 = (height + 3) / 4, w4 = (width + 3) / 4;
-  std::vector<torch::Tensor> parts;
-  if (dino_dim > 0) parts.push_back(up(f.dino.narrow(0, 0, 1), h4, w4));
-  if (cnn_dim > 0) parts.push_back(up(f.cnn.narrow(0, 0, 1), h4, w4));
-  auto x = torch::relu(reduce->forward(torch::cat(parts, 1)));
-  x = torch::relu(refine1->forward(up(x, (height + 1) / 2, (width + 1) / 2)));
-  x = torch::relu(refine2->forward(up(x, height, width)));
-  return out->forward(x);
 }
 
 }  // namespace isplat

@@ -1,13 +1,12 @@
 // The shared implicit decoder (DESIGN §3, release): query both feature maps bilinearly at each support,
-// fuse them with a gate, and predict the 14-dim update through an MLP with a zero-initialized head.
-// Also the pixel-aligned dense head used by the "w/o implicit decoder" ablation.
+// fuse them with a gate, and predict the 14-dim update through an MLP with a zero-initialized head. DecoderOptions
+// choose between it and the dense head (decoder/dense_head.h).
 #pragma once
 #include <string>
 #include <vector>
 
 #include <torch/nn/module.h>
 #include <torch/nn/modules/container/modulelist.h>
-#include <torch/nn/modules/conv.h>
 #include <torch/nn/modules/linear.h>
 #include <torch/nn/pimpl.h>
 
@@ -40,14 +39,5 @@ struct ImplicitDecoderImpl : torch::nn::Module {
   int64_t dino_dim, cnn_dim, chunk;
 };
 TORCH_MODULE(ImplicitDecoder);
-
-// DPT-style head: fuses both maps at H/4, upsamples to full resolution and predicts 14 channels per pixel.
-struct DenseHeadImpl : torch::nn::Module {
-  DenseHeadImpl(int64_t dino_dim, int64_t cnn_dim, int64_t width = 64);
-  torch::Tensor forward(const EncoderFeatures& features, int64_t width, int64_t height);  // [1,14,H,W]
-  torch::nn::Conv2d reduce{nullptr}, refine1{nullptr}, refine2{nullptr}, out{nullptr};
-  int64_t dino_dim, cnn_dim;
-};
-TORCH_MODULE(DenseHead);
 
 }  // namespace isplat

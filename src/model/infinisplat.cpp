@@ -15,19 +15,18 @@
 namespace isplat {
 
 ModelOptions::ModelOptions() {
-  // 0.85 supports per pixel, edge supports with half the budget spread per pixel and a per-pixel floor, a 2-pixel
-  // band of pixel rays on the near side of silhouettes, 0.5 px off the far side, with 3 pixels of surface behind
-  // them; rotation updates in the surface's frame (lab/2026-11-28-seeds, -behind-band, 2026-11-26-surface-frame);
-  // no Gaussian narrower than 0.35 source pixels, so views above the working size show fewer gaps
-  // (lab/2026-12-06-display-holes).
+  // One support per pixel centre plus the silhouette supports: 0.5 px off the far side at near-side silhouettes,
+  // with 3 pixels of hidden surface behind them, decoded by the dense head (lab/2026-12-06-lpips-gap: it holds the
+  // photo better than area sampling, -0.013 to -0.017 LPIPS and +0.28 to +0.83 dB, with the same holes at wide
+  // baselines); rotation updates in the surface's frame (lab/2026-11-26-surface-frame); no Gaussian narrower than
+  // 0.35 source pixels, so views above the working size show fewer gaps (lab/2026-12-06-display-holes). The density
+  // and the area keys are what sampler.mode = area (the paper's sampling) takes (lab/2026-11-28-seeds).
+  sampler.mode = "pixel";
   sampler.budget_mode = "per_pixel";
   sampler.density = 0.85;
-  sampler.edge_supports = true;
-  sampler.image_share = 0.5;
-  sampler.pixel_floor = 1.0;
-  sampler.edge_band = 2;
   sampler.edge_shift = 0.5;
   sampler.edge_behind = 3;
+  decoder.mode = "dense";
   composer.orientation = "surface";
   composer.scale_floor_px = 0.35;
 }
@@ -38,7 +37,7 @@ void ModelOptions::visit(ConfigVisitor& v) {
   v.section("prior", "the frozen depth prior", prior);
   v.section("sampler", "geometry-guided support sampling", sampler);
   v.section("encoder", "the dual-branch encoder", encoder);
-  v.section("decoder", "the implicit decoder", decoder);
+  v.section("decoder", "the decoder of bounded Gaussian updates", decoder);
   v.section("composer", "bounded Gaussian updates", composer);
 }
 
@@ -48,7 +47,7 @@ InfiniSplatImpl::InfiniSplatImpl(const ModelOptions& o) : options(o) {
   if (o.decoder.mode == "implicit") decoder = register_module("decoder", ImplicitDecoder(o.decoder, dd, cd));
   if (o.decoder.mode == "dense") dense = register_module("dense", DenseHead(dd, cd));
   if (o.decoder.mode == "dense" && o.sampler.mode != "pixel")
-    log_warn("decoder.mode = dense predicts per pixel; the paper's ablation pairs it with sampler.mode = pixel");
+    log_warn("decoder.mode = dense predicts per pixel; it was trained and measured with sampler.mode = pixel");
 }
 
 Prediction InfiniSplatImpl::forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,

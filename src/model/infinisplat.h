@@ -1,5 +1,5 @@
 // The InfiniSplat model, end to end: supports from depth -> base Gaussians; image -> dual features;
-// implicit decoder -> 14-dim updates; composer -> metric Gaussians in the world frame.
+// decoder (dense or implicit) -> 14-dim updates; composer -> metric Gaussians in the world frame.
 #pragma once
 #include <functional>
 #include <map>
@@ -12,6 +12,7 @@
 
 #include "core/gaussians.h"
 #include "decoder/composer.h"
+#include "decoder/dense_head.h"
 #include "decoder/implicit_decoder.h"
 #include "encoder/dual_encoder.h"
 #include "prior/depth_prior.h"
@@ -22,8 +23,8 @@ namespace isplat {
 
 class ConfigVisitor;
 
-// The model's defaults are the recipe the lab's studies adopted (config_version 2, lab/README.md): the sampler and
-// composer structs alone keep the paper release's, which model_defaults(1) in model/model_io.h restores.
+// The model's defaults are the recipe the lab's studies adopted (config_version 3, lab/README.md): the sampler,
+// decoder and composer structs alone keep the paper release's; model_defaults in model/model_io.h restores older ones.
 struct ModelOptions {
   ModelOptions();
   std::string variant = "rgb";  // rgb | lidar: which prior family the checkpoint was trained with

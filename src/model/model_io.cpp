@@ -29,6 +29,15 @@ ModelOptions model_defaults(int config_version) {
   // config that has a key keeps its value (every config written since stores every key).
   o.prior.sparse.densify = "fit";
   o.composer.scale_floor_px = 0.0;
+  if (config_version >= 3) return o;
+  // Version 2: the paper's area sampling with the lab's edge supports, per-pixel share and floor, and its implicit
+  // decoder (the defaults from 2026-12-06 to 2026-12-07).
+  o.sampler.mode = "area";
+  o.sampler.edge_supports = true;
+  o.sampler.image_share = 0.5;
+  o.sampler.pixel_floor = 1.0;
+  o.sampler.edge_band = 2;
+  o.decoder.mode = "implicit";
   if (config_version >= 2) return o;
   // Version 1: the paper release's fixed budget, no edge supports, rotations in the camera frame.
   o.sampler.budget_mode = "fixed";

@@ -10,9 +10,10 @@
 namespace isplat {
 
 // The model defaults a checkpoint was trained under, from its metadata's "config_version": 1 (no key, every
-// checkpoint written before 2026-12-06) is the paper release's sampler and composer; 2 is the recipe the lab's
-// studies adopted (lab/README.md). A key that a stored config lacks takes its version's default.
-constexpr int kModelConfigVersion = 2;
+// checkpoint written before 2026-12-06) is the paper release's sampler and composer; 2 is area sampling with the lab's
+// edge supports and the implicit decoder; 3 is pixel-centre supports with the silhouette supports and the dense head
+// (lab/README.md). A key that a stored config lacks takes its version's default.
+constexpr int kModelConfigVersion = 3;
 int config_version(const Checkpoint& ck, const std::string& source);
 ModelOptions model_defaults(int config_version);
 

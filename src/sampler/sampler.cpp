@@ -13,8 +13,9 @@ namespace isplat {
 
 void SamplerOptions::visit(ConfigVisitor& v) {
   v.field("mode", mode,
-          "support placement: area-weighted on the depth surface (paper), one per pixel (ablation), "
-          "or the release's gradient-priority vertices + area-weighted faces",
+          "support placement: one per pixel centre (the default, with edge_behind's hidden surface; the budget keys "
+          "do not apply), area-weighted on the depth surface (paper), or the release's gradient-priority vertices + "
+          "area-weighted faces",
           {"area", "pixel", "vertex_face"});
   v.field("budget_mode", budget_mode,
           "fixed count; or per image pixel, per steradian of valid surface; or detail: per pixel, scaled by how "

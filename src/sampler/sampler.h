@@ -13,7 +13,8 @@ class ConfigVisitor;
 // Upper bound on any support budget: 4M is the paper's 1.5M with room; 2e7 ran 4.5 min at 9.3 GB.
 constexpr int64_t kMaxSupports = 4000000;
 
-// The paper release's sampler; the model's defaults (ModelOptions, model/infinisplat.h) are the lab's recipe.
+// The paper release's sampler; the model's defaults (ModelOptions, model/infinisplat.h) are the lab's recipe:
+// pixel mode with edge_shift and edge_behind.
 struct SamplerOptions {
   std::string mode = "area";          // area | pixel | vertex_face
   std::string budget_mode = "fixed";  // fixed | per_pixel | solid_angle | detail

@@ -1,6 +1,8 @@
 // Tiny model and training configurations for tests.
 #include "support/tiny_model.h"
 
+#include "model/model_io.h"
+
 namespace isplat::test {
 
 ModelOptions tiny_model_options(int64_t budget, int64_t vit_depth) {
@@ -10,8 +12,12 @@ ModelOptions tiny_model_options(int64_t budget, int64_t vit_depth) {
   o.encoder.vit.depth = vit_depth;
   o.encoder.vit.heads = 2;
   o.encoder.cnn_options.width = 4;
-  o.sampler.budget_mode = "fixed";  // the model's defaults otherwise (the recipe), at a size the test chooses
+  // The paper's layout with the lab's edge supports (config_version 2's sampler, the implicit decoder) at a size the
+  // test chooses; the model's defaults otherwise. The default layout's own tests set theirs.
+  o.sampler = model_defaults(2).sampler;
+  o.sampler.budget_mode = "fixed";
   o.sampler.budget = budget;
+  o.decoder.mode = "implicit";
   o.decoder.hidden = {32, 16};
   return o;
 }

@@ -8,8 +8,8 @@
 
 namespace isplat::test {
 
-// ViT 32-d with `vit_depth` blocks and 2 heads, CNN width 4, MLP [32, 16], a fixed budget of `budget` supports;
-// the sampler and composer otherwise as the model's defaults.
+// ViT 32-d with `vit_depth` blocks and 2 heads, CNN width 4, the paper's area sampling (with the lab's edge supports)
+// at a fixed budget of `budget` supports and its implicit decoder, MLP [32, 16]; otherwise the model's defaults.
 ModelOptions tiny_model_options(int64_t budget = 600, int64_t vit_depth = 1);
 
 // Trains tiny_model_options on a tiny generated dataset at 48x32 with 2 targets, dataset depth,
