@@ -1,4 +1,5 @@
-// Benchmark: the implicit decoder's forward and backward at training and paper-scale support counts.
+// Benchmark: the implicit decoder's forward and backward (the paper's method; the default model decodes with the dense
+// head, timed by bench_predict) at training and paper-scale support counts.
 #include <chrono>
 #include <cstdio>
 
@@ -51,7 +52,7 @@ int main(int argc, char** argv) {
   keep_freed_memory();  // as every executable does (run_main)
   configure_threads(argc > 1 ? std::atoll(argv[1]) : 0);
   std::printf("implicit decoder benchmark, %d threads\n", at::get_num_threads());
-  run(384, 100000, 256, 192);  // quickstart: ViT-S, 100k supports
+  run(384, 100000, 256, 192);  // the paper's layout at the quickstart's size: ViT-S, 100k supports
   run(384, 30000, 256, 192);
   run(1024, 100000, 512, 384);  // ViT-L width
   return 0;

@@ -1,7 +1,7 @@
 // Benchmark: one prediction (no autograd) from image + depth to Gaussians, and where its time and memory go: the
 // defaults (ViT-S at 256x192: a support per pixel and behind silhouettes, the dense head), the paper's layout at the
 // quickstart's size (100k and 40k area supports, the implicit decoder) and, with --paper, the paper's setting (ViT-L,
-// 1.5M supports, 1536x1152). Untrained weights: the time does not depend on their values.
+// 1.5M supports, 1536x1152) and the default model at that size. Untrained weights: the time does not depend on them.
 // usage: bench_predict [--paper] [--threads N] [--runs N] (--help)
 #include <algorithm>
 #include <chrono>
@@ -26,6 +26,7 @@
 #include "decoder/feature_sampler.h"
 #include "geometry/camera_torch.h"
 #include "model/infinisplat.h"
+#include "model/model_io.h"
 
 using namespace isplat;
 using Clock = std::chrono::steady_clock;
@@ -145,7 +146,9 @@ int main(int argc, char** argv) {
         "bench_predict",
         "Times one prediction (no autograd) from image and depth to Gaussians, stage by stage, with "
         "untrained weights at 256x192 with ViT-S: the defaults, and the paper's layout with 100k and 40k supports.");
-    parser.flag("--paper", paper, "also the paper's setting: ViT-L, 1.5M supports, 1536x1152 (one cold run)");
+    parser.flag("--paper", paper,
+                "also the paper's setting (ViT-L, 1.5M supports, 1536x1152) and the default model at its size "
+                "(one cold run each)");
     parser.option("--threads", threads, "threads (0 = all cores)");
     parser.option("--runs", runs, "timed runs per setting (after one warm-up)");
     parser.option("--precision", precision, "the encoder's and decoder's matmuls: fp32, bf16 or auto",
@@ -161,7 +164,7 @@ int main(int argc, char** argv) {
     ModelOptions o;
     o.encoder.vit.size = "S";
     run("default: ViT-S, pixels+edges, dense head", o, 256, 192, static_cast<int>(runs));
-    o.sampler.mode = "area";  // the paper's layout at a fixed budget
+    o.sampler = model_defaults(2).sampler;  // the paper's layout (with the lab's edge supports) at a fixed budget
     o.sampler.budget_mode = "fixed";
     o.sampler.budget = 100000;
     o.decoder.mode = "implicit";
@@ -172,6 +175,9 @@ int main(int argc, char** argv) {
       o.encoder.vit.size = "L";
       o.sampler.budget = 1500000;
       run("paper: ViT-L, 1.5M supports (one cold run)", o, 1536, 1152, 1, /*warm_up=*/false);
+      ModelOptions d;
+      d.encoder.vit.size = "L";
+      run("the default at the paper's size (cold)", d, 1536, 1152, 1, /*warm_up=*/false);
     }
     return 0;
   });

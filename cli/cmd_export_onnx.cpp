@@ -1,4 +1,4 @@
-// `infinisplat export-onnx`: the encoder + implicit decoder of a checkpoint as an ONNX graph.
+// `infinisplat export-onnx`: the encoder + decoder (dense head or implicit) of a checkpoint as an ONNX graph.
 #include <onnx/onnx_pb.h>
 
 #include <filesystem>
@@ -21,7 +21,7 @@ int run_export_onnx(int argc, char** argv) {
   int64_t width = 256, height = 192, opset = 17, threads = 0;
   bool verify = false;
   ArgParser args("infinisplat export-onnx",
-                 "Write the encoder (ViT + CNN) and the implicit decoder of a checkpoint as "
+                 "Write the encoder (ViT + CNN) and the decoder (dense head or implicit) of a checkpoint as "
                  "one ONNX graph: inputs image [1,3,H,W] and uv [N,2], output delta [N,14]. "
                  "Weights are initializers; the graph passes onnx::checker.");
   args.option("--checkpoint", checkpoint, "trained checkpoint", "FILE");

@@ -30,6 +30,7 @@
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "metrics/display.h"
+#include "model/model_io.h"
 #include "predict/photo.h"
 #include "render/prune.h"
 #include "render/scale_align.h"
@@ -297,6 +298,7 @@ int run_predict(int argc, char** argv) {
     // --max-gaussians: the supports the checkpoint's sampler would place on this photo's prior depth, counted before
     // decoding; above the limit, the sampler places exactly the limit (pruning only removes).
     int64_t would_place = 0;
+    bool cap_warned = false;
     hooks.after_prior = [&](PriorOutput& prior, const PhotoFrame& frame) {
       if (max_gaussians <= 0) return;
       would_place =
@@ -306,7 +308,16 @@ int run_predict(int argc, char** argv) {
       SamplerOptions& capped = pipeline.model()->options.sampler;
       capped.budget_mode = "fixed";
       capped.budget = max_gaussians;
-      if (capped.mode == "pixel") capped.mode = "area";  // pixel mode has no budget: one support per valid pixel
+      if (capped.mode == "pixel") {  // no budget there: area sampling with the lab's edge supports (version 2's)
+        const SamplerOptions area = model_defaults(2).sampler;
+        capped.mode = area.mode, capped.edge_supports = area.edge_supports, capped.image_share = area.image_share;
+        capped.pixel_floor = area.pixel_floor, capped.edge_band = area.edge_band;
+        if (!cap_warned)
+          log_warn("predict: --max-gaussians ", max_gaussians, " is below the ", would_place,
+                   " supports the checkpoint's pixel sampler places; area sampling places them instead, a layout the "
+                   "model was not trained on");
+        cap_warned = true;
+      }
     };
     ScaleFit aligned;
     hooks.after_decode = [&](Gaussians& g, const PhotoFrame& frame) {

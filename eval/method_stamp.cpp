@@ -66,7 +66,9 @@ void check_method_stamp(const std::string& results, const MethodOptions& mo, con
     now["checkpoint_fingerprint"] = file_fingerprint(mo.checkpoint);
   if (!dataset.is_null()) now["dataset_fingerprint"] = dataset;
   const std::string stamp = results + ".method.json";
-  if (fs::exists(stamp)) {
+  // A stamp over no scored pair (a run that stopped before its first, e.g. on a refused option) guards nothing.
+  const bool scored = fs::exists(results) && fs::file_size(results) > 0;
+  if (scored && fs::exists(stamp)) {
     nlohmann::json before = read_json_file(stamp);  // names the file when it is unreadable
     // The data the results were scored on (a stamp written before fingerprints adopts the current one).
     bool adopt_data = false;

@@ -42,9 +42,9 @@ nerfstudio = os.path.join(data, "eval", "atrium_nerfstudio")
 run_dir = os.path.join(work, "run")
 tiny = {"runtime.threads": 1, "data.hypersim.root": os.path.join(data, "hypersim"), "data.tuples.width": 48,
         "data.tuples.height": 32, "data.tuples.targets": 1, "data.tuples.window": 4, "data.workers": 0,
-        "data.val_tuples": 1, "model.prior.type": "dataset", "model.sampler.budget": 500,
+        "data.val_tuples": 1, "model.prior.type": "dataset",
         "model.encoder.vit.size": "custom", "model.encoder.vit.embed_dim": 32, "model.encoder.vit.depth": 1,
-        "model.encoder.vit.heads": 2, "model.encoder.cnn_branch.width": 4, "model.decoder.hidden": "[32,16]",
+        "model.encoder.vit.heads": 2, "model.encoder.cnn_branch.width": 4,
         "loss.perceptual": 0, "train.out": run_dir, "train.steps": 1, "train.val_every": 1000,
         "train.checkpoint_every": 1, "train.val_images": 0}
 train_cmd = lambda sets: [tool("infinisplat-train"), "--config", "configs/quickstart.json"] + sum(

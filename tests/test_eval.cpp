@@ -636,6 +636,33 @@ TEST_CASE("eval: motion types and the finer baseline breakdown", "[eval]") {
   CHECK(fs::exists(fs::path(out) / "stability.png"));
 }
 
+TEST_CASE("eval: a budget sweep of a checkpoint in pixel mode (the default model) is refused, naming the fix",
+          "[eval]") {
+  test::QuietLogs quiet;
+  const auto g = test::make_tiny_dataset("eval_sweep_pixel", 16);
+  const std::string ck = test::temp_dir("eval_sweep_pixel_ck") + "/tiny.safetensors";
+  TrainConfig tc = test::tiny_train_config(g, test::temp_dir("eval_sweep_pixel_run"), 1);
+  tc.model = test::tiny_default_options();
+  tc.model.prior.type = "dataset";
+  Trainer(tc).save(ck);
+  EvalConfig c;
+  c.datasets = {colmap_set(g)};
+  c.methods = {named_method("tiny", "model", ck, {"prior.type=dataset"})};
+  c.methods[0].budgets = {"n:700"};
+  c.protocol.pairs_per_bin = 1;
+  c.scoring.out = test::temp_dir("eval_sweep_pixel_out");
+  c.scoring.lpips = {};
+  c.scoring.examples = 0;
+  CHECK_THROWS_WITH(Evaluator(c).run(), Catch::Contains("method 'tiny': budgets sweep the support budget") &&
+                                            Catch::Contains("pixel mode") &&
+                                            Catch::Contains("sampler.mode=area and sampler.edge_supports=true"));
+  c.methods[0].overrides = {"prior.type=dataset", "sampler.mode=area", "sampler.edge_supports=true"};
+  const auto rows = Evaluator(c).run();
+  REQUIRE_FALSE(rows.empty());
+  for (const auto& r : rows)
+    if (r.bin == "all") CHECK(r.decoded == 700);
+}
+
 TEST_CASE("eval: a support-budget sweep with pruning scores every budget and writes the chart and tables", "[eval]") {
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_sweep", 16);

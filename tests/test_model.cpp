@@ -165,8 +165,7 @@ TEST_CASE(
     "the dense head",
     "[model]") {
   torch::manual_seed(2);
-  ModelOptions o;  // the defaults, with the tiny encoder
-  o.encoder = test::tiny_model_options().encoder;
+  const ModelOptions o = test::tiny_default_options();
   REQUIRE(o.sampler.mode == "pixel");
   REQUIRE(o.decoder.mode == "dense");
   InfiniSplat model(o);

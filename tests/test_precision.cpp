@@ -37,11 +37,12 @@ struct Scene {
   Camera source{make_K(40, 40, W / 2.0, H / 2.0), torch::eye(4), W, H};
 };
 
-InfiniSplat trained_looking_model() {
+// The paper's layout with the implicit decoder, or the default's with the dense head.
+InfiniSplat trained_looking_model(bool default_model = false) {
   torch::manual_seed(3);
-  InfiniSplat model(test::tiny_model_options());
+  InfiniSplat model(default_model ? test::tiny_default_options() : test::tiny_model_options());
   torch::NoGradGuard g;  // the zero-initialized head would make every update 0 in both precisions
-  model->decoder->head->weight.normal_(0, 0.1);
+  (default_model ? model->dense->out->weight : model->decoder->head->weight).normal_(0, 0.1);
   return model;
 }
 
@@ -96,7 +97,9 @@ TEST_CASE("precision: a weight changed between bf16 regions is seen (the cast ca
 }
 
 TEST_CASE("precision: the model in bf16 predicts fp32 Gaussians within 3% of fp32's updates", "[precision][model]") {
-  InfiniSplat model = trained_looking_model();
+  const bool default_model = GENERATE(false, true);
+  INFO((default_model ? "the default model (dense head)" : "the paper's layout (implicit decoder)"));
+  InfiniSplat model = trained_looking_model(default_model);
   const Scene s;
   const Prediction fp32 = model->predict(s.image, s.source.K, s.source.T_cw, s.depth, s.valid, 1);
   Prediction bf16;

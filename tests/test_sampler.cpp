@@ -618,6 +618,12 @@ TEST_CASE("sampler: all-invalid depth is a clear error", "[sampler]") {
                     Catch::Contains("no valid pixel"));
   CHECK_THROWS_WITH(sample_supports(torch::ones({kH, kW}), ones(), K(), torch::rand({3, 8, 8}), fixed(10)),
                     Catch::Contains("image must be [3, H, W]"));
+  // Pixel mode has no budget, so an image above the support limit is refused before anything is allocated.
+  const int64_t side = 2048;  // 4.19M pixels
+  CHECK_THROWS_WITH(
+      sample_supports(torch::ones({side, side}), torch::ones({side, side}), K(), torch::zeros({3, side, side}), px),
+      Catch::Contains("pixel mode places one support per valid pixel: 4194304 at 2048x2048") &&
+          Catch::Contains("--max-gaussians"));
 }
 
 TEST_CASE("sampler: every support carries the plane's normal, facing the camera, in every mode", "[sampler]") {

@@ -40,8 +40,12 @@ TrainConfig tiny_depth_config(const GenerateOptions& data, const std::string& ou
 
 TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
   test::QuietLogs quiet;
+  const bool default_model = GENERATE(false, true);
+  INFO((default_model ? "the default model (dense head)" : "the paper's layout (implicit decoder)"));
   const auto data = test::make_tiny_dataset("train_falls", 10);
-  Trainer trainer(test::tiny_train_config(data, test::temp_dir("train_falls_run"), 40));
+  auto config = test::tiny_train_config(data, test::temp_dir("train_falls_run"), 40);
+  if (default_model) config.model = test::tiny_default_options(), config.model.prior.type = "dataset";
+  Trainer trainer(config);
   std::vector<double> losses;
   for (int i = 0; i < 40; ++i) losses.push_back(trainer.train_step().losses.at("total"));
   const double first = (losses[0] + losses[1] + losses[2] + losses[3] + losses[4]) / 5;
@@ -52,19 +56,26 @@ TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
 
 TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[train]") {
   test::QuietLogs quiet;
+  const bool default_model = GENERATE(false, true);
+  INFO((default_model ? "the default model (dense head)" : "the paper's layout (implicit decoder)"));
   const auto data = test::make_tiny_dataset("train_resume", 10);
   const std::string a_dir = test::temp_dir("resume_a"), b_dir = test::temp_dir("resume_b");
-  Trainer straight(test::tiny_train_config(data, a_dir, 4));
+  const auto config = [&](const std::string& dir) {
+    auto c = test::tiny_train_config(data, dir, 4);
+    if (default_model) c.model = test::tiny_default_options(), c.model.prior.type = "dataset";
+    return c;
+  };
+  Trainer straight(config(a_dir));
   for (int i = 0; i < 4; ++i) straight.train_step();
   const std::string ck = b_dir + "/two.safetensors";
   {
-    Trainer first(test::tiny_train_config(data, b_dir, 4));
+    Trainer first(config(b_dir));
     first.train_step();
     first.train_step();
     first.save(ck);
     CHECK(load_checkpoint(ck).step() == 2);
   }
-  Trainer resumed(test::tiny_train_config(data, b_dir, 4));
+  Trainer resumed(config(b_dir));
   resumed.resume(ck);
   CHECK(resumed.step() == 2);
   resumed.train_step();
@@ -81,7 +92,7 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
   Trainer depth(depth_cfg);
   CHECK_THROWS_WITH(depth.resume(ck), Catch::Contains("checkpoint is for task 'gaussians'"));
   // Nor does a run resume into another model: a changed sampler key is named.
-  auto other = test::tiny_train_config(data, test::temp_dir("resume_other"), 4);
+  auto other = config(test::temp_dir("resume_other"));
   other.model.sampler.image_share = 0.25;
   Trainer changed(other);
   CHECK_THROWS_WITH(changed.resume(ck), Catch::Contains("model/sampler/image_share differ"));

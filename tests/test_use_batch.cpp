@@ -111,7 +111,10 @@ TEST_CASE("predict batch: a folder, a list and a video in one process, resumable
 
   // --max-gaussians: never more in the output; exactly the limit as supports when the checkpoint's sampler would
   // place more (its fixed 2000 here, and pixel mode's one per pixel at 160x128), so the output comes close to it.
-  for (const std::string sampler : {"", "--set sampler.mode=pixel "})
+  const std::string pixel_default =
+      "--set sampler.mode=pixel --set sampler.edge_supports=false --set "
+      "sampler.image_share=0 --set sampler.pixel_floor=0 --set sampler.edge_band=0 ";
+  for (const std::string sampler : {std::string(), std::string("--set sampler.mode=pixel "), pixel_default})
     for (int64_t n : {300, 1000, 1900, 50000}) {
       for (const char* photo : {"IMG_0002.jpg", "IMG_0006.jpg"}) {
         const std::string ply = cat(out, "/max_", n, "_", photo, ".ply");
@@ -127,6 +130,7 @@ TEST_CASE("predict batch: a folder, a list and a video in one process, resumable
           CHECK(supports == n);
           CHECK(written >= 0.8 * n);
           CHECK_THAT(text, Catch::Contains("the checkpoint's sampler would place"));
+          if (!sampler.empty()) CHECK_THAT(text, Catch::Contains("area sampling places them instead"));
         }
       }
     }

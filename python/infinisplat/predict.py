@@ -71,8 +71,9 @@ class Predictor:
     ) -> Gaussians:
         """Predicts the Gaussians of one photo, in its camera's frame (OpenCV axes, metres).
 
-        The defaults are `infinisplat predict`'s, which gives the same Gaussians on the same photo; None takes them from
-        the C++ side, where the CLI's are defined (`infinisplat predict --help` lists them).
+        The defaults are `infinisplat predict`'s, which gives the same Gaussians on the same photo at the same thread
+        count (set_num_threads; the dense head's convolutions differ in the last bit across counts); None takes them
+        from the C++ side, where the CLI's are defined (`infinisplat predict --help` lists them).
 
         Args:
             image: the photo: a path (PNG/JPG/..., its EXIF may give the focal length) or sRGB in [0, 1] as a float

@@ -21,9 +21,9 @@ void DecoderOptions::visit(ConfigVisitor& v) {
           "dense (a per-pixel conv head whose maps each support reads; the default, lab/2026-12-06-lpips-gap), "
           "implicit (the paper's feature queries and MLP), none (base Gaussians only: 'w/o learned updates')",
           {"implicit", "dense", "none"});
-  v.field("hidden", hidden, "MLP hidden widths; empty = [C, C/4, C/16] from the fused width C",
+  v.field("hidden", hidden, "implicit mode: MLP hidden widths; empty = [C, C/4, C/16] from the fused width C",
           Range::between(1, 16384));
-  v.field("chunk", chunk, "supports decoded per chunk (bounds memory)", Range::at_least(1));
+  v.field("chunk", chunk, "implicit mode: supports decoded per chunk (bounds memory)", Range::at_least(1));
 }
 
 namespace {

@@ -1,5 +1,5 @@
 // ONNX export of the learned part of the model, built with the ONNX protobuf API: the encoder (ViT +
-// CNN) and the implicit decoder as one graph, image + support coordinates in, 14-dim updates out.
+// CNN) and the decoder (dense head or implicit) as one graph, image + support coordinates in, 14-dim updates out.
 #pragma once
 #include <string>
 

@@ -51,7 +51,7 @@ struct InfiniSplatImpl : torch::nn::Module {
   // network weights (supports and base Gaussians are fixed functions of the prior).
   Prediction forward(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
-  // Inference: no autograd, decoder chunks bound memory.
+  // Inference: no autograd (the implicit decoder's chunks bound its memory).
   Prediction predict(const torch::Tensor& image, const torch::Tensor& K, const torch::Tensor& T_cw,
                      const torch::Tensor& depth, const torch::Tensor& valid, uint64_t seed = 0);
   // Updates [N,14] at supports uv of a W x H image from its encoder features: the implicit decoder, or

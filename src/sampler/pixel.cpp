@@ -1,5 +1,5 @@
-// sampler.mode = pixel (the paper's ablation): one support per valid pixel centre, with the edge shift and hidden
-// surface on top.
+// sampler.mode = pixel (the default since config_version 3; the paper's ablation without edge_behind): one support per
+// valid pixel centre, with the edge shift and hidden surface on top.
 #include "core/error.h"
 #include "sampler/edges.h"
 #include "sampler/normals.h"
@@ -24,6 +24,10 @@ class PixelStrategy final : public SupportStrategy {
     Behind behind;  // pixel mode has no budget: hidden supports come on top of one support per pixel
     if (options.edge_behind > 0) behind = behind_places(g, idx, options.edge_behind);
     const int64_t nv = static_cast<int64_t>(idx.size()), nb = static_cast<int64_t>(behind.depth.size());
+    ISPLAT_CHECK(nv + nb <= kMaxSupports, "sampler: pixel mode places one support per valid pixel: ", nv + nb, " at ",
+                 g.W, "x", g.H, ", above the limit of ", kMaxSupports,
+                 " supports; use a smaller working size, or sampler.mode = area with a budget (predict: "
+                 "--max-gaussians)");
     Supports s = allocate(nv + nb);
     const Output o = pointers(s);
     write_pixel_supports(g, o, idx, nv);

@@ -22,6 +22,12 @@ ModelOptions tiny_model_options(int64_t budget, int64_t vit_depth) {
   return o;
 }
 
+ModelOptions tiny_default_options(int64_t vit_depth) {
+  ModelOptions o;
+  o.encoder = tiny_model_options(600, vit_depth).encoder;
+  return o;
+}
+
 TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps) {
   TrainConfig c;
   c.runtime.seed = 3;
