@@ -10,6 +10,25 @@ out="${OUT_DIR:-out/demo}"
 bin="${BUILD_DIR:-$root/build}"
 start=$(date +%s)
 stamp() { echo; echo "== $1  ($(( $(date +%s) - start )) s elapsed)"; }
+# A model run started with another model config (an earlier checkout's defaults) cannot resume: it moves aside,
+# with the evaluation that scored it, and trains afresh. Nothing is lost.
+set_aside_if_stale() {
+  local dir="$1"
+  shift
+  [ -f "$dir/config.json" ] || return 0
+  "$bin/infinisplat-train" "$@" --print-config >"$out/.config_now.json"
+  if python3 -c 'import json, sys; a, b = (json.load(open(p))["model"] for p in sys.argv[1:]); sys.exit(a != b)' \
+    "$dir/config.json" "$out/.config_now.json"; then
+    return 0
+  fi
+  local aside
+  aside="$out/previous-$(date +%Y%m%d-%H%M%S)"
+  mkdir -p "$aside"
+  mv "$dir" "$aside/"
+  if [ -d "$out/eval" ]; then mv "$out/eval" "$aside/"; fi
+  echo "demo.sh: $dir was trained with another model config (an earlier checkout's defaults); moved it and the" \
+    "evaluation to $aside, training afresh"
+}
 
 stamp "1. set-up and build"
 scripts/setup.sh
@@ -34,14 +53,16 @@ stamp "3. the learned depth prior (task: depth)"
   --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/depth" --resume auto
 
 stamp "4. the quickstart model (ViT-S, the defaults: a support per pixel and at silhouettes, the dense head; 256x192, 1 context + 3 targets)"
-"$bin/infinisplat-train" --config configs/quickstart.json \
-  --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart" \
-  --set model.prior.learned_weights="$out/depth/depth_net.safetensors" --resume auto
+quickstart=(--config configs/quickstart.json --set data.hypersim.root="$out/data/hypersim"
+  --set train.out="$out/quickstart" --set model.prior.learned_weights="$out/depth/depth_net.safetensors")
+set_aside_if_stale "$out/quickstart" "${quickstart[@]}"
+"$bin/infinisplat-train" "${quickstart[@]}" --resume auto
 
 stamp "4b. the same model with the paper's area sampling and implicit decoder (the defaults of config_version 2), to compare"
-"$bin/infinisplat-train" --config configs/quickstart_paper.json \
-  --set data.hypersim.root="$out/data/hypersim" --set train.out="$out/quickstart_paper" \
-  --set model.prior.learned_weights="$out/depth/depth_net.safetensors" --resume auto
+paper=(--config configs/quickstart_paper.json --set data.hypersim.root="$out/data/hypersim"
+  --set train.out="$out/quickstart_paper" --set model.prior.learned_weights="$out/depth/depth_net.safetensors")
+set_aside_if_stale "$out/quickstart_paper" "${paper[@]}"
+"$bin/infinisplat-train" "${paper[@]}" --resume auto
 
 stamp "5. evaluation: trained vs the paper's method vs step 0 vs baselines on the pair protocol (held-out rooms, then two other styles)"
 "$bin/infinisplat-eval" --config configs/eval_synthetic.json \
