@@ -32,19 +32,12 @@
 using namespace isplat;
 namespace fs = std::filesystem;
 
-namespace {
-
-EvalDatasetOptions colmap_set(const GenerateOptions& g) {
-  return test::tiny_courtyard_set(g);
-}
-}  // namespace
-
 TEST_CASE("pairs: windows, filters, bins and per-scene caps", "[eval][pairs]") {
   test::QuietLogs quiet;
   auto g = test::eval_dataset_options(test::temp_dir("pairs_data"), 24, {"courtyard_colmap"});
   g.eval_scenes = 2;
   generate_datasets(g);
-  const auto seqs = load_eval_dataset(colmap_set(g));
+  const auto seqs = load_eval_dataset(test::tiny_courtyard_set(g));
   REQUIRE(seqs.size() == 2);
   ProtocolOptions o;
   o.pairs_per_bin = 10;
@@ -97,7 +90,7 @@ TEST_CASE("pairs: a generated trajectory of the default length populates all fou
   auto g = test::eval_dataset_options(test::temp_dir("pairs_bins"), 40,
                                       {"courtyard_colmap"});  // 40 frames: the default eval length
   generate_datasets(g);
-  const Manifest m = draw_manifest("courtyard", load_eval_dataset(colmap_set(g)), ProtocolOptions{});
+  const Manifest m = draw_manifest("courtyard", load_eval_dataset(test::tiny_courtyard_set(g)), ProtocolOptions{});
   for (size_t b = 0; b < 4; ++b) {
     INFO("bin " << m.bin_label(static_cast<int>(b)));
     CHECK(m.bin_candidates[b] > 0);
@@ -111,7 +104,7 @@ TEST_CASE("eval: two methods end to end, with reports and resume", "[eval]") {
   const std::string ck = test::temp_dir("eval_e2e_ck") + "/tiny.safetensors";
   Trainer(test::tiny_train_config(g, test::temp_dir("eval_e2e_run"), 1)).save(ck);
   EvalConfig c;
-  c.datasets = {colmap_set(g)};
+  c.datasets = {test::tiny_courtyard_set(g)};
   c.datasets[0].prompts = "points3d";
   c.methods.push_back(
       named_method("lidar", "model", ck, {"variant=lidar", "prior.type=sparse", "prior.sparse.mono=none"}));
@@ -203,7 +196,7 @@ TEST_CASE("eval: display factors score each target again at k times its size, fo
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_display", 16);
   EvalConfig c;
-  c.datasets = {colmap_set(g)};
+  c.datasets = {test::tiny_courtyard_set(g)};
   c.protocol.pairs_per_bin = 2;
   c.scoring.out = test::temp_dir("eval_display_out");
   c.scoring.lpips = {};
@@ -641,12 +634,9 @@ TEST_CASE("eval: a budget sweep of a checkpoint in pixel mode (the default model
   test::QuietLogs quiet;
   const auto g = test::make_tiny_dataset("eval_sweep_pixel", 16);
   const std::string ck = test::temp_dir("eval_sweep_pixel_ck") + "/tiny.safetensors";
-  TrainConfig tc = test::tiny_train_config(g, test::temp_dir("eval_sweep_pixel_run"), 1);
-  tc.model = test::tiny_default_options();
-  tc.model.prior.type = "dataset";
-  Trainer(tc).save(ck);
+  Trainer(test::tiny_train_config(g, test::temp_dir("eval_sweep_pixel_run"), 1, test::tiny_default_options())).save(ck);
   EvalConfig c;
-  c.datasets = {colmap_set(g)};
+  c.datasets = {test::tiny_courtyard_set(g)};
   c.methods = {named_method("tiny", "model", ck, {"prior.type=dataset"})};
   c.methods[0].budgets = {"n:700"};
   c.protocol.pairs_per_bin = 1;
@@ -669,7 +659,7 @@ TEST_CASE("eval: a support-budget sweep with pruning scores every budget and wri
   const std::string ck = test::temp_dir("eval_sweep_ck") + "/tiny.safetensors";
   Trainer(test::tiny_train_config(g, test::temp_dir("eval_sweep_run"), 1)).save(ck);
   EvalConfig c;
-  c.datasets = {colmap_set(g)};
+  c.datasets = {test::tiny_courtyard_set(g)};
   c.methods = {named_method("tiny", "model", ck, {"prior.type=dataset"}),
                named_method("tiny+prune", "model", ck, {"prior.type=dataset"})};
   c.methods[0].budgets = {"px:0.25", "n:900", "detail:1"};
@@ -903,7 +893,7 @@ TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D an
   const auto g = test::make_tiny_dataset("eval_nodepth", 16);
   const std::string ck = test::temp_dir("eval_nodepth_ck") + "/tiny.safetensors";
   Trainer(test::tiny_train_config(g, test::temp_dir("eval_nodepth_run"), 1)).save(ck);
-  EvalDatasetOptions ds = colmap_set(g);
+  EvalDatasetOptions ds = test::tiny_courtyard_set(g);
   ds.depth_format = "none";  // a real capture: images and a sparse model, no depth sensor
   ds.prompts = "points3d";
   const auto seqs = load_eval_dataset(ds);
@@ -917,7 +907,7 @@ TEST_CASE("eval: a COLMAP capture without depth draws pairs from its points3D an
   CHECK(!m.overlap_depth.count("dataset"));
   for (const auto& p : m.pairs) CHECK(p.overlap_depth != "dataset");
   // The overlaps agree with the ones the true depth gives, to a few per cent.
-  const Manifest truth = draw_manifest("courtyard", load_eval_dataset(colmap_set(g)), o);
+  const Manifest truth = draw_manifest("courtyard", load_eval_dataset(test::tiny_courtyard_set(g)), o);
   CHECK(std::abs(static_cast<double>(m.bin_candidates[0]) - truth.bin_candidates[0]) <=
         0.25 * truth.bin_candidates[0] + 2);
 

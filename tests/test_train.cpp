@@ -43,9 +43,9 @@ TEST_CASE("train: a tiny configuration's training loss falls", "[train]") {
   const bool default_model = GENERATE(false, true);
   INFO((default_model ? "the default model (dense head)" : "the paper's layout (implicit decoder)"));
   const auto data = test::make_tiny_dataset("train_falls", 10);
-  auto config = test::tiny_train_config(data, test::temp_dir("train_falls_run"), 40);
-  if (default_model) config.model = test::tiny_default_options(), config.model.prior.type = "dataset";
-  Trainer trainer(config);
+  const std::string dir = test::temp_dir("train_falls_run");
+  Trainer trainer(default_model ? test::tiny_train_config(data, dir, 40, test::tiny_default_options())
+                                : test::tiny_train_config(data, dir, 40));
   std::vector<double> losses;
   for (int i = 0; i < 40; ++i) losses.push_back(trainer.train_step().losses.at("total"));
   const double first = (losses[0] + losses[1] + losses[2] + losses[3] + losses[4]) / 5;
@@ -61,9 +61,8 @@ TEST_CASE("train: 2 steps, save, resume, 2 more equals 4 steps straight", "[trai
   const auto data = test::make_tiny_dataset("train_resume", 10);
   const std::string a_dir = test::temp_dir("resume_a"), b_dir = test::temp_dir("resume_b");
   const auto config = [&](const std::string& dir) {
-    auto c = test::tiny_train_config(data, dir, 4);
-    if (default_model) c.model = test::tiny_default_options(), c.model.prior.type = "dataset";
-    return c;
+    return default_model ? test::tiny_train_config(data, dir, 4, test::tiny_default_options())
+                         : test::tiny_train_config(data, dir, 4);
   };
   Trainer straight(config(a_dir));
   for (int i = 0; i < 4; ++i) straight.train_step();

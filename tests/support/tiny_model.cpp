@@ -28,7 +28,8 @@ ModelOptions tiny_default_options(int64_t vit_depth) {
   return o;
 }
 
-TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps) {
+TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps,
+                              const ModelOptions& model) {
   TrainConfig c;
   c.runtime.seed = 3;
   c.data.hypersim.root = generated_hypersim_root(data.out);
@@ -38,7 +39,7 @@ TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& ou
   c.data.tuples.window = 4;
   c.data.workers = 0;
   c.data.val_tuples = 2;
-  c.model = tiny_model_options(1500);
+  c.model = model;
   c.model.prior.type = "dataset";
   c.loss.perceptual = 0;  // keeps tests fast; the perceptual term has its own tests
   c.optim.lr = 3e-3;

@@ -14,8 +14,9 @@ ModelOptions tiny_model_options(int64_t budget = 600, int64_t vit_depth = 1);
 // The model's defaults (a support per pixel and behind silhouettes, the dense head) with the same tiny encoder.
 ModelOptions tiny_default_options(int64_t vit_depth = 1);
 
-// Trains tiny_model_options on a tiny generated dataset at 48x32 with 2 targets, dataset depth,
-// no perceptual term and no loader threads.
-TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps);
+// Trains `model` (tiny_model_options(1500) unless given) on a tiny generated dataset at 48x32 with 2 targets, dataset
+// depth, no perceptual term and no loader threads.
+TrainConfig tiny_train_config(const GenerateOptions& data, const std::string& out, int64_t steps,
+                              const ModelOptions& model = tiny_model_options(1500));
 
 }  // namespace isplat::test
