@@ -61,8 +61,8 @@ inline StageFlops count_flops(const ModelOptions& o, int64_t W, int64_t H, int64
     for (int64_t width : widths) macs += static_cast<double>(in) * width, in = width;
     macs += static_cast<double>(in) * kDeltaDim;
     f.decoder_mlp = 2.0 * macs * supports;
-  } else if (o.decoder.mode == "dense") {  // decoder/dense_head.h at its width of 64; the supports read its maps
-    const double w = 64, H2 = static_cast<double>((H + 1) / 2), W2 = static_cast<double>((W + 1) / 2);
+  } else if (o.decoder.mode == "dense") {  // decoder/dense_head.h; the supports read its maps
+    const double w = kDenseHeadWidth, H2 = static_cast<double>((H + 1) / 2), W2 = static_cast<double>((W + 1) / 2);
     f.decoder_maps = 2.0 * H4 * W4 * (dd + cd) * w * 9 + 2.0 * H2 * W2 * w * w * 9 + 2.0 * H * W * w * (w / 2) * 9 +
                      2.0 * H * W * (w / 2) * kDeltaDim;
   }

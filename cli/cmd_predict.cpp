@@ -308,7 +308,7 @@ int run_predict(int argc, char** argv) {
       SamplerOptions& capped = pipeline.model()->options.sampler;
       capped.budget_mode = "fixed";
       capped.budget = max_gaussians;
-      if (capped.mode == "pixel") {  // no budget there: area sampling with the lab's edge supports (version 2's)
+      if (!capped.has_budget()) {  // pixel mode: area sampling with the lab's edge supports (version 2's) instead
         const SamplerOptions area = model_defaults(2).sampler;
         capped.mode = area.mode, capped.edge_supports = area.edge_supports, capped.image_share = area.image_share;
         capped.pixel_floor = area.pixel_floor, capped.edge_band = area.edge_band;

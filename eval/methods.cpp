@@ -45,7 +45,7 @@ class ModelMethod final : public Method {
     ISPLAT_CHECK(!o.checkpoint.empty(), "method '", o.name, "': type model needs a checkpoint (methods[].checkpoint)");
     pipeline_ = load_pipeline(o.checkpoint, o.overrides);
     ISPLAT_CHECK(
-        o.sweep.budget.empty() || pipeline_->model()->options.sampler.mode != "pixel", "method '", o.name,
+        o.sweep.budget.empty() || pipeline_->model()->options.sampler.has_budget(), "method '", o.name,
         "': budgets sweep the support budget, but ", o.checkpoint,
         " samples in pixel mode, one support per pixel, which has none; add the overrides sampler.mode=area and "
         "sampler.edge_supports=true to sweep area sampling's budget");

@@ -99,6 +99,10 @@ std::unique_ptr<SupportStrategy> make_support_strategy(const std::string& mode) 
 
 }  // namespace sampling
 
+bool SamplerOptions::has_budget() const {
+  return sampling::make_support_strategy(mode)->uses_budget();
+}
+
 using namespace sampling;
 
 Supports sample_supports(const torch::Tensor& depth, const torch::Tensor& valid, const torch::Tensor& K,

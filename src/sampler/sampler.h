@@ -52,6 +52,8 @@ struct SamplerOptions {
   // depth is).
   int64_t fill_px = 0;
   void visit(ConfigVisitor& v);
+  // Whether the mode places a budget of supports (pixel mode: one per valid pixel, whatever the budget keys say).
+  bool has_budget() const;
 };
 
 // Supports in the source camera. Depth and colour are read bilinearly at uv (barycentric inside a triangle
