@@ -57,12 +57,13 @@ void print_counts(const ModelOptions& o, int64_t W, int64_t H, int64_t supports,
   const int64_t rows = std::max<int64_t>(1, (o.encoder.vit.attention_chunk_mb << 20) / (heads * N * 4));
   const int64_t chunk = std::min(o.decoder.chunk, supports);
   const bool bf16 = cpu_has_bf16();
+  const std::string cap = onednn_bf16_cap();
   auto both = [&](const char* what, const std::function<double(torch::Dtype)>& rate) {
     std::printf("  machine: %-44s fp32 %6.0f GFLOP/s", what, rate(torch::kFloat32));
     if (bf16)
       std::printf(", bf16 %6.0f GFLOP/s\n", rate(torch::kBFloat16));
     else
-      std::printf(", bf16 n/a (no AVX512-BF16 or AMX)\n");
+      std::printf(", bf16 n/a (%s)\n", cap.empty() ? "no AVX512-BF16 or AMX" : cap.c_str());
   };
   both(cat("ViT MLP linear [", N, " x ", C, "] -> ", 4 * C).c_str(),
        [&](torch::Dtype t) { return bench::linear_gflops(N, C, 4 * C, t); });

@@ -5,6 +5,7 @@
 #include <torch/torch.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -53,6 +54,43 @@ TEST_CASE("precision: names resolve, auto follows the CPU, anything else is refu
   CHECK_THROWS_WITH(resolve_precision("fp16", "--precision"),
                     Catch::Contains("--precision") && Catch::Contains("fp16") && Catch::Contains("fp32, bf16 or auto"));
   CHECK(std::string(precision_name(Precision::bf16)) == "bf16");
+}
+
+TEST_CASE("precision: a oneDNN ISA cap below its bf16 kernels turns auto to fp32, and bf16 is refused naming it",
+          "[precision]") {
+  CHECK(onednn_isa_excludes_bf16("AVX2"));
+  CHECK(onednn_isa_excludes_bf16("avx512_core_vnni"));
+  CHECK_FALSE(onednn_isa_excludes_bf16("AVX512_CORE_BF16"));
+  CHECK_FALSE(onednn_isa_excludes_bf16("avx512_core_amx"));
+  CHECK_FALSE(onednn_isa_excludes_bf16("ALL"));
+  struct EnvRestore {  // the cap is read at each call; the test leaves the environment as it found it
+    std::string name, value;
+    bool was_set;
+    explicit EnvRestore(const char* n) : name(n), was_set(std::getenv(n) != nullptr) {
+      if (was_set) value = std::getenv(n);
+    }
+    ~EnvRestore() { was_set ? setenv(name.c_str(), value.c_str(), 1) : unsetenv(name.c_str()); }
+  } onednn("ONEDNN_MAX_CPU_ISA"), dnnl("DNNL_MAX_CPU_ISA");
+  unsetenv("ONEDNN_MAX_CPU_ISA");
+  setenv("DNNL_MAX_CPU_ISA", "AVX2", 1);
+  CHECK(onednn_bf16_cap() == "DNNL_MAX_CPU_ISA=AVX2");
+  CHECK_FALSE(cpu_has_bf16());
+  CHECK(resolve_precision("auto") == Precision::fp32);
+  setenv("ONEDNN_MAX_CPU_ISA", "AVX512_CORE_AMX", 1);  // the newer name wins
+  CHECK(onednn_bf16_cap().empty());
+  setenv("ONEDNN_MAX_CPU_ISA", "avx512_core", 1);
+  CHECK(onednn_bf16_cap() == "ONEDNN_MAX_CPU_ISA=avx512_core");
+  const PrecisionScope keep(compute_precision());
+  // With the instructions present, bf16 under the cap would reach a oneDNN that fails; without them it is emulated.
+  unsetenv("ONEDNN_MAX_CPU_ISA");
+  unsetenv("DNNL_MAX_CPU_ISA");
+  const bool instructions = cpu_has_bf16();
+  setenv("ONEDNN_MAX_CPU_ISA", "AVX2", 1);
+  if (instructions)
+    CHECK_THROWS_WITH(use_precision("bf16", "--precision"),
+                      Catch::Contains("--precision") && Catch::Contains("ONEDNN_MAX_CPU_ISA=AVX2"));
+  else
+    CHECK_NOTHROW(use_precision("bf16", "--precision"));
 }
 
 TEST_CASE("precision: a bf16 region casts matmuls and restores the state it found, nested or not", "[precision]") {

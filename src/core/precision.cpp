@@ -4,14 +4,18 @@
 #include <ATen/autocast_mode.h>
 #include <cpuid.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
+#include <cstdlib>
 
 #include "core/error.h"
 #include "core/log.h"
 
 namespace isplat {
 
-bool cpu_has_bf16() {
+namespace {
+bool cpuid_has_bf16() {
   unsigned a = 0, b = 0, c = 0, d = 0;
   if (!__get_cpuid_count(7, 0, &a, &b, &c, &d)) return false;
   const unsigned max_subleaf = a;
@@ -19,6 +23,30 @@ bool cpu_has_bf16() {
   bool avx512_bf16 = false;
   if (max_subleaf >= 1 && __get_cpuid_count(7, 1, &a, &b, &c, &d)) avx512_bf16 = (a >> 5) & 1u;
   return avx512_bf16 || amx_bf16;
+}
+}  // namespace
+
+bool onednn_isa_excludes_bf16(std::string isa) {
+  std::transform(isa.begin(), isa.end(), isa.begin(), [](unsigned char c) { return char(std::toupper(c)); });
+  // oneDNN's names of the instruction sets below its bf16 kernels; any other value (ALL, DEFAULT, the bf16 and AMX
+  // ones, names newer than oneDNN 2.6) leaves them on.
+  for (const char* below : {"SSE41", "AVX", "AVX2", "AVX2_VNNI", "AVX2_VNNI_2", "AVX512_MIC", "AVX512_MIC_4OPS",
+                            "AVX512_CORE", "AVX512_CORE_VNNI"})
+    if (isa == below) return true;
+  return false;
+}
+
+std::string onednn_bf16_cap() {
+  for (const char* name : {"ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA"}) {  // oneDNN reads the first one set
+    const char* value = std::getenv(name);
+    if (value == nullptr || *value == 0) continue;
+    return onednn_isa_excludes_bf16(value) ? std::string(name) + "=" + value : std::string();
+  }
+  return {};
+}
+
+bool cpu_has_bf16() {
+  return cpuid_has_bf16() && onednn_bf16_cap().empty();
 }
 
 Precision resolve_precision(const std::string& name, const std::string& key) {
@@ -46,8 +74,11 @@ Precision compute_precision() {
 
 void use_precision(const std::string& name, const std::string& key) {
   set_compute_precision(resolve_precision(name, key));
-  if (name == "bf16" && !cpu_has_bf16())
-    log_warn(key, " = bf16 on a CPU without AVX512-BF16 or AMX: emulated, slower than fp32");
+  if (name != "bf16") return;
+  // LibTorch sends bf16 matmuls to oneDNN whenever the CPU has the instructions, and a capped oneDNN then fails.
+  if (const std::string cap = onednn_bf16_cap(); cpuid_has_bf16() && !cap.empty())
+    fail(key, " = bf16, but ", cap, " keeps oneDNN off its bf16 kernels: unset it, or use fp32 or auto");
+  if (!cpu_has_bf16()) log_warn(key, " = bf16 on a CPU without AVX512-BF16 or AMX: emulated, slower than fp32");
 }
 
 Bf16Region::Bf16Region(bool enabled) : active_(enabled) {

@@ -6,8 +6,14 @@ namespace isplat {
 
 enum class Precision { fp32, bf16 };
 
-// True when the CPU has AVX512-BF16 or AMX-BF16 (oneDNN's bf16 matmul and convolution kernels).
+// True when the CPU has AVX512-BF16 or AMX-BF16 (oneDNN's bf16 matmul and convolution kernels) and no oneDNN ISA cap
+// (ONEDNN_MAX_CPU_ISA, DNNL_MAX_CPU_ISA) keeps oneDNN below them.
 bool cpu_has_bf16();
+
+// "ONEDNN_MAX_CPU_ISA=AVX2" (the variable and its value) when that cap keeps oneDNN off its bf16 kernels, else "".
+std::string onednn_bf16_cap();
+// True for oneDNN's names of the instruction sets below its bf16 kernels (SSE41 ... AVX512_CORE_VNNI, any case).
+bool onednn_isa_excludes_bf16(std::string isa);
 
 // "fp32" | "bf16" | "auto" (bf16 where cpu_has_bf16(), else fp32); anything else is an error naming `key`.
 Precision resolve_precision(const std::string& name, const std::string& key = "runtime.precision");
