@@ -114,7 +114,7 @@ TEST_CASE("predict batch: a folder, a list and a video in one process, resumable
   const std::string pixel_default =
       "--set sampler.mode=pixel --set sampler.edge_supports=false --set "
       "sampler.image_share=0 --set sampler.pixel_floor=0 --set sampler.edge_band=0 ";
-  for (const std::string sampler : {std::string(), std::string("--set sampler.mode=pixel "), pixel_default})
+  for (const std::string& sampler : {std::string(), std::string("--set sampler.mode=pixel "), pixel_default})
     for (int64_t n : {300, 1000, 1900, 50000}) {
       for (const char* photo : {"IMG_0002.jpg", "IMG_0006.jpg"}) {
         const std::string ply = cat(out, "/max_", n, "_", photo, ".ply");
