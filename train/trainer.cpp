@@ -24,6 +24,7 @@
 #include "io/safetensors.h"
 #include "metrics/metrics.h"
 #include "model/model_io.h"
+#include "train/fused_adamw.h"
 
 namespace isplat {
 namespace fs = std::filesystem;
@@ -122,7 +123,7 @@ Trainer::Trainer(const TrainConfig& config)
   }
   ISPLAT_CHECK(grouped == count, "train: the optimizer's parameter groups hold ", grouped, " weights, the task has ",
                count);
-  optimizer_ = std::make_unique<torch::optim::AdamW>(std::move(groups), adamw(config.optim.lr));
+  optimizer_ = std::make_unique<FusedAdamW>(std::move(groups), adamw(config.optim.lr));
   if (dp_) {  // every rank starts from rank 0's weights (and buffers)
     std::vector<torch::Tensor> state = params;
     for (const auto& b : task_->module().buffers()) state.push_back(b);
