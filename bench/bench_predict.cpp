@@ -63,7 +63,9 @@ void print_counts(const ModelOptions& o, int64_t W, int64_t H, int64_t supports,
     if (bf16)
       std::printf(", bf16 %6.0f GFLOP/s\n", rate(torch::kBFloat16));
     else
-      std::printf(", bf16 n/a (%s)\n", cap.empty() ? "no AVX512-BF16 or AMX" : cap.c_str());
+      std::printf(", bf16 n/a (%s)\n", cap.empty()
+                                           ? "no AVX512-BF16 or AMX"
+                                           : ("no AVX512-BF16 or AMX, or " + cap + " keeps oneDNN off them").c_str());
   };
   both(cat("ViT MLP linear [", N, " x ", C, "] -> ", 4 * C).c_str(),
        [&](torch::Dtype t) { return bench::linear_gflops(N, C, 4 * C, t); });

@@ -10,12 +10,19 @@ enum class Precision { fp32, bf16 };
 // (ONEDNN_MAX_CPU_ISA, DNNL_MAX_CPU_ISA) keeps oneDNN below them.
 bool cpu_has_bf16();
 
-// "ONEDNN_MAX_CPU_ISA=AVX2" (the variable and its value) when that cap keeps oneDNN off its bf16 kernels, else "".
-std::string onednn_bf16_cap();
-// True for oneDNN's names of the instruction sets below its bf16 kernels (SSE41 ... AVX512_CORE_VNNI, any case).
-bool onednn_isa_excludes_bf16(std::string isa);
+// True on CPUs with AVX-512 F, BW, VL and DQ, where LibTorch 1.13 sends bf16 matmuls and convolutions to oneDNN.
+bool cpu_sends_bf16_to_onednn();
 
-// "fp32" | "bf16" | "auto" (bf16 where cpu_has_bf16(), else fp32); anything else is an error naming `key`.
+// What a oneDNN instruction-set cap (its name, any case) leaves of bf16: the native kernels (AVX512_CORE_BF16, AMX,
+// ALL, unknown names), emulated ones (AVX512_CORE, AVX512_CORE_VNNI), or none (AVX2 and below).
+enum class OnednnBf16 { native, emulated, none };
+OnednnBf16 onednn_bf16_under_cap(std::string isa);
+// "ONEDNN_MAX_CPU_ISA=AVX2" (the variable and its value) when the environment caps oneDNN below its native bf16
+// kernels, else "".
+std::string onednn_bf16_cap();
+
+// "fp32" | "bf16" | "auto" (bf16 where cpu_has_bf16(), else fp32); anything else is an error naming `key`, and so is
+// bf16 on an AVX-512 CPU whose oneDNN is capped below AVX-512 (LibTorch's bf16 matmuls would fail there).
 Precision resolve_precision(const std::string& name, const std::string& key = "runtime.precision");
 const char* precision_name(Precision p);
 
@@ -23,8 +30,8 @@ const char* precision_name(Precision p);
 void set_compute_precision(Precision p);
 Precision compute_precision();
 
-// Resolves `name` (an error naming `key` if it is none), makes it the process-wide precision, and warns when bf16 is
-// asked for on a CPU that can only emulate it: what runtime.precision and every --precision flag do.
+// Resolves `name` (an error naming `key`, as resolve_precision says, changes nothing), makes it the process-wide
+// precision, and warns when bf16 can only be emulated: what runtime.precision and every --precision flag do.
 void use_precision(const std::string& name, const std::string& key);
 
 // Sets the process-wide precision while alive, then restores the one it found (one method of an evaluation).
