@@ -18,9 +18,14 @@ struct StepScalars {
 // One clone per instruction set: only with FMA in the target is std::fma an instruction the loop can vectorize (else
 // a call to libm). The file is built with -ffp-contract=off (no other product is fused) and -fno-math-errno (the
 // square root vectorizes too: v is never negative).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void update_range(
-    float* __restrict p, const float* __restrict g, float* __restrict m, float* __restrict v, int64_t begin,
-    int64_t end, const StepScalars& s, bool decay) {
+#if defined(__x86_64__)
+#define ISPLAT_OPTIMIZER_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define ISPLAT_OPTIMIZER_CLONES
+#endif
+ISPLAT_OPTIMIZER_CLONES void update_range(float* __restrict p, const float* __restrict g, float* __restrict m,
+                                          float* __restrict v, int64_t begin, int64_t end, const StepScalars& s,
+                                          bool decay) {
   for (int64_t i = begin; i < end; ++i) {
     float pi = p[i];
     if (decay) pi = pi * s.decay;
@@ -46,6 +51,7 @@ torch::Tensor FusedAdamW::step(LossClosure closure) {
     at::AutoGradMode enable_grad(true);
     loss = closure();
   }
+  fused_in_last_step_ = 0;
   for (auto& group : param_groups_) {
     const auto& o = static_cast<const torch::optim::AdamWOptions&>(group.options());
     const double lr = o.lr(), beta1 = std::get<0>(o.betas()), beta2 = std::get<1>(o.betas());
@@ -70,16 +76,22 @@ torch::Tensor FusedAdamW::step(LossClosure closure) {
       const double step_size = lr / bias1;
       torch::Tensor& m = state.exp_avg();
       torch::Tensor& v = state.exp_avg_sq();
-      const bool fused = !o.amsgrad() && p.scalar_type() == torch::kFloat32 && p.is_contiguous() &&
-                         grad.scalar_type() == torch::kFloat32 && grad.is_contiguous() && m.is_contiguous() &&
-                         v.is_contiguous() && m.scalar_type() == torch::kFloat32 &&
-                         v.scalar_type() == torch::kFloat32 && p.device().is_cpu();
+      // One flat loop needs four contiguous float tensors of one shape (a loaded state of another shape, say, takes
+      // LibTorch's operations, which refuse it).
+      auto flat_float = [&](const torch::Tensor& t) {
+        return t.scalar_type() == torch::kFloat32 && t.is_contiguous() && t.device().is_cpu() && t.sizes() == p.sizes();
+      };
+      const bool fused = !o.amsgrad() && flat_float(p) && flat_float(grad) && flat_float(m) && flat_float(v);
       if (fused) {
         const StepScalars s{
             float(1 - lr * o.weight_decay()), float(beta1),   float(1 - beta1), float(beta2), float(1 - beta2),
             float(std::sqrt(bias2)),          float(o.eps()), float(-step_size)};
         fused_update(p.data_ptr<float>(), grad.data_ptr<float>(), m.data_ptr<float>(), v.data_ptr<float>(), p.numel(),
                      s, o.weight_decay() != 0);
+        // Written through raw pointers: bump the version counters as in-place operations do, so autograd still
+        // notices a saved tensor that changed.
+        for (const torch::Tensor* t : {&p, &m, &v}) t->unsafeGetTensorImpl()->bump_version();
+        ++fused_in_last_step_;
         continue;
       }
       // LibTorch's AdamW::step, as tensor operations.

@@ -13,6 +13,11 @@ class FusedAdamW : public torch::optim::AdamW {
  public:
   using torch::optim::AdamW::AdamW;
   torch::Tensor step(LossClosure closure = nullptr) override;
+  // How many parameters the last step updated in the fused loop (the rest took LibTorch's operations).
+  int64_t fused_in_last_step() const { return fused_in_last_step_; }
+
+ private:
+  int64_t fused_in_last_step_ = 0;
 };
 
 }  // namespace isplat
