@@ -65,16 +65,8 @@ TEST_CASE("precision: a oneDNN ISA cap below its bf16 kernels turns auto to fp32
   CHECK(onednn_bf16_under_cap("AVX512_CORE_BF16") == OnednnBf16::native);
   CHECK(onednn_bf16_under_cap("avx512_core_amx") == OnednnBf16::native);
   CHECK(onednn_bf16_under_cap("ALL") == OnednnBf16::native);
-  struct EnvRestore {  // the cap is read at each call; the test leaves the environment as it found it
-    std::string name, value;
-    bool was_set;
-    explicit EnvRestore(const char* n) : name(n), was_set(std::getenv(n) != nullptr) {
-      if (was_set) value = std::getenv(n);
-    }
-    ~EnvRestore() { was_set ? setenv(name.c_str(), value.c_str(), 1) : unsetenv(name.c_str()); }
-  } onednn("ONEDNN_MAX_CPU_ISA"), dnnl("DNNL_MAX_CPU_ISA");
-  unsetenv("ONEDNN_MAX_CPU_ISA");
-  setenv("DNNL_MAX_CPU_ISA", "AVX2", 1);
+  // The cap is read at each call; the test leaves the environment as it found it.
+  const test::ScopedEnv onednn("ONEDNN_MAX_CPU_ISA", nullptr), dnnl("DNNL_MAX_CPU_ISA", "AVX2");
   CHECK(onednn_bf16_cap() == "DNNL_MAX_CPU_ISA=AVX2");
   CHECK_FALSE(cpu_has_bf16());
   CHECK(resolve_precision("auto") == Precision::fp32);

@@ -12,21 +12,6 @@
 using namespace isplat;
 namespace fs = std::filesystem;
 
-namespace {
-// Sets an environment variable for the scope, restoring the old value after.
-struct ScopedEnv {
-  std::string name, before;
-  bool had;
-  ScopedEnv(const std::string& n, const std::string& value) : name(n) {
-    const char* old = std::getenv(n.c_str());
-    had = old != nullptr;
-    before = had ? old : "";
-    setenv(n.c_str(), value.c_str(), 1);
-  }
-  ~ScopedEnv() { had ? setenv(name.c_str(), before.c_str(), 1) : unsetenv(name.c_str()); }
-};
-}  // namespace
-
 TEST_CASE("weights: a file name is looked up in order, a path is taken as given", "[weights][core]") {
   const std::string root = test::temp_dir("weights_lookup");
   const fs::path env_dir = fs::path(root) / "env", home = fs::path(root) / "home";
@@ -36,7 +21,7 @@ TEST_CASE("weights: a file name is looked up in order, a path is taken as given"
   test::write_bytes((cache / "a.safetensors").string(), "cache");
   test::write_bytes((cache / "b.safetensors").string(), "cache");
   test::write_bytes((env_dir / "a.safetensors").string(), "env");
-  ScopedEnv e(kWeightsEnv, env_dir.string()), h("HOME", home.string());
+  test::ScopedEnv e(kWeightsEnv, env_dir.string().c_str()), h("HOME", home.string().c_str());
 
   const auto path = weights_search_path();
   REQUIRE(path.size() >= 2);
@@ -56,7 +41,7 @@ TEST_CASE("weights: a file name is looked up in order, a path is taken as given"
 TEST_CASE("weights: a missing depth model named by file is an error that says where it was looked for",
           "[weights][prior]") {
   const std::string root = test::temp_dir("weights_torchscript");
-  ScopedEnv e(kWeightsEnv, root);
+  test::ScopedEnv e(kWeightsEnv, root.c_str());
   PriorOptions o;
   o.type = "torchscript";
   o.torchscript = "depth_pro_traced.pt";

@@ -50,6 +50,16 @@ bool weights_or_skip() {
   return false;
 }
 
+ScopedEnv::ScopedEnv(const std::string& n, const char* value) : name(n) {
+  const char* old = std::getenv(n.c_str());
+  had = old != nullptr;
+  before = had ? old : "";
+  value ? setenv(n.c_str(), value, 1) : unsetenv(n.c_str());
+}
+ScopedEnv::~ScopedEnv() {
+  had ? setenv(name.c_str(), before.c_str(), 1) : unsetenv(name.c_str());
+}
+
 std::string aten_capability() {
   if (const char* env = std::getenv("ATEN_CPU_CAPABILITY")) return env;
   if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&

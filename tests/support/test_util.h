@@ -19,6 +19,16 @@ struct QuietLogs {
   QuietLogs& operator=(const QuietLogs&) = delete;
 };
 
+// Sets (or, given nullptr, unsets) an environment variable for the scope, restoring what it found after.
+struct ScopedEnv {
+  std::string name, before;
+  bool had;
+  ScopedEnv(const std::string& n, const char* value);
+  ~ScopedEnv();
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+};
+
 // A new empty folder under $ISPLAT_TEST_TMP (or /tmp), unique per call.
 std::string temp_dir(const std::string& tag);
 // The folder the weights lookup finds (core/weights.h: $INFINISPLAT_WEIGHTS, the checkout's weights/, the user
