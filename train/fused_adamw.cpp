@@ -73,7 +73,7 @@ torch::Tensor FusedAdamW::step(LossClosure closure) {
       state.step(state.step() + 1);
       const double bias1 = 1 - std::pow(beta1, double(state.step()));
       const double bias2 = 1 - std::pow(beta2, double(state.step()));
-      const double step_size = lr / bias1;
+      const double step_size = lr / bias1, decay = 1 - lr * o.weight_decay();
       torch::Tensor& m = state.exp_avg();
       torch::Tensor& v = state.exp_avg_sq();
       // One flat loop needs four contiguous float tensors of one shape (a loaded state of another shape, say, takes
@@ -83,9 +83,9 @@ torch::Tensor FusedAdamW::step(LossClosure closure) {
       };
       const bool fused = !o.amsgrad() && flat_float(p) && flat_float(grad) && flat_float(m) && flat_float(v);
       if (fused) {
-        const StepScalars s{
-            float(1 - lr * o.weight_decay()), float(beta1),   float(1 - beta1), float(beta2), float(1 - beta2),
-            float(std::sqrt(bias2)),          float(o.eps()), float(-step_size)};
+        const StepScalars s{float(decay),   float(beta1),     float(1 - beta1),
+                            float(beta2),   float(1 - beta2), float(std::sqrt(bias2)),
+                            float(o.eps()), float(-step_size)};
         fused_update(p.data_ptr<float>(), grad.data_ptr<float>(), m.data_ptr<float>(), v.data_ptr<float>(), p.numel(),
                      s, o.weight_decay() != 0);
         // Written through raw pointers: bump the version counters as in-place operations do, so autograd still
@@ -95,7 +95,7 @@ torch::Tensor FusedAdamW::step(LossClosure closure) {
         continue;
       }
       // LibTorch's AdamW::step, as tensor operations.
-      if (o.weight_decay() != 0) p.mul_(1 - lr * o.weight_decay());
+      if (o.weight_decay() != 0) p.mul_(decay);
       m.mul_(beta1).add_(grad, 1 - beta1);
       v.mul_(beta2).addcmul_(grad, grad, 1 - beta2);
       torch::Tensor denom;

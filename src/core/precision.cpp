@@ -26,17 +26,6 @@ bool cpuid_has_bf16() {
   return avx512_bf16 || amx_bf16;
 }
 
-}  // namespace
-
-bool cpu_sends_bf16_to_onednn() {
-  unsigned a = 0, b = 0, c = 0, d = 0;
-  if (!__get_cpuid_count(7, 0, &a, &b, &c, &d)) return false;
-  const unsigned f = 1u << 16, dq = 1u << 17, bw = 1u << 30, vl = 1u << 31;
-  return (b & (f | dq | bw | vl)) == (f | dq | bw | vl);
-}
-
-namespace {
-
 // The cap oneDNN reads (the first of its two variable names that is set): {name, value}, or two empty strings.
 std::pair<std::string, std::string> onednn_isa_cap() {
   for (const char* name : {"ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA"})
@@ -44,6 +33,11 @@ std::pair<std::string, std::string> onednn_isa_cap() {
   return {};
 }
 }  // namespace
+
+bool cpu_sends_bf16_to_onednn() {
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl");
+}
 
 OnednnBf16 onednn_bf16_under_cap(std::string isa) {
   std::transform(isa.begin(), isa.end(), isa.begin(), [](unsigned char c) { return char(std::toupper(c)); });
